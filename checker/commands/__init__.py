@@ -1,0 +1,1 @@
+"""Click subcommands of `pathcheck`, one module each; each parses, calls the library, formats."""

@@ -1,0 +1,113 @@
+"""The one validated configuration: defaults from `config/defaults.toml`, overridden by a user
+file (`--config`) and, for the store path, the environment variable PATHCHECK_STORE."""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from functools import lru_cache
+from pathlib import Path
+
+from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, PositiveInt, ValidationError
+
+from checker.errors import PathcheckError
+
+CONFIG_DIR = Path(__file__).resolve().parents[1] / "config"
+DEFAULTS_FILE = CONFIG_DIR / "defaults.toml"
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class GeometryConfig(_Section):
+    sag_tolerance: PositiveFloat = 0.05
+    max_samples_per_surface: PositiveInt = 200_000
+    min_samples_per_direction: PositiveInt = 8
+
+
+class CheckConfig(_Section):
+    tolerance: float = Field(0.001, ge=0)
+    gouge_neighbourhood: PositiveFloat = 2.0
+    arc_chord_tolerance: PositiveFloat = 0.01
+
+
+class FourAxisConfig(_Section):
+    b_min: float = -180.0
+    b_max: float = 180.0
+    b_coarse_step: PositiveFloat = 2.0
+    b_tolerance: PositiveFloat = 0.01
+    dp_b_step: PositiveFloat = 0.5
+    dp_weight_change: float = Field(1.0, ge=0)
+    dp_weight_original: float = Field(0.1, ge=0)
+    max_db_per_mm: PositiveFloat = 5.0
+    axis_j_tolerance: PositiveFloat = 1e-6
+
+
+class IntermediateConfig(_Section):
+    max_chord: PositiveFloat = 0.5
+    max_db: PositiveFloat = 1.0
+
+
+class ServiceConfig(_Section):
+    bind: str = "tcp://127.0.0.1:5555"
+    workers: PositiveInt = 2
+    max_message_bytes: PositiveInt = 16 * 1024 * 1024
+    request_timeout_s: PositiveFloat = 60.0
+    max_points: PositiveInt = 200_000
+    part_cache_bytes: PositiveInt = 512 * 1024 * 1024
+
+
+class StoreConfig(_Section):
+    path: str = "~/.local/share/pathcheck/results.sqlite"
+
+    def resolved_path(self) -> Path:
+        """The store file: PATHCHECK_STORE if set, else `path`, with ~ expanded."""
+        return Path(os.environ.get("PATHCHECK_STORE") or self.path).expanduser()
+
+
+class Config(_Section):
+    geometry: GeometryConfig = GeometryConfig()
+    check: CheckConfig = CheckConfig()
+    four_axis: FourAxisConfig = FourAxisConfig()
+    intermediate: IntermediateConfig = IntermediateConfig()
+    service: ServiceConfig = ServiceConfig()
+    store: StoreConfig = StoreConfig()
+
+
+def _read_toml(path: Path) -> dict:
+    try:
+        with path.open("rb") as fh:
+            return tomllib.load(fh)
+    except OSError as err:
+        raise PathcheckError(f"cannot read config: {err.strerror}", path=path, code="config") from err
+    except tomllib.TOMLDecodeError as err:
+        raise PathcheckError(f"not valid TOML: {err}", path=path, code="config") from err
+
+
+def _merge(base: dict, over: dict) -> dict:
+    out = dict(base)
+    for key, value in over.items():
+        out[key] = _merge(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) else value
+    return out
+
+
+def load_config(user_file: str | Path | None = None) -> Config:
+    """Defaults merged with an optional user TOML file; invalid fields name the field."""
+    data = _read_toml(DEFAULTS_FILE)
+    source = DEFAULTS_FILE
+    if user_file is not None:
+        source = Path(user_file)
+        data = _merge(data, _read_toml(source))
+    try:
+        return Config.model_validate(data)
+    except ValidationError as err:
+        first = err.errors()[0]
+        field = ".".join(str(p) for p in first["loc"])
+        raise PathcheckError(f"config field '{field}': {first['msg']}", path=source, code="config") from err
+
+
+@lru_cache(maxsize=1)
+def default_config() -> Config:
+    """The defaults from config/defaults.toml (cached)."""
+    return load_config()

@@ -1,0 +1,2 @@
+"""pathcheck post-processor: machine definitions, part <-> machine kinematics, G-code writer and
+reader."""
