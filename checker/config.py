@@ -56,6 +56,7 @@ class ServiceConfig(_Section):
     request_timeout_s: PositiveFloat = 60.0
     max_points: PositiveInt = 200_000
     part_cache_bytes: PositiveInt = 512 * 1024 * 1024
+    debug_ops: bool = False
 
 
 class StoreConfig(_Section):

@@ -1,0 +1,77 @@
+"""Part geometry: `load_part(path) -> Part` for geomdl JSON/YAML, STEP, IGES and STL files, and
+`find_part_beside(job_path)`. Evaluation, trims, sampling and part info are in the submodules."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+from checker.errors import PathcheckError
+from checker.part import Part
+
+BESIDE_SUFFIXES = (".step", ".stp", ".igs", ".iges", ".json", ".stl")
+_READERS = {
+    ".json": "geomdl", ".yaml": "geomdl", ".yml": "geomdl",
+    ".step": "step", ".stp": "step", ".igs": "iges", ".iges": "iges", ".stl": "stl",
+}
+_CACHE: dict[tuple[str, str], Part] = {}
+
+__all__ = ["BESIDE_SUFFIXES", "find_part_beside", "load_part"]
+
+
+def find_part_beside(job_path: str | Path) -> Path | None:
+    """The part file beside a job with the same stem (first of BESIDE_SUFFIXES), or None."""
+    job = Path(job_path)
+    for suffix in BESIDE_SUFFIXES:
+        cand = job.with_suffix(suffix)
+        if cand.is_file():
+            return cand
+    return None
+
+
+def load_part(path: str | Path) -> Part:
+    """Read a part file (kind from its suffix); cached in memory by (path, content sha256).
+
+    Raises PathcheckError(code="part") naming the file when it is missing, unreadable, of an
+    unsupported kind or holds no usable surface.
+    """
+    path = Path(path)
+    kind = _READERS.get(path.suffix.lower())
+    if kind is None:
+        raise PathcheckError(
+            f"unsupported part file type '{path.suffix}', expected one of "
+            f"{', '.join(sorted(_READERS))}", path=path, code="part")
+    try:
+        raw = path.read_bytes()
+    except OSError as err:
+        raise PathcheckError(f"cannot read part file: {err.strerror}", path=path, code="part") from err
+    digest = hashlib.sha256(raw).hexdigest()
+    key = (str(path.resolve()), digest)
+    if key in _CACHE:
+        return _CACHE[key]
+    part = _read(kind, path, raw, digest)
+    _CACHE[key] = part
+    return part
+
+
+def _read(kind: str, path: Path, raw: bytes, digest: str) -> Part:
+    if kind == "stl":
+        from checker.geometry.stl_io import read_stl
+
+        return Part(surfaces=[], source=str(path), content_hash=digest, mesh=read_stl(path, raw))
+    if kind == "geomdl":
+        from checker.geometry.geomdl_io import read_geomdl
+
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as err:
+            raise PathcheckError("geomdl exchange file is not UTF-8 text", path=path, code="part") from err
+        surfaces = read_geomdl(path, text)
+        faces = len(surfaces)
+    else:
+        from checker.geometry.occ_io import read_occ
+
+        surfaces, faces = read_occ(path, kind)
+    if not surfaces:
+        raise PathcheckError("no surface found in the part file", path=path, code="part")
+    return Part(surfaces=surfaces, source=str(path), content_hash=digest, faces=faces)

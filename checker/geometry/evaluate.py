@@ -1,0 +1,293 @@
+"""Batch evaluation of (rational) B-spline surfaces: points, derivatives, unit normals and
+principal curvatures at many (u, v) at once, in mm in the part frame.
+
+One numba kernel per call: per point it finds the knot spans, builds the basis functions and
+their derivatives (Cox-de Boor, The NURBS Book A2.3), contracts them with the homogeneous poles
+and applies the quotient rule for rational surfaces (A4.4). Points are processed in parallel
+chunks; no Python runs per point. (u, v) outside the domain are clipped onto it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba as nb
+import numpy as np
+
+from checker.part import Part, Surface
+
+_CHUNK = 512
+_MAXDEG = 32
+
+
+@nb.njit(cache=True, inline="always")
+def _find_span(knots: np.ndarray, p: int, n: int, x: float) -> int:
+    """Index s in [p, n-1] with knots[s] <= x < knots[s+1] (last span at the right end)."""
+    if x >= knots[n]:
+        return n - 1
+    if x <= knots[p]:
+        return p
+    lo, hi = p, n
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if x < knots[mid]:
+            hi = mid
+        else:
+            lo = mid
+    return lo
+
+
+@nb.njit(cache=True)
+def _basis_ders(knots, p, span, x, nd, ders, ndu, a, left, right):
+    """Basis functions N_{span-p..span} and their derivatives up to order nd into ders[k, j]."""
+    ndu[0, 0] = 1.0
+    for j in range(1, p + 1):
+        left[j] = x - knots[span + 1 - j]
+        right[j] = knots[span + j] - x
+        saved = 0.0
+        for r in range(j):
+            ndu[j, r] = right[r + 1] + left[j - r]
+            temp = ndu[r, j - 1] / ndu[j, r]
+            ndu[r, j] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        ndu[j, j] = saved
+    for j in range(p + 1):
+        ders[0, j] = ndu[j, p]
+    for k in range(1, nd + 1):
+        for j in range(p + 1):
+            ders[k, j] = 0.0
+    n = min(nd, p)
+    for r in range(p + 1):
+        s1, s2 = 0, 1
+        a[0, 0] = 1.0
+        for k in range(1, n + 1):
+            d = 0.0
+            rk, pk = r - k, p - k
+            if r >= k:
+                a[s2, 0] = a[s1, 0] / ndu[pk + 1, rk]
+                d = a[s2, 0] * ndu[rk, pk]
+            j1 = 1 if rk >= -1 else -rk
+            j2 = k - 1 if r - 1 <= pk else p - r
+            for j in range(j1, j2 + 1):
+                a[s2, j] = (a[s1, j] - a[s1, j - 1]) / ndu[pk + 1, rk + j]
+                d += a[s2, j] * ndu[rk + j, pk]
+            if r <= pk:
+                a[s2, k] = -a[s1, k - 1] / ndu[pk + 1, r]
+                d += a[s2, k] * ndu[r, pk]
+            ders[k, r] = d
+            s1, s2 = s2, s1
+    fac = float(p)
+    for k in range(1, n + 1):
+        for j in range(p + 1):
+            ders[k, j] *= fac
+        fac *= p - k
+
+
+@nb.njit(cache=True, parallel=True)
+def _eval_kernel(ku, kv, p, q, Hw, u, v, order, out, normals, flip):
+    """out[i, m] for m = S, Su, Sv (, Suu, Suv, Svv) and unit normals[i] at (u[i], v[i])."""
+    npts = u.shape[0]
+    nu, nv = Hw.shape[0], Hw.shape[1]
+    nchunks = (npts + _CHUNK - 1) // _CHUNK
+    sign = -1.0 if flip else 1.0
+    for c in nb.prange(nchunks):
+        Nu = np.empty((3, p + 1))
+        Nv = np.empty((3, q + 1))
+        ndu = np.empty((_MAXDEG + 1, _MAXDEG + 1))
+        a = np.empty((2, _MAXDEG + 1))
+        left = np.empty(_MAXDEG + 1)
+        right = np.empty(_MAXDEG + 1)
+        A = np.empty((6, 4))
+        T = np.empty((3, 4))
+        for i in range(c * _CHUNK, min(npts, (c + 1) * _CHUNK)):
+            x = min(max(u[i], ku[p]), ku[nu])
+            y = min(max(v[i], kv[q]), kv[nv])
+            su = _find_span(ku, p, nu, x)
+            sv = _find_span(kv, q, nv, y)
+            _basis_ders(ku, p, su, x, order, Nu, ndu, a, left, right)
+            _basis_ders(kv, q, sv, y, order, Nv, ndu, a, left, right)
+            A[:, :] = 0.0
+            for ii in range(p + 1):
+                T[:, :] = 0.0
+                row = su - p + ii
+                for jj in range(q + 1):
+                    col = sv - q + jj
+                    for l in range(order + 1):
+                        b = Nv[l, jj]
+                        for m in range(4):
+                            T[l, m] += b * Hw[row, col, m]
+                for m in range(4):
+                    A[0, m] += Nu[0, ii] * T[0, m]
+                    A[1, m] += Nu[1, ii] * T[0, m]
+                    A[2, m] += Nu[0, ii] * T[1, m]
+                    if order >= 2:
+                        A[3, m] += Nu[2, ii] * T[0, m]
+                        A[4, m] += Nu[1, ii] * T[1, m]
+                        A[5, m] += Nu[0, ii] * T[2, m]
+            w = A[0, 3]
+            for m in range(3):
+                S = A[0, m] / w
+                Su = (A[1, m] - A[1, 3] * S) / w
+                Sv = (A[2, m] - A[2, 3] * S) / w
+                out[i, 0, m] = S
+                out[i, 1, m] = Su
+                out[i, 2, m] = Sv
+                if order >= 2:
+                    out[i, 3, m] = (A[3, m] - 2.0 * A[1, 3] * Su - A[3, 3] * S) / w
+                    out[i, 4, m] = (A[4, m] - A[1, 3] * Sv - A[2, 3] * Su - A[4, 3] * S) / w
+                    out[i, 5, m] = (A[5, m] - 2.0 * A[2, 3] * Sv - A[5, 3] * S) / w
+            nx = out[i, 1, 1] * out[i, 2, 2] - out[i, 1, 2] * out[i, 2, 1]
+            ny = out[i, 1, 2] * out[i, 2, 0] - out[i, 1, 0] * out[i, 2, 2]
+            nz = out[i, 1, 0] * out[i, 2, 1] - out[i, 1, 1] * out[i, 2, 0]
+            nn = np.sqrt(nx * nx + ny * ny + nz * nz)
+            if nn > 0.0:
+                nn = sign / nn
+            normals[i, 0] = nx * nn
+            normals[i, 1] = ny * nn
+            normals[i, 2] = nz * nn
+
+
+@dataclass
+class SurfaceEval:
+    """Evaluation at N parameter pairs: `points`, first derivatives `du`, `dv` (mm per unit
+    parameter), unit `normals` (out of the material), and with order=2 `duu`, `duv`, `dvv`;
+    all (N, 3) in the part frame. Normals are exact limits at degenerate points (poles)."""
+
+    points: np.ndarray
+    du: np.ndarray
+    dv: np.ndarray
+    normals: np.ndarray
+    duu: np.ndarray | None = None
+    duv: np.ndarray | None = None
+    dvv: np.ndarray | None = None
+
+
+@dataclass
+class Curvatures:
+    """Principal curvatures `k1 >= k2` (1/mm; positive where the surface bends away from its
+    normal, i.e. convex as seen by the tool) and unit principal directions `d1`, `d2` (N, 3)."""
+
+    k1: np.ndarray
+    k2: np.ndarray
+    d1: np.ndarray
+    d2: np.ndarray
+
+
+def _raw_eval(surface: Surface, u: np.ndarray, v: np.ndarray, order: int):
+    if order not in (1, 2):
+        raise ValueError(f"order must be 1 or 2, got {order}")
+    if max(surface.degree_u, surface.degree_v) > _MAXDEG:
+        raise ValueError(f"degree above {_MAXDEG} is not supported")
+    Hw = _homogeneous(surface)
+    n = u.shape[0]
+    out = np.empty((n, 3 * order, 3))
+    normals = np.empty((n, 3))
+    _eval_kernel(surface.knots_u, surface.knots_v, surface.degree_u, surface.degree_v, Hw, u, v,
+                 order, out, normals, bool(surface.flip))
+    return out, normals
+
+
+def _homogeneous(surface: Surface) -> np.ndarray:
+    """The surface's weighted poles, computed once per Surface object."""
+    Hw = surface.__dict__.get("_hw")
+    if Hw is None:
+        Hw = surface.homogeneous
+        surface.__dict__["_hw"] = Hw
+    return Hw
+
+
+def _params(u, v) -> tuple[np.ndarray, np.ndarray]:
+    u = np.ascontiguousarray(np.atleast_1d(u), dtype=np.float64).ravel()
+    v = np.ascontiguousarray(np.atleast_1d(v), dtype=np.float64).ravel()
+    if u.shape != v.shape:
+        raise ValueError(f"u and v differ in length: {u.shape} vs {v.shape}")
+    return u, v
+
+
+def _fix_degenerate(surface: Surface, u: np.ndarray, v: np.ndarray, normals: np.ndarray) -> None:
+    """Replace zero normals (collapsed edges, poles) by the limit from just inside the domain."""
+    bad = ~np.isfinite(normals).all(axis=1) | (np.abs(normals).sum(axis=1) == 0.0)
+    if not bad.any():
+        return
+    (u0, u1), (v0, v1) = surface.domain
+    uc, vc = 0.5 * (u0 + u1), 0.5 * (v0 + v1)
+    for t in (1e-9, 1e-7, 1e-5):
+        idx = np.flatnonzero(bad)
+        if idx.size == 0:
+            return
+        us = np.clip(u[idx], u0, u1) + t * (uc - u[idx])
+        vs = np.clip(v[idx], v0, v1) + t * (vc - v[idx])
+        _, nrm = _raw_eval(surface, us, vs, 1)
+        ok = np.abs(nrm).sum(axis=1) > 0.0
+        normals[idx[ok]] = nrm[ok]
+        bad[idx[ok]] = False
+
+
+def evaluate(surface: Surface, u, v, order: int = 1) -> SurfaceEval:
+    """Evaluate `surface` at parameter arrays `u`, `v` (N,); order 1 or 2 derivatives."""
+    u, v = _params(u, v)
+    out, normals = _raw_eval(surface, u, v, order)
+    _fix_degenerate(surface, u, v, normals)
+    ev = SurfaceEval(out[:, 0], out[:, 1], out[:, 2], normals)
+    if order == 2:
+        ev.duu, ev.duv, ev.dvv = out[:, 3], out[:, 4], out[:, 5]
+    return ev
+
+
+def evaluate_mixed(part: Part, surface_ids, u, v, order: int = 1) -> SurfaceEval:
+    """Evaluate K points that lie on different surfaces of `part` (`surface_ids (K,)` int,
+    `u`, `v` (K,)); grouped by surface, one kernel call per distinct surface."""
+    u, v = _params(u, v)
+    ids = np.asarray(surface_ids, dtype=np.int64).ravel()
+    if ids.shape != u.shape:
+        raise ValueError(f"surface_ids has {ids.size} entries for {u.size} parameters")
+    k = u.size
+    fields = ["points", "du", "dv", "normals"] + (["duu", "duv", "dvv"] if order == 2 else [])
+    res = {f: np.empty((k, 3)) for f in fields}
+    order_idx = np.argsort(ids, kind="stable")
+    uniq, starts = np.unique(ids[order_idx], return_index=True)
+    bounds = np.append(starts, k)
+    for sid, a, b in zip(uniq, bounds[:-1], bounds[1:], strict=True):
+        sel = order_idx[a:b]
+        ev = evaluate(part.surfaces[int(sid)], u[sel], v[sel], order)
+        for f in fields:
+            res[f][sel] = getattr(ev, f)
+    return SurfaceEval(**res)
+
+
+def curvatures_of(ev: SurfaceEval) -> Curvatures:
+    """Principal curvatures and directions from an order-2 evaluation."""
+    if ev.duu is None:
+        raise ValueError("principal curvatures need an order=2 evaluation")
+    n = ev.normals
+    E = np.einsum("ij,ij->i", ev.du, ev.du)
+    F = np.einsum("ij,ij->i", ev.du, ev.dv)
+    G = np.einsum("ij,ij->i", ev.dv, ev.dv)
+    L = -np.einsum("ij,ij->i", ev.duu, n)
+    M = -np.einsum("ij,ij->i", ev.duv, n)
+    N = -np.einsum("ij,ij->i", ev.dvv, n)
+    det = E * G - F * F
+    H = (E * N - 2.0 * F * M + G * L) / (2.0 * det)
+    K = (L * N - M * M) / det
+    root = np.sqrt(np.maximum(H * H - K, 0.0))
+    k1, k2 = H + root, H - root
+    d1 = _direction(ev, E, F, G, L, M, N, k1)
+    d2 = np.cross(n, d1)
+    return Curvatures(k1, k2, d1, d2)
+
+
+def _direction(ev, E, F, G, L, M, N, k) -> np.ndarray:
+    """Unit 3-D principal direction for curvature k: kernel of (II - k I) mapped by (du, dv)."""
+    a1, b1 = -(M - k * F), L - k * E
+    a2, b2 = N - k * G, -(M - k * F)
+    use1 = a1 * a1 + b1 * b1 >= a2 * a2 + b2 * b2
+    a, b = np.where(use1, a1, a2), np.where(use1, b1, b2)
+    d = a[:, None] * ev.du + b[:, None] * ev.dv
+    umbilic = np.linalg.norm(d, axis=1) <= 1e-12 * np.linalg.norm(ev.du, axis=1)
+    d[umbilic] = ev.du[umbilic]
+    return d / np.linalg.norm(d, axis=1)[:, None]
+
+
+def principal_curvatures(surface: Surface, u, v) -> Curvatures:
+    """Principal curvatures (1/mm) and directions of `surface` at (u, v) (N,)."""
+    return curvatures_of(evaluate(surface, u, v, order=2))

@@ -1,0 +1,237 @@
+"""One function per service op: `(request, state) -> result fields`. Thin: each calls library
+functions (imported lazily, so a worker that only answers `ping` stays light) and formats their
+results as the protocol's reply fields. Bad input raises PathcheckError."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from checker.config import Config
+from checker.errors import PathcheckError
+from checker.service import protocol as p
+from checker.service.cache import CachedPart, PartCache, deep_nbytes, file_key, json_key
+
+
+@dataclass
+class WorkerState:
+    """What a worker keeps between requests: config, part cache, counters; `broker` holds the
+    broker's counters sent with the current request."""
+
+    config: Config
+    cache: PartCache
+    started: float = field(default_factory=time.time)
+    requests: int = 0
+    errors: int = 0
+    broker: dict = field(default_factory=dict)
+    last_document: Any = None
+    last_job_path: str = ""
+
+
+def ping(req: p.PingRequest, state: WorkerState) -> dict:
+    return {"pong": True, "worker": os.getpid(), "time": time.time()}
+
+
+def stats(req: p.StatsRequest, state: WorkerState) -> dict:
+    return {
+        "protocol": p.PROTOCOL_VERSION,
+        "broker": state.broker,
+        "worker": {
+            "pid": os.getpid(),
+            "uptime_s": time.time() - state.started,
+            "requests": state.requests,
+            "errors": state.errors,
+        },
+        "cache": state.cache.stats(),
+    }
+
+
+def sleep(req: p.SleepRequest, state: WorkerState) -> dict:
+    time.sleep(req.seconds)
+    return {"slept": req.seconds, "worker": os.getpid()}
+
+
+def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
+    """Allowable cutter size at every CC row, as `pathcheck allowable --json` writes it."""
+    from checker.cutter import parse_cutter
+    from checker.engine import allowable as engine_allowable
+
+    cutter = parse_cutter(req.cutter)
+    rows = np.asarray(req.cc, dtype=np.float64).reshape(-1, 6)
+    cc, normals = rows[:, :3], _unit_rows(rows[:, 3:], "cc", "normal")
+    axis = np.asarray(req.axis, dtype=np.float64)
+    axes = np.broadcast_to(axis / np.linalg.norm(axis), cc.shape)
+    entry, cached, key = cached_part(req.part, state)
+    t0 = time.perf_counter()
+    result = engine_allowable(entry.test_points, entry.part, cutter, cc, normals, axes)
+    extra = _best_b(req, entry, cutter, cc, normals) if req.b_range is not None else {}
+    search_s = time.perf_counter() - t0
+    points = _points(cc, normals, result, extra)
+    return {
+        "points": points,
+        "part_hash": key,
+        "cached": cached,
+        "timing": {
+            "load_s": 0.0 if cached else entry.load_s,
+            "sample_s": 0.0 if cached else entry.sample_s,
+            "search_s": search_s,
+        },
+    }
+
+
+def check(req: p.CheckRequest, state: WorkerState) -> dict:
+    """Check a job with `checker.job.check_job`; `post` also returns the G-code text."""
+    from checker.job import check_job
+
+    with tempfile.TemporaryDirectory(prefix="pathcheck-service-") as tmp:
+        apt_path = Path(req.apt_path) if req.apt_path else Path(tmp) / "job.apt"
+        if req.apt is not None:
+            apt_path.write_text(req.apt)
+        part_path = _part_file(req.part, Path(tmp)) if req.part is not None else None
+        gcode_path = Path(tmp) / "job.nc" if req.post else None
+        kwargs: dict[str, Any] = dict(req.options)
+        if gcode_path is not None:
+            kwargs["output"] = gcode_path
+        doc = check_job(
+            apt_path, part_path=part_path, cutter=req.cutter, machine=req.machine, **kwargs
+        )
+        state.last_document, state.last_job_path = doc, str(req.apt_path or "<service>")
+        out: dict[str, Any] = {"results": doc.model_dump(mode="json")}
+        if gcode_path is not None:
+            out["gcode"] = gcode_path.read_text()
+        return out
+
+
+OPS: dict[type, Callable[[Any, WorkerState], dict]] = {
+    p.PingRequest: ping,
+    p.StatsRequest: stats,
+    p.SleepRequest: sleep,
+    p.AllowableRequest: allowable,
+    p.CheckRequest: check,
+}
+
+
+# --- parts -----------------------------------------------------------------------------------
+
+
+def cached_part(spec: p.PartSpec, state: WorkerState) -> tuple[CachedPart, bool, str]:
+    """The loaded and sampled part from the cache (keyed by content hash and sampling
+    settings): `(entry, was_cached, key)`."""
+    geometry = state.config.geometry
+    salt = f"sag={geometry.sag_tolerance};max={geometry.max_samples_per_surface};"
+    if isinstance(spec, p.PartPath):
+        path = _existing(spec.path)
+        key = file_key(path, salt)
+        entry, cached = state.cache.get(key, lambda: _load_and_sample(path, state.config))
+        return entry, cached, key
+    key = json_key(spec.geomdl, salt)
+
+    def build() -> CachedPart:
+        with tempfile.TemporaryDirectory(prefix="pathcheck-part-") as tmp:
+            return _load_and_sample(_part_file(spec, Path(tmp)), state.config)
+
+    entry, cached = state.cache.get(key, build)
+    return entry, cached, key
+
+
+def _load_and_sample(path: Path, config: Config) -> CachedPart:
+    from checker.geometry import load_part
+    from checker.geometry.sampling import sample_part
+
+    t0 = time.perf_counter()
+    part = load_part(path)
+    t1 = time.perf_counter()
+    test_points = sample_part(part, config.geometry.sag_tolerance)
+    t2 = time.perf_counter()
+    nbytes = deep_nbytes(part) + deep_nbytes(test_points)
+    return CachedPart(part, test_points, nbytes, load_s=t1 - t0, sample_s=t2 - t1)
+
+
+def _part_file(spec: p.PartSpec, folder: Path) -> Path:
+    """A path to the part: the given file, or the inline geomdl JSON written into `folder`."""
+    if isinstance(spec, p.PartPath):
+        return _existing(spec.path)
+    import json
+
+    path = folder / "part.json"
+    path.write_text(json.dumps(spec.geomdl))
+    return path
+
+
+def _existing(path: str) -> Path:
+    out = Path(path).expanduser()
+    if not out.is_file():
+        found = "a directory" if out.is_dir() else "nothing"
+        raise PathcheckError(f"field 'part.path': expected a part file, found {found}",
+                             path=out, code="part")
+    return out
+
+
+# --- formatting ------------------------------------------------------------------------------
+
+
+def _unit_rows(v: np.ndarray, field_name: str, what: str) -> np.ndarray:
+    """(N, 3) rows scaled to unit length; a zero row is a request error naming its index."""
+    norm = np.linalg.norm(v, axis=1)
+    bad = np.flatnonzero(norm < 1e-12)
+    if bad.size:
+        raise PathcheckError(f"field '{field_name}.{bad[0]}': expected a non-zero {what} "
+                             f"(columns 4-6), found {v[bad[0]].tolist()}", code="request")
+    return v / norm[:, None]
+
+
+def _best_b(req: p.AllowableRequest, entry: CachedPart, cutter: Any, cc: np.ndarray,
+            normals: np.ndarray) -> dict[str, Any]:
+    """b_best, allowable_at_best and b_feasible per point (degrees, mm) over `req.b_range`."""
+    from checker.four_axis import best_b
+
+    lo, hi = req.b_range
+    out = best_b(entry.test_points, entry.part, cutter, cc, normals, b_range=(lo, hi))
+    return {
+        "b_best": np.asarray(out.b_best, dtype=float),
+        "allowable_at_best": np.asarray(out.allowable_at_best, dtype=float),
+        "b_feasible": list(out.b_feasible),
+    }
+
+
+def _opt(values: np.ndarray) -> list[float | None]:
+    """Floats with nan/inf as None (JSON null: unbounded or not applicable)."""
+    arr = np.asarray(values, dtype=float)
+    return [float(x) if np.isfinite(x) else None for x in arr]
+
+
+def _points(cc: np.ndarray, normals: np.ndarray, result: Any, extra: dict[str, Any]) -> list[dict]:
+    """The `points` list of the allowable reply (one dict per CC row)."""
+    n = len(cc)
+    size = _opt(result.size)
+    lp = np.asarray(result.limiting_point, dtype=float).reshape(n, 3)
+    lp_ok = np.all(np.isfinite(lp), axis=1) & np.isfinite(np.asarray(result.size, dtype=float))
+    surf = np.asarray(result.limiting_surface).reshape(n)
+    verdict = np.asarray(result.verdict).reshape(n)
+    b_best = _opt(extra["b_best"]) if extra else [None] * n
+    at_best = _opt(extra["allowable_at_best"]) if extra else [None] * n
+    feasible = extra.get("b_feasible") or [None] * n
+    cc_l, n_l, lp_l = cc.tolist(), normals.tolist(), lp.tolist()
+    return [
+        p.AllowablePoint(
+            index=i,
+            cc=cc_l[i],
+            normal=n_l[i],
+            allowable=size[i],
+            limiting_point=lp_l[i] if lp_ok[i] else None,
+            limiting_surface=int(surf[i]) if lp_ok[i] and surf[i] >= 0 else None,
+            verdict=str(verdict[i]),
+            b_best=b_best[i],
+            allowable_at_best=at_best[i],
+            b_feasible=[tuple(map(float, iv)) for iv in feasible[i]] if feasible[i] is not None
+            else None,
+        ).model_dump(exclude_none=False)
+        for i in range(n)
+    ]

@@ -1,0 +1,254 @@
+"""The service protocol, version 1: one JSON object per request and per reply (docs/protocol.md).
+
+Every request has `op` (and optionally `v`, the protocol version, and `id`, echoed in the reply);
+every reply has `ok`, `v`, `id` and `op`, and either the op's result fields or `error: {code,
+message, line?}`. Coordinates are mm in the part frame, angles in degrees.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    TypeAdapter,
+    ValidationError,
+    model_validator,
+)
+
+from checker.errors import PathcheckError
+
+PROTOCOL_VERSION = 1
+OPS: tuple[str, ...] = ("ping", "stats", "allowable", "check")
+DEBUG_OPS: tuple[str, ...] = ("sleep",)
+
+Vec3 = tuple[float, float, float]
+CCRow = tuple[float, float, float, float, float, float]
+RequestId = Annotated[str, Field(max_length=200)] | int | None
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
+
+
+class _Request(_Strict):
+    v: Literal[1] = PROTOCOL_VERSION
+    id: RequestId = None
+
+
+class PingRequest(_Request):
+    """Liveness and round-trip latency."""
+
+    op: Literal["ping"]
+
+
+class StatsRequest(_Request):
+    """Counters of the broker and of the worker that answers, and its part cache."""
+
+    op: Literal["stats"]
+
+
+class SleepRequest(_Request):
+    """Debug op (only with `[service] debug_ops = true`): hold a worker for `seconds`."""
+
+    op: Literal["sleep"]
+    seconds: float = Field(ge=0, le=3600)
+
+
+class PartPath(_Strict):
+    """A part file on the service's machine (geomdl JSON/YAML, STEP, IGES, STL)."""
+
+    path: str = Field(min_length=1, max_length=4096)
+
+
+class PartInline(_Strict):
+    """A part sent inline as geomdl exchange JSON (the object `exchange.export_json` writes)."""
+
+    geomdl: dict[str, Any]
+
+
+PartSpec = PartPath | PartInline
+
+
+class AllowableRequest(_Request):
+    """Allowable cutter size at CC points: rows `[x, y, z, nx, ny, nz]` (mm, part frame; the
+    normal points out of the material); `axis` the tool axis (tip -> spindle) for every point;
+    `b_range` `[lo, hi]` degrees adds the best table angle B per point."""
+
+    op: Literal["allowable"]
+    part: PartSpec
+    cc: list[CCRow] = Field(min_length=1)
+    cutter: str = Field(min_length=1, max_length=1000)
+    axis: Vec3 = (0.0, 0.0, 1.0)
+    b_range: tuple[float, float] | None = None
+
+    @model_validator(mode="after")
+    def _check(self) -> AllowableRequest:
+        if sum(c * c for c in self.axis) < 1e-24:
+            raise ValueError("axis must be a non-zero vector")
+        if self.b_range is not None and self.b_range[0] >= self.b_range[1]:
+            raise ValueError(f"b_range must be [lo, hi] with lo < hi, found {list(self.b_range)}")
+        return self
+
+
+class CheckRequest(_Request):
+    """Check a job: the CL file as text (`apt`) or as a path on the service's machine
+    (`apt_path`), with optional part, cutter override (`CUTTER/...`), machine name and options;
+    `post: true` also returns the corrected G-code."""
+
+    op: Literal["check"]
+    apt: str | None = Field(None, min_length=1)
+    apt_path: str | None = Field(None, min_length=1, max_length=4096)
+    part: PartSpec | None = None
+    cutter: str | None = Field(None, min_length=1, max_length=1000)
+    machine: str | None = Field(None, min_length=1, max_length=200)
+    options: dict[str, float | int | str | bool] = Field(default_factory=dict)
+    post: bool = False
+
+    @model_validator(mode="after")
+    def _one_source(self) -> CheckRequest:
+        if (self.apt is None) == (self.apt_path is None):
+            raise ValueError("give exactly one of 'apt' (CL text) and 'apt_path'")
+        return self
+
+
+Request = PingRequest | StatsRequest | SleepRequest | AllowableRequest | CheckRequest
+_REQUEST = TypeAdapter(Annotated[Request, Field(discriminator="op")])
+
+
+# --- replies -------------------------------------------------------------------------------
+
+
+class ErrorInfo(BaseModel):
+    code: str
+    message: str
+    line: int | None = None
+
+
+class Reply(BaseModel):
+    """Common reply fields; op results add their own fields (see docs/protocol.md)."""
+
+    model_config = ConfigDict(extra="allow")
+
+    ok: bool
+    v: int = PROTOCOL_VERSION
+    id: str | int | None = None
+    op: str | None = None
+    error: ErrorInfo | None = None
+
+
+class AllowablePoint(BaseModel):
+    """One CC point as in `pathcheck allowable --json`: sizes mm, B degrees."""
+
+    index: int
+    cc: Vec3
+    normal: Vec3
+    allowable: float | None = Field(description="allowable size, mm; null = unbounded")
+    limiting_point: Vec3 | None = None
+    limiting_surface: int | None = None
+    verdict: str
+    b_best: float | None = None
+    allowable_at_best: float | None = None
+    b_feasible: list[tuple[float, float]] | None = None
+
+
+def error_reply(err: PathcheckError, *, request_id: Any = None, op: str | None = None) -> dict:
+    """The reply for a failed request: `{ok: false, v, id, op, error: {code, message, line?}}`."""
+    return {"ok": False, "v": PROTOCOL_VERSION, "id": request_id, "op": op, "error": err.to_dict()}
+
+
+def ok_reply(result: dict, *, request_id: Any = None, op: str) -> dict:
+    """The reply for a successful request: the op's result fields plus `ok, v, id, op`."""
+    return {"ok": True, "v": PROTOCOL_VERSION, "id": request_id, "op": op, **result}
+
+
+def encode(reply: dict) -> bytes:
+    """A reply as compact UTF-8 JSON; non-finite floats become null (JSON has no NaN)."""
+    try:
+        return json.dumps(reply, separators=(",", ":"), allow_nan=False).encode()
+    except ValueError:
+        return json.dumps(_finite(reply), separators=(",", ":")).encode()
+
+
+def _finite(obj: Any) -> Any:
+    if isinstance(obj, float):
+        return obj if obj == obj and abs(obj) != float("inf") else None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite(v) for v in obj]
+    return obj
+
+
+def peek(raw: bytes) -> tuple[Any, str | None]:
+    """Best effort `(id, op)` of a request that may be invalid, for the error reply."""
+    try:
+        data = json.loads(raw)
+    except (ValueError, UnicodeDecodeError, RecursionError):
+        return None, None
+    if not isinstance(data, dict):
+        return None, None
+    rid = data.get("id")
+    op = data.get("op")
+    rid = rid if isinstance(rid, int | str) and not isinstance(rid, bool) else None
+    return rid, op if isinstance(op, str) else None
+
+
+def parse_request(
+    raw: bytes, *, max_bytes: int, max_points: int, debug_ops: bool = False
+) -> Request:
+    """Validate one request message; raises PathcheckError (code `limit`, `json`, `op`,
+    `version` or `request`) naming the field, what was expected and what was found."""
+    if len(raw) > max_bytes:
+        raise PathcheckError(
+            f"request is {len(raw)} bytes, the limit is {max_bytes} bytes", code="limit"
+        )
+    try:
+        request = _REQUEST.validate_json(raw)
+    except ValidationError as err:
+        raise _request_error(err) from None
+    if isinstance(request, SleepRequest) and not debug_ops:
+        raise _unknown_op("sleep")
+    if isinstance(request, AllowableRequest) and len(request.cc) > max_points:
+        raise PathcheckError(
+            f"field 'cc': {len(request.cc)} points, the limit is {max_points}", code="limit"
+        )
+    return request
+
+
+def _unknown_op(op: object) -> PathcheckError:
+    return PathcheckError(
+        f"unknown op {op!r}; expected one of {', '.join(OPS)}", code="op"
+    )
+
+
+def _request_error(err: ValidationError) -> PathcheckError:
+    first = err.errors(include_url=False)[0]
+    kind = first["type"]
+    if kind == "json_invalid":
+        return PathcheckError(f"request is not valid JSON: {first['ctx']['error']}", code="json")
+    if kind == "dict_type" and not first["loc"]:
+        found = type(first["input"]).__name__
+        return PathcheckError(f"request must be a JSON object, found {found}", code="request")
+    if kind == "union_tag_not_found":
+        return PathcheckError("request has no 'op' field; expected one of " + ", ".join(OPS),
+                              code="op")
+    if kind == "union_tag_invalid":
+        return _unknown_op(first["ctx"]["tag"])
+    loc = [str(p) for p in first["loc"][1:]]  # the first element is the op tag
+    field = ".".join(loc) or "request"
+    found = _short(first.get("input"))
+    if loc == ["v"]:
+        return PathcheckError(
+            f"protocol version {found} is not supported; this service speaks version "
+            f"{PROTOCOL_VERSION}", code="version"
+        )
+    return PathcheckError(f"field '{field}': {first['msg']}, found {found}", code="request")
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    text = json.dumps(value) if not isinstance(value, float) else repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."

@@ -1,0 +1,66 @@
+"""Where every service request is recorded: a `Recorder` protocol, a no-op `NullRecorder`, and
+`StoreRecorder`, the adapter to the results store (`checker.store.ResultsStore`). A recorder
+never fails a request: store errors are logged and swallowed."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+from typing import Any, Protocol
+
+log = logging.getLogger("pathcheck.service")
+
+
+class Recorder(Protocol):
+    def record(
+        self, op: str, reply: dict, elapsed_s: float, document: Any = None, job_path: str = ""
+    ) -> None:
+        """Record one answered request: its op (`?` when it did not parse), the reply object,
+        the seconds the worker spent on it, and for `check` the ResultsDocument and job path."""
+
+
+class NullRecorder:
+    """Records nothing."""
+
+    def record(
+        self, op: str, reply: dict, elapsed_s: float, document: Any = None, job_path: str = ""
+    ) -> None:
+        return None
+
+
+class StoreRecorder:
+    """Records into a results store: a `requests` row per request, and for a checked job the
+    full document as a `jobs` row (source `service`) that the request row points to."""
+
+    def __init__(self, store: Any) -> None:
+        self.store = store
+
+    def record(
+        self, op: str, reply: dict, elapsed_s: float, document: Any = None, job_path: str = ""
+    ) -> None:
+        try:
+            job = None
+            if document is not None:
+                job = self.store.record_job(
+                    document, elapsed_s=elapsed_s, job_path=job_path or None, source="service"
+                )
+            error = reply.get("error") or {}
+            self.store.record_request(
+                op, bool(reply.get("ok")), elapsed_s, error=error.get("message"), job=job
+            )
+        except Exception as err:  # the store must never take a request down with it
+            log.warning("results store: request not recorded: %s", err)
+
+
+def open_recorder(store_path: str | Path | None) -> Recorder:
+    """A StoreRecorder on `store_path` (None: no recording); a store that cannot be opened is
+    logged and requests go unrecorded."""
+    if store_path is None:
+        return NullRecorder()
+    from checker.store import ResultsStore
+
+    try:
+        return StoreRecorder(ResultsStore(store_path))
+    except Exception as err:
+        log.warning("results store %s unavailable, requests are not recorded: %s", store_path, err)
+        return NullRecorder()

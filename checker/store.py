@@ -1,0 +1,369 @@
+"""The results store: one SQLite file that every CLI check, batch job and service request is
+recorded in, and that the nightly report reads.
+
+Safe under concurrent writers (service workers and a batch at once): WAL journal, a busy
+timeout, and one short transaction per record. The schema is versioned with PRAGMA user_version
+and migrated forward on open; a file that is locked, corrupt, from a newer pathcheck or not a
+pathcheck store gets a PathcheckError and is never overwritten.
+
+Times are UTC seconds since the epoch; lengths in mm, as in the results document."""
+
+from __future__ import annotations
+
+import io
+import sqlite3
+import time
+import zlib
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from checker.errors import PathcheckError
+from checker.results import VERDICTS, ResultsDocument
+
+JobStatus = Literal["ok", "findings", "failed"]
+JOB_STATUSES: tuple[str, ...] = ("ok", "findings", "failed")
+
+# migrations[i] takes a store from user_version i to i + 1; never edit one that has shipped
+MIGRATIONS: tuple[str, ...] = (
+    """
+    CREATE TABLE jobs (
+        id INTEGER PRIMARY KEY,
+        recorded_at REAL NOT NULL,
+        source TEXT NOT NULL,
+        status TEXT NOT NULL CHECK (status IN ('ok', 'findings', 'failed')),
+        error TEXT,
+        job_path TEXT NOT NULL,
+        part TEXT,
+        part_hash TEXT,
+        cutter TEXT,
+        machine TEXT,
+        axis_class TEXT,
+        points INTEGER,
+        n_ok INTEGER, n_gouge INTEGER, n_interference INTEGER, n_holder INTEGER,
+        n_inaccessible INTEGER,
+        worst_margin REAL,
+        worst_depth REAL,
+        largest_safe_cutter REAL,
+        largest_safe_standard TEXT,
+        elapsed_s REAL NOT NULL,
+        document BLOB
+    );
+    CREATE INDEX jobs_recorded_at ON jobs (recorded_at);
+    CREATE TABLE requests (
+        id INTEGER PRIMARY KEY,
+        recorded_at REAL NOT NULL,
+        op TEXT NOT NULL,
+        ok INTEGER NOT NULL,
+        elapsed_s REAL NOT NULL,
+        error TEXT,
+        job_id INTEGER REFERENCES jobs (id)
+    );
+    CREATE INDEX requests_recorded_at ON requests (recorded_at);
+    """,
+    """
+    ALTER TABLE jobs ADD COLUMN arrays BLOB;
+    CREATE INDEX jobs_path ON jobs (job_path, recorded_at);
+    """,
+)
+SCHEMA_VERSION = len(MIGRATIONS)
+
+# per-point columns kept beside the document so the report never has to parse JSON
+VERDICT_CODE = {v: i for i, v in enumerate(VERDICTS)}
+ARRAY_FIELDS = ("cc", "allowable", "verdict", "depth", "b_best", "b_chosen", "surface", "kind")
+
+
+@dataclass(frozen=True)
+class JobRow:
+    """One recorded job as the report sees it (no document)."""
+
+    id: int
+    recorded_at: float
+    source: str
+    status: str
+    error: str | None
+    job_path: str
+    part: str | None
+    part_hash: str | None
+    cutter: str | None
+    machine: str | None
+    axis_class: str | None
+    points: int | None
+    n_ok: int | None
+    n_gouge: int | None
+    n_interference: int | None
+    n_holder: int | None
+    n_inaccessible: int | None
+    worst_margin: float | None
+    worst_depth: float | None
+    largest_safe_cutter: float | None
+    largest_safe_standard: str | None
+    elapsed_s: float
+
+
+_ROW_COLUMNS = ", ".join(JobRow.__dataclass_fields__)
+
+
+def point_arrays(doc: ResultsDocument) -> dict[str, np.ndarray]:
+    """Per-point arrays of a document: cc (N,3) mm, allowable/depth/b_best/b_chosen (N,) with nan
+    for null, verdict (N,) int8 code into VERDICTS, surface (N,) int32 (-1 null), kind (N,) bool
+    (True for a CC point, False for an intermediate pose)."""
+    pts = doc.points
+
+    def col(name: str) -> np.ndarray:
+        return np.array([getattr(p, name) for p in pts], dtype=float).reshape(len(pts))
+
+    return {
+        "cc": np.array([p.cc for p in pts], dtype=float).reshape(len(pts), 3),
+        "allowable": col("allowable"),
+        "verdict": np.array([VERDICT_CODE[p.verdict] for p in pts], dtype=np.int8),
+        "depth": col("depth"),
+        "b_best": col("b_best"),
+        "b_chosen": col("b_chosen"),
+        "surface": np.array(
+            [-1 if p.surface is None else p.surface for p in pts], dtype=np.int32
+        ),
+        "kind": np.array([p.kind == "cc" for p in pts], dtype=bool),
+    }
+
+
+def _pack_arrays(arrays: dict[str, np.ndarray]) -> bytes:
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return zlib.compress(buf.getvalue(), 1)
+
+
+def _unpack_arrays(blob: bytes) -> dict[str, np.ndarray]:
+    with np.load(io.BytesIO(zlib.decompress(blob))) as data:
+        return {k: data[k] for k in ARRAY_FIELDS}
+
+
+def job_status(doc: ResultsDocument) -> JobStatus:
+    """'ok' when every point is ok, else 'findings'."""
+    return "ok" if doc.summary.counts.ok == doc.summary.points else "findings"
+
+
+def default_store_path() -> Path:
+    """The store file from the config (PATHCHECK_STORE overrides)."""
+    from checker.config import default_config
+
+    return default_config().store.resolved_path()
+
+
+class ResultsStore:
+    """An open results store. Use as a context manager or call `close()`."""
+
+    def __init__(self, path: str | Path | None = None, *, busy_timeout_s: float = 10.0) -> None:
+        self.path = Path(path) if path is not None else default_store_path()
+        self.busy_timeout_s = busy_timeout_s
+        if self.path.is_dir():
+            raise PathcheckError(
+                "expected an SQLite results store file, found a directory", path=self.path,
+                code="store",
+            )
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._con = self._connect()
+        try:
+            self._migrate()
+        except BaseException:
+            self._con.close()
+            raise
+
+    # ------------------------------------------------------------------ opening
+    def _fail(self, err: sqlite3.Error, doing: str) -> PathcheckError:
+        text = str(err)
+        if "locked" in text or "busy" in text:
+            msg = f"store is locked by another process (waited {self.busy_timeout_s:g} s) while {doing}"
+        elif isinstance(err, sqlite3.DatabaseError) and not isinstance(err, sqlite3.OperationalError):
+            msg = f"not a readable pathcheck store ({text}) while {doing}; the file was left untouched"
+        else:
+            msg = f"store error while {doing}: {text}"
+        return PathcheckError(msg, path=self.path, code="store")
+
+    def _connect(self) -> sqlite3.Connection:
+        try:
+            con = sqlite3.connect(
+                self.path, timeout=self.busy_timeout_s, isolation_level=None,
+                check_same_thread=False,
+            )
+            con.execute(f"PRAGMA busy_timeout = {int(self.busy_timeout_s * 1000)}")
+            con.execute("PRAGMA foreign_keys = ON")
+            mode = con.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+        except sqlite3.Error as err:
+            raise self._fail(err, "opening the store") from err
+        if mode.lower() != "wal":
+            con.close()
+            raise PathcheckError(
+                f"expected the store to switch to WAL journal mode, found '{mode}'",
+                path=self.path, code="store",
+            )
+        return con
+
+    @contextmanager
+    def _write(self, doing: str) -> Iterator[sqlite3.Connection]:
+        """One short write transaction (BEGIN IMMEDIATE waits up to the busy timeout)."""
+        try:
+            self._con.execute("BEGIN IMMEDIATE")
+        except sqlite3.Error as err:
+            raise self._fail(err, doing) from err
+        try:
+            yield self._con
+            self._con.execute("COMMIT")
+        except BaseException as err:
+            self._con.execute("ROLLBACK")
+            if isinstance(err, sqlite3.Error):
+                raise self._fail(err, doing) from err
+            raise
+
+    def _migrate(self) -> None:
+        try:
+            version = self._con.execute("PRAGMA user_version").fetchone()[0]
+        except sqlite3.Error as err:
+            raise self._fail(err, "reading the schema version") from err
+        if version > SCHEMA_VERSION:
+            raise PathcheckError(
+                f"store schema version {version} is newer than this pathcheck understands "
+                f"(expected at most {SCHEMA_VERSION}); upgrade pathcheck", path=self.path,
+                code="store",
+            )
+        if version == SCHEMA_VERSION:
+            return
+        with self._write("migrating the schema") as con:
+            version = con.execute("PRAGMA user_version").fetchone()[0]  # another writer won?
+            if version == 0:
+                tables = con.execute(
+                    "SELECT count(*) FROM sqlite_master WHERE name NOT LIKE 'sqlite_%'"
+                ).fetchone()[0]
+                if tables:
+                    raise PathcheckError(
+                        f"expected a pathcheck results store, found an SQLite file with {tables} "
+                        "other tables; the file was left untouched", path=self.path, code="store",
+                    )
+            for step in range(version, SCHEMA_VERSION):
+                for statement in MIGRATIONS[step].split(";"):
+                    if statement.strip():
+                        con.execute(statement)
+                con.execute(f"PRAGMA user_version = {step + 1}")
+
+    @property
+    def schema_version(self) -> int:
+        return self._con.execute("PRAGMA user_version").fetchone()[0]
+
+    def close(self) -> None:
+        self._con.close()
+
+    def __enter__(self) -> ResultsStore:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ writing
+    def record_job(
+        self,
+        doc: ResultsDocument | None,
+        *,
+        status: JobStatus | None = None,
+        error: str | None = None,
+        elapsed_s: float,
+        job_path: str | Path | None = None,
+        source: str = "cli",
+        recorded_at: float | None = None,
+    ) -> int:
+        """Record one checked job (the full document) or a failed one (`doc=None`, `error` and
+        `job_path` given). `status` defaults to 'ok'/'findings' from the document. Returns the
+        job id."""
+        if doc is None and (job_path is None or error is None):
+            raise ValueError("a failed job needs job_path and error")
+        status = status or ("failed" if doc is None else job_status(doc))
+        if status not in JOB_STATUSES:
+            raise ValueError(f"status must be one of {JOB_STATUSES}, got {status!r}")
+        row: dict[str, object] = {
+            "recorded_at": time.time() if recorded_at is None else recorded_at,
+            "source": source, "status": status, "error": error,
+            "job_path": str(job_path if job_path is not None else doc.job.path),
+            "elapsed_s": float(elapsed_s),
+        }
+        if doc is not None:
+            s, job = doc.summary, doc.job
+            row.update(
+                part=job.part, part_hash=job.part_hash, cutter=job.cutter, machine=job.machine,
+                axis_class=job.axis_class, points=s.points,
+                **{f"n_{v}": getattr(s.counts, v) for v in VERDICTS},
+                worst_margin=s.worst_margin, worst_depth=s.worst_depth,
+                largest_safe_cutter=s.largest_safe_cutter,
+                largest_safe_standard=s.largest_safe_standard_cutter,
+                document=zlib.compress(doc.model_dump_json().encode(), 1),
+                arrays=_pack_arrays(point_arrays(doc)),
+            )
+        names = ", ".join(row)
+        marks = ", ".join("?" for _ in row)
+        with self._write("recording a job") as con:
+            cur = con.execute(f"INSERT INTO jobs ({names}) VALUES ({marks})", tuple(row.values()))
+            return int(cur.lastrowid)
+
+    def record_request(
+        self,
+        op: str,
+        ok: bool,
+        elapsed_s: float,
+        error: str | None = None,
+        job: int | None = None,
+    ) -> int:
+        """Record one service request; `job` is the id returned by `record_job`, if any."""
+        with self._write("recording a request") as con:
+            cur = con.execute(
+                "INSERT INTO requests (recorded_at, op, ok, elapsed_s, error, job_id) "
+                "VALUES (?, ?, ?, ?, ?, ?)",
+                (time.time(), op, int(bool(ok)), float(elapsed_s), error, job),
+            )
+            return int(cur.lastrowid)
+
+    # ------------------------------------------------------------------ reading
+    def _read(self, sql: str, args: tuple = ()) -> list[tuple]:
+        try:
+            return self._con.execute(sql, args).fetchall()
+        except sqlite3.Error as err:
+            raise self._fail(err, "reading") from err
+
+    def jobs(self, since: float | None = None, until: float | None = None) -> list[JobRow]:
+        """Recorded jobs with since <= recorded_at < until (UTC epoch s), oldest first."""
+        rows = self._read(
+            f"SELECT {_ROW_COLUMNS} FROM jobs WHERE recorded_at >= ? AND recorded_at < ? "
+            "ORDER BY recorded_at, id",
+            (-np.inf if since is None else since, np.inf if until is None else until),
+        )
+        return [JobRow(*r) for r in rows]
+
+    def previous(self, job_path: str, before: float) -> JobRow | None:
+        """The last record of the same job path before `before`, for trends."""
+        rows = self._read(
+            f"SELECT {_ROW_COLUMNS} FROM jobs WHERE job_path = ? AND recorded_at < ? "
+            "ORDER BY recorded_at DESC, id DESC LIMIT 1",
+            (job_path, before),
+        )
+        return JobRow(*rows[0]) if rows else None
+
+    def document(self, job_id: int) -> ResultsDocument | None:
+        """The full results document of a job (None for a failed job)."""
+        rows = self._read("SELECT document FROM jobs WHERE id = ?", (job_id,))
+        if not rows or rows[0][0] is None:
+            return None
+        return ResultsDocument.model_validate_json(zlib.decompress(rows[0][0]))
+
+    def arrays(self, job_id: int) -> dict[str, np.ndarray] | None:
+        """The per-point arrays of a job (see `point_arrays`), None for a failed job."""
+        rows = self._read("SELECT arrays FROM jobs WHERE id = ?", (job_id,))
+        return _unpack_arrays(rows[0][0]) if rows and rows[0][0] is not None else None
+
+    def requests(self, since: float | None = None) -> list[tuple]:
+        """(recorded_at, op, ok, elapsed_s, error, job_id) of service requests since `since`."""
+        return self._read(
+            "SELECT recorded_at, op, ok, elapsed_s, error, job_id FROM requests "
+            "WHERE recorded_at >= ? ORDER BY recorded_at, id",
+            (-np.inf if since is None else since,),
+        )
