@@ -24,6 +24,7 @@ class GeometryConfig(_Section):
     sag_tolerance: PositiveFloat = 0.05
     max_samples_per_surface: PositiveInt = 200_000
     min_samples_per_direction: PositiveInt = 8
+    max_spacing: PositiveFloat = 1.0
 
 
 class CheckConfig(_Section):
@@ -61,10 +62,18 @@ class ServiceConfig(_Section):
 
 class StoreConfig(_Section):
     path: str = "~/.local/share/pathcheck/results.sqlite"
+    busy_timeout_s: PositiveFloat = 10.0
 
     def resolved_path(self) -> Path:
         """The store file: PATHCHECK_STORE if set, else `path`, with ~ expanded."""
         return Path(os.environ.get("PATHCHECK_STORE") or self.path).expanduser()
+
+
+class ReportConfig(_Section):
+    standard_diameters: tuple[PositiveFloat, ...] = (3.175, 6.35, 12.7, 25.4, 50.8)
+    trend_nights: PositiveInt = 14
+    picture_dpi: PositiveInt = 72
+    render_workers: PositiveInt = 2
 
 
 class Config(_Section):
@@ -74,6 +83,7 @@ class Config(_Section):
     intermediate: IntermediateConfig = IntermediateConfig()
     service: ServiceConfig = ServiceConfig()
     store: StoreConfig = StoreConfig()
+    report: ReportConfig = ReportConfig()
 
 
 def _read_toml(path: Path) -> dict:

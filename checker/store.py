@@ -22,6 +22,7 @@ from typing import Literal
 
 import numpy as np
 
+from checker.config import default_config
 from checker.errors import PathcheckError
 from checker.results import VERDICTS, ResultsDocument
 
@@ -67,6 +68,7 @@ MIGRATIONS: tuple[str, ...] = (
     """,
     """
     ALTER TABLE jobs ADD COLUMN arrays BLOB;
+    ALTER TABLE jobs ADD COLUMN cutter_size REAL;
     CREATE INDEX jobs_path ON jobs (job_path, recorded_at);
     """,
 )
@@ -103,6 +105,7 @@ class JobRow:
     largest_safe_cutter: float | None
     largest_safe_standard: str | None
     elapsed_s: float
+    cutter_size: float | None
 
 
 _ROW_COLUMNS = ", ".join(JobRow.__dataclass_fields__)
@@ -147,19 +150,19 @@ def job_status(doc: ResultsDocument) -> JobStatus:
     return "ok" if doc.summary.counts.ok == doc.summary.points else "findings"
 
 
-def default_store_path() -> Path:
-    """The store file from the config (PATHCHECK_STORE overrides)."""
-    from checker.config import default_config
-
-    return default_config().store.resolved_path()
 
 
 class ResultsStore:
     """An open results store. Use as a context manager or call `close()`."""
 
-    def __init__(self, path: str | Path | None = None, *, busy_timeout_s: float = 10.0) -> None:
-        self.path = Path(path) if path is not None else default_store_path()
-        self.busy_timeout_s = busy_timeout_s
+    def __init__(
+        self, path: str | Path | None = None, *, busy_timeout_s: float | None = None
+    ) -> None:
+        """Open (and create or migrate) the store at `path`, default: the config's store path
+        (PATHCHECK_STORE overrides); writers wait up to `busy_timeout_s` for a lock."""
+        cfg = default_config().store
+        self.path = Path(path) if path is not None else cfg.resolved_path()
+        self.busy_timeout_s = cfg.busy_timeout_s if busy_timeout_s is None else busy_timeout_s
         if self.path.is_dir():
             raise PathcheckError(
                 "expected an SQLite results store file, found a directory", path=self.path,
@@ -177,9 +180,15 @@ class ResultsStore:
     def _fail(self, err: sqlite3.Error, doing: str) -> PathcheckError:
         text = str(err)
         if "locked" in text or "busy" in text:
-            msg = f"store is locked by another process (waited {self.busy_timeout_s:g} s) while {doing}"
-        elif isinstance(err, sqlite3.DatabaseError) and not isinstance(err, sqlite3.OperationalError):
-            msg = f"not a readable pathcheck store ({text}) while {doing}; the file was left untouched"
+            msg = (
+                f"store is locked by another process (waited {self.busy_timeout_s:g} s) "
+                f"while {doing}"
+            )
+        elif not isinstance(err, sqlite3.OperationalError):
+            msg = (
+                f"expected an SQLite pathcheck store, found an unreadable file ({text}) "
+                f"while {doing}; the file was left untouched"
+            )
         else:
             msg = f"store error while {doing}: {text}"
         return PathcheckError(msg, path=self.path, code="store")
@@ -292,7 +301,7 @@ class ResultsStore:
             s, job = doc.summary, doc.job
             row.update(
                 part=job.part, part_hash=job.part_hash, cutter=job.cutter, machine=job.machine,
-                axis_class=job.axis_class, points=s.points,
+                axis_class=job.axis_class, cutter_size=job.cutter_size, points=s.points,
                 **{f"n_{v}": getattr(s.counts, v) for v in VERDICTS},
                 worst_margin=s.worst_margin, worst_depth=s.worst_depth,
                 largest_safe_cutter=s.largest_safe_cutter,

@@ -4,6 +4,7 @@ results as the protocol's reply fields. Bad input raises PathcheckError."""
 
 from __future__ import annotations
 
+import importlib
 import os
 import tempfile
 import time
@@ -60,14 +61,15 @@ def sleep(req: p.SleepRequest, state: WorkerState) -> dict:
 
 def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
     """Allowable cutter size at every CC row, as `pathcheck allowable --json` writes it."""
-    from checker.cutter import parse_cutter
-    from checker.engine import allowable as engine_allowable
-
-    cutter = parse_cutter(req.cutter)
     rows = np.asarray(req.cc, dtype=np.float64).reshape(-1, 6)
     cc, normals = rows[:, :3], _unit_rows(rows[:, 3:], "cc", "normal")
     axis = np.asarray(req.axis, dtype=np.float64)
     axes = np.broadcast_to(axis / np.linalg.norm(axis), cc.shape)
+    if isinstance(req.part, p.PartPath):
+        _existing(req.part.path)
+    parse_cutter = _library("checker.cutter", "parse_cutter", "allowable")
+    engine_allowable = _library("checker.engine", "allowable", "allowable")
+    cutter = parse_cutter(req.cutter)
     entry, cached, key = cached_part(req.part, state)
     t0 = time.perf_counter()
     result = engine_allowable(entry.test_points, entry.part, cutter, cc, normals, axes)
@@ -88,8 +90,11 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
 
 def check(req: p.CheckRequest, state: WorkerState) -> dict:
     """Check a job with `checker.job.check_job`; `post` also returns the G-code text."""
-    from checker.job import check_job
-
+    if isinstance(req.part, p.PartPath):
+        _existing(req.part.path)
+    if req.apt_path is not None:
+        _existing(req.apt_path, "apt_path", "a CL file")
+    check_job = _library("checker.job", "check_job", "check")
     with tempfile.TemporaryDirectory(prefix="pathcheck-service-") as tmp:
         apt_path = Path(req.apt_path) if req.apt_path else Path(tmp) / "job.apt"
         if req.apt is not None:
@@ -142,9 +147,8 @@ def cached_part(spec: p.PartSpec, state: WorkerState) -> tuple[CachedPart, bool,
 
 
 def _load_and_sample(path: Path, config: Config) -> CachedPart:
-    from checker.geometry import load_part
-    from checker.geometry.sampling import sample_part
-
+    load_part = _library("checker.geometry", "load_part", "allowable")
+    sample_part = _library("checker.geometry.sampling", "sample_part", "allowable")
     t0 = time.perf_counter()
     part = load_part(path)
     t1 = time.perf_counter()
@@ -165,13 +169,22 @@ def _part_file(spec: p.PartSpec, folder: Path) -> Path:
     return path
 
 
-def _existing(path: str) -> Path:
+def _existing(path: str, field_name: str = "part.path", what: str = "a part file") -> Path:
     out = Path(path).expanduser()
     if not out.is_file():
         found = "a directory" if out.is_dir() else "nothing"
-        raise PathcheckError(f"field 'part.path': expected a part file, found {found}",
-                             path=out, code="part")
+        raise PathcheckError(f"field '{field_name}': expected {what}, found {found}",
+                             path=out, code="part" if field_name.startswith("part") else "input")
     return out
+
+
+def _library(module: str, name: str, op: str) -> Any:
+    """`module.name`, imported now; a missing library module is an `unavailable` error."""
+    try:
+        return getattr(importlib.import_module(module), name)
+    except (ModuleNotFoundError, AttributeError) as err:
+        raise PathcheckError(f"op '{op}' is not available in this build: {err}",
+                             code="unavailable") from err
 
 
 # --- formatting ------------------------------------------------------------------------------
@@ -190,7 +203,7 @@ def _unit_rows(v: np.ndarray, field_name: str, what: str) -> np.ndarray:
 def _best_b(req: p.AllowableRequest, entry: CachedPart, cutter: Any, cc: np.ndarray,
             normals: np.ndarray) -> dict[str, Any]:
     """b_best, allowable_at_best and b_feasible per point (degrees, mm) over `req.b_range`."""
-    from checker.four_axis import best_b
+    best_b = _library("checker.four_axis", "best_b", "allowable with b_range")
 
     lo, hi = req.b_range
     out = best_b(entry.test_points, entry.part, cutter, cc, normals, b_range=(lo, hi))

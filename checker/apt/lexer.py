@@ -1,0 +1,153 @@
+"""CL text -> `Record`s: `$` continuation, `$$` comments, free-text statements, column-72 card
+images, numbers checked (finite, not absurd). No meaning is given to any word here."""
+
+from __future__ import annotations
+
+import math
+import re
+
+from checker.errors import PathcheckError
+from checker.toolpath import Record, Value
+
+# statements whose text after "/" is literal (commas, slashes and "$" included)
+FREE_TEXT = frozenset({"PARTNO", "PPRINT", "INSERT", "TITLE", "REMARK"})
+# a number as APT writes it: 5.  .5  -0.173648  1.0E+02  1.0D+02
+_NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?"
+_NUM_RE = re.compile(_NUM)
+_FAST_NUMS = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:,[+-]?(?:\d+\.?\d*|\.\d+))*")
+_STATEMENT = re.compile(r"([A-Za-z][A-Za-z0-9_\-]*(?: [A-Za-z][A-Za-z0-9_\-]*)*)\s*(/?)(.*)", re.S)
+_WORD_TOKEN = re.compile(r"[\x21-\x7e](?:[\x20-\x7e]*[\x21-\x7e])?")
+_HAS_LETTER = re.compile(r"[A-Za-z]")
+MAX_ABS = 1e15  # larger numbers are malformed input, not coordinates
+
+
+def _show(text: str, limit: int = 40) -> str:
+    text = text.strip()
+    return repr(text if len(text) <= limit else text[:limit] + "...")
+
+
+def parse_args(raw: str, word: str, *, path: str, line: int) -> tuple[Value, ...]:
+    """The comma-separated values after ``WORD/``: floats or upper-case minor words."""
+    if not raw.strip():
+        return ()
+    if _FAST_NUMS.fullmatch(raw):
+        vals = tuple(map(float, raw.split(",")))
+        if all(abs(v) <= MAX_ABS for v in vals):
+            return vals
+    out: list[Value] = []
+    for pos, tok in enumerate(raw.split(","), start=1):
+        tok = tok.strip()
+        if not tok:
+            raise PathcheckError(
+                f"{word}/: expected a value at position {pos}, found an empty field",
+                path=path,
+                line=line,
+                code="parse",
+            )
+        if _NUM_RE.fullmatch(tok):
+            v = float(tok.replace("D", "E").replace("d", "e"))
+            if not (math.isfinite(v) and abs(v) <= MAX_ABS):
+                raise PathcheckError(
+                    f"{word}/: expected a finite number of at most {MAX_ABS:g} at position "
+                    f"{pos}, found {_show(tok)}",
+                    path=path,
+                    line=line,
+                    code="parse",
+                )
+            out.append(v)
+        elif _HAS_LETTER.search(tok) and _WORD_TOKEN.fullmatch(tok):
+            out.append(tok.upper())
+        else:
+            raise PathcheckError(
+                f"{word}/: expected a number or a word at position {pos}, found malformed "
+                f"{_show(tok)}",
+                path=path,
+                line=line,
+                code="parse",
+            )
+    return tuple(out)
+
+
+def is_card_image(lines: list[str]) -> bool:
+    """True for 80-column card images (sequence numbers in columns 73-80): at least 90 % of the
+    non-blank lines are exactly 80 characters wide."""
+    widths = [len(s) for s in lines if s.strip()]
+    return bool(widths) and sum(w == 80 for w in widths) >= 0.9 * len(widths)
+
+
+def _split_comment(body: str) -> tuple[str, str | None]:
+    """``'GOTO/1,2,3 $$ note'`` -> ``('GOTO/1,2,3', ' note')``."""
+    k = body.find("$$")
+    if k < 0:
+        return body, None
+    return body[:k].rstrip(), body[k + 2 :].rstrip()
+
+
+def _statement(text: str) -> tuple[str, bool, str] | None:
+    """``(WORD, has_slash, rest)`` of a statement, None when the text is not one."""
+    m = _STATEMENT.fullmatch(text)
+    if m is None or (not m.group(2) and m.group(3).strip()):
+        return None
+    return " ".join(m.group(1).upper().split()), bool(m.group(2)), m.group(3)
+
+
+def lex(
+    lines: list[str], *, path: str, column72: bool, header_comments: bool
+) -> list[Record]:
+    """Records of the file. ``header_comments``: lines before the first statement that are not
+    statements (the NX "Information listing" header) become comment records."""
+    records: list[Record] = []
+    append = records.append
+    pending: list[str] = []
+    pending_line = 0
+    comment: str | None = None
+    seen_statement = False
+    for no, raw in enumerate(lines, start=1):
+        s = (raw[:72] if column72 else raw).rstrip()
+        if not pending and s.startswith("GOTO/") and "$" not in s:
+            # the common case, kept lean
+            append(Record("GOTO", parse_args(s[5:], "GOTO", path=path, line=no), no))
+            seen_statement = True
+            continue
+        stripped = s.strip()
+        if not stripped:
+            continue
+        if stripped.startswith("$$"):
+            append(Record("$$", (), no, text=stripped[2:]))
+            continue
+        if not pending:
+            head = _statement(stripped)
+            if head is None and header_comments and not seen_statement:
+                append(Record("$$", (), no, text=" " + stripped))
+                continue
+            seen_statement = True
+            if head is not None and head[0] in FREE_TEXT and head[1]:
+                append(Record(head[0], (), no, text=head[2].rstrip()))
+                continue
+            pending_line, comment = no, None
+        body, note = _split_comment(stripped)
+        comment = note if note is not None else comment
+        if body.endswith("$"):
+            pending.append(body[:-1])
+            continue
+        pending.append(body)
+        text, pending = "".join(pending), []
+        head = _statement(text)
+        if head is None:
+            raise PathcheckError(
+                f"expected a statement WORD/values, found {_show(text)}",
+                path=path,
+                line=pending_line,
+                code="parse",
+            )
+        word, slash, rest = head
+        args = parse_args(rest, word, path=path, line=pending_line)
+        append(Record(word, args, pending_line, comment=comment, slash=slash))
+    if pending:
+        raise PathcheckError(
+            "statement continued with '$' but the file ends: expected a continuation line",
+            path=path,
+            line=pending_line,
+            code="parse",
+        )
+    return records

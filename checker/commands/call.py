@@ -1,0 +1,117 @@
+"""`pathcheck call OP [FIELD=VALUE ...]`: send one request to the service and print the reply
+JSON, for scripts. An error reply is one line on stderr and exit code 2."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import click
+
+from checker.errors import PathcheckError
+
+
+@click.command()
+@click.argument("op")
+@click.argument("fields", nargs=-1)
+@click.option("--address", default=None, help="service address [config: service.bind]")
+@click.option("--timeout", "timeout_s", type=click.FloatRange(min=0, min_open=True),
+              default=60.0, show_default=True, help="seconds to wait for each attempt")
+@click.option("--retries", type=click.IntRange(min=0), default=2, show_default=True)
+@click.option("--dealer", is_flag=True, help="use a DEALER socket instead of REQ")
+@click.option("--request", "request_file", type=click.File("r"), default=None,
+              help="JSON object with the request fields ('-' reads stdin); FIELD=VALUE override")
+@click.option("--cc", "cc_csv", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="CSV with a header row and columns x,y,z,nx,ny,nz: the `cc` field")
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="write the reply JSON here instead of stdout")
+@click.option("--gcode-out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="write the reply's `gcode` (check with post=true) to this file")
+def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float, retries: int,
+         dealer: bool, request_file: Any, cc_csv: Path | None, out: Path | None,
+         gcode_out: Path | None) -> None:
+    """Call the pathcheck service: OP is ping, stats, allowable or check; each FIELD=VALUE sets
+    a request field (VALUE is JSON, else a string; @FILE reads the file's text; dotted names
+    nest: part.path=part.json).
+
+    \b
+    pathcheck call ping
+    pathcheck call allowable part.path=mould.json --cc cc.csv cutter=CUTTER/10,2
+    pathcheck call check apt=@job.apt part.path=job.json post=true --gcode-out job.nc
+    """
+    from checker.client import Client, raise_for_error
+    from checker.config import default_config
+
+    message: dict[str, Any] = {}
+    if request_file is not None:
+        message = _json_object(request_file.read(), request_file.name)
+    for item in fields:
+        _set(message, *_field(item))
+    if cc_csv is not None:
+        message["cc"] = _read_cc(cc_csv)
+    message["op"] = op
+    with Client(address or default_config().service.bind, timeout_s=timeout_s, retries=retries,
+                kind="dealer" if dealer else "req") as client:
+        reply = raise_for_error(client.call(**message))
+    if gcode_out is not None:
+        if not reply.get("gcode"):
+            raise PathcheckError("the reply has no G-code (ask with post=true)", code="usage")
+        gcode_out.write_text(reply["gcode"])
+    text = json.dumps(reply, indent=1)
+    if out is not None:
+        out.write_text(text + "\n")
+    else:
+        click.echo(text)
+
+
+def _json_object(text: str, name: str) -> dict:
+    try:
+        data = json.loads(text)
+    except ValueError as err:
+        raise PathcheckError(f"expected a JSON object, found invalid JSON: {err}", path=name,
+                             code="usage") from err
+    if not isinstance(data, dict):
+        raise PathcheckError(f"expected a JSON object, found {type(data).__name__}", path=name,
+                             code="usage")
+    return data
+
+
+def _field(item: str) -> tuple[list[str], Any]:
+    """`a.b=VALUE` -> (['a', 'b'], value): JSON if it parses, @FILE the file's text, else text."""
+    name, sep, raw = item.partition("=")
+    if not sep or not name:
+        raise PathcheckError(f"expected FIELD=VALUE, found {item!r}", code="usage")
+    if raw.startswith("@"):
+        try:
+            return name.split("."), Path(raw[1:]).read_text()
+        except OSError as err:
+            raise PathcheckError(f"cannot read {name}: {err.strerror}", path=raw[1:],
+                                 code="usage") from err
+    try:
+        return name.split("."), json.loads(raw)
+    except ValueError:
+        return name.split("."), raw
+
+
+def _set(message: dict, keys: list[str], value: Any) -> None:
+    for key in keys[:-1]:
+        message = message.setdefault(key, {})
+        if not isinstance(message, dict):
+            raise PathcheckError(f"field '{key}' is not an object", code="usage")
+    message[keys[-1]] = value
+
+
+def _read_cc(path: Path) -> list[list[float]]:
+    """Rows x,y,z,nx,ny,nz of a CSV file with a header row."""
+    import numpy as np
+
+    try:
+        rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    except (OSError, ValueError) as err:
+        raise PathcheckError(f"expected a CSV of x,y,z,nx,ny,nz with a header row: {err}",
+                             path=path, code="usage") from err
+    if rows.shape[1] != 6:
+        raise PathcheckError(f"expected 6 columns x,y,z,nx,ny,nz, found {rows.shape[1]}",
+                             path=path, code="usage")
+    return rows.tolist()

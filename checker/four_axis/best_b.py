@@ -1,0 +1,165 @@
+"""The best table angle per CC point: B* = argmax over B of min over test points of R(P; B)
+(thesis eq. 2.2, chapter 5), and the feasible B intervals for the real cutter.
+
+Works on any `allowable_fn(point_index (M,), b_deg (M,)) -> sizes (M,)` (mm, inf = unbounded), so
+the engine evaluates many (point, B) rows as one batch. A coarse scan over the machine's B range,
+then a vectorised golden-section refinement around the best few local maxima of every point
+(to `b_tolerance` degrees), and a vectorised bisection of every interval end. Degrees throughout.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.four_axis.intervals import Intervals, feasible_intervals
+
+AllowableFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
+GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
+
+
+@dataclass(frozen=True)
+class BestB:
+    """Per point: best B and the allowable size there, the feasible intervals, and the coarse
+    samples (grid (K,), sizes (N, K)) they came from."""
+
+    b_best: np.ndarray
+    allowable_at_best: np.ndarray
+    feasible: list[Intervals]
+    grid: np.ndarray
+    samples: np.ndarray
+
+
+def coarse_grid(b_min: float, b_max: float, step: float) -> np.ndarray:
+    """Evenly spaced B values covering [b_min, b_max] with spacing <= step, degrees."""
+    count = max(2, int(np.ceil((b_max - b_min) / step - 1e-9)) + 1)
+    return np.linspace(b_min, b_max, count)
+
+
+def _scan(fn: AllowableFn, n: int, grid: np.ndarray) -> np.ndarray:
+    rows = np.repeat(np.arange(n), grid.size)
+    return fn(rows, np.tile(grid, n)).reshape(n, grid.size)
+
+
+def _top_local_maxima(samples: np.ndarray, count: int) -> np.ndarray:
+    """Column indices (N, count) of the largest local maxima of each row (repeats when fewer)."""
+    padded = np.pad(samples, ((0, 0), (1, 1)), constant_values=-np.inf)
+    is_peak = (samples >= padded[:, :-2]) & (samples >= padded[:, 2:])
+    score = np.where(is_peak, samples, -np.inf)
+    order = np.argsort(-score, axis=1, kind="stable")[:, :count]
+    first = order[:, :1]
+    valid = np.take_along_axis(score, order, axis=1) > -np.inf
+    return np.where(valid, order, first)
+
+
+def _golden_max(fn: AllowableFn, rows: np.ndarray, lo: np.ndarray, hi: np.ndarray, tol: float):
+    """Vectorised golden-section search for the maximum of fn(row, b) on [lo, hi] per row."""
+    a, b = lo.copy(), hi.copy()
+    c = b - GOLDEN * (b - a)
+    d = a + GOLDEN * (b - a)
+    fc, fd = fn(rows, c), fn(rows, d)
+    while np.max(b - a) > tol:
+        left = fc >= fd  # keep [a, d]
+        b = np.where(left, d, b)
+        a = np.where(left, a, c)
+        new_c = b - GOLDEN * (b - a)
+        new_d = a + GOLDEN * (b - a)
+        probe = np.where(left, new_c, new_d)
+        fp = fn(rows, probe)
+        c, fc, d, fd = (
+            np.where(left, new_c, d),
+            np.where(left, fp, fd),
+            np.where(left, c, new_d),
+            np.where(left, fc, fp),
+        )
+    best_is_c = fc >= fd
+    return np.where(best_is_c, c, d), np.where(best_is_c, fc, fd)
+
+
+def _refine_ends(fn: AllowableFn, rows, inside, outside, level, tol: float) -> np.ndarray:
+    """Bisection of the boundary between a feasible B (`inside`) and an infeasible one."""
+    inside, outside = inside.copy(), outside.copy()
+    while rows.size and np.max(np.abs(outside - inside)) > tol:
+        mid = 0.5 * (inside + outside)
+        ok = fn(rows, mid) >= level
+        inside = np.where(ok, mid, inside)
+        outside = np.where(ok, outside, mid)
+    return inside
+
+
+def _refined_intervals(fn, grid, samples, required, tol) -> list[Intervals]:
+    coarse = feasible_intervals(grid, samples, required)
+    step = grid[1] - grid[0]
+    ends = [
+        (row, j, side, value)
+        for row, ivs in enumerate(coarse)
+        for j, iv in enumerate(ivs)
+        for side, value in enumerate(iv)
+        if grid[0] + 1e-9 < value < grid[-1] - 1e-9
+    ]
+    if not ends:
+        return coarse
+    rows = np.array([e[0] for e in ends])
+    side = np.array([e[2] for e in ends])
+    value = np.array([e[3] for e in ends])
+    # the coarse end lies between two grid samples: the feasible one and the infeasible one
+    k = np.clip(np.searchsorted(grid, value), 1, grid.size - 1)
+    inside = np.where(side == 0, grid[k], grid[k - 1])
+    outside = np.where(side == 0, grid[k - 1], grid[k])
+    inside = np.where(np.abs(inside - value) > step, value, inside)
+    level = np.broadcast_to(np.asarray(required, float), (len(coarse),))[rows]
+    refined = _refine_ends(fn, rows, inside, outside, level, tol)
+    out = [list(ivs) for ivs in coarse]
+    for (row, j, s, _), v in zip(ends, refined.tolist(), strict=True):
+        lo, hi = out[row][j]
+        out[row][j] = (v, hi) if s == 0 else (lo, v)
+    return out
+
+
+def best_b(
+    fn: AllowableFn,
+    n: int,
+    *,
+    b_min: float,
+    b_max: float,
+    coarse_step: float,
+    tolerance: float,
+    required: float | np.ndarray,
+    reference: np.ndarray | None = None,
+    candidates: int = 3,
+) -> BestB:
+    """Best B to `tolerance` degrees for n points, and their feasible intervals for a cutter that
+    needs `required` mm. Unbounded plateaus (inf) take the B nearest `reference` (the CAM's B)."""
+    grid = coarse_grid(b_min, b_max, coarse_step)
+    samples = _scan(fn, n, grid)
+    reference = np.zeros(n) if reference is None else np.nan_to_num(reference, nan=0.0)
+    b_best = np.empty(n)
+    at_best = np.empty(n)
+    unbounded = np.isinf(samples).any(axis=1)
+    if unbounded.any():
+        distance = np.where(np.isinf(samples), np.abs(grid[None, :] - reference[:, None]), np.inf)
+        k = np.argmin(distance, axis=1)
+        b_best[unbounded] = grid[k[unbounded]]
+        at_best[unbounded] = np.inf
+    bounded = np.flatnonzero(~unbounded)
+    if bounded.size:
+        peaks = _top_local_maxima(samples[bounded], min(candidates, grid.size))
+        rows = np.repeat(bounded, peaks.shape[1])
+        k = peaks.ravel()
+        step = grid[1] - grid[0]
+        lo = np.maximum(grid[k] - step, b_min)
+        hi = np.minimum(grid[k] + step, b_max)
+        b_ref, f_ref = _golden_max(fn, rows, lo, hi, tolerance)
+        f_ref = f_ref.reshape(-1, peaks.shape[1])
+        b_ref = b_ref.reshape(-1, peaks.shape[1])
+        coarse_best = samples[bounded].max(axis=1)
+        pick = np.argmax(f_ref, axis=1)
+        chosen_f = f_ref[np.arange(bounded.size), pick]
+        chosen_b = b_ref[np.arange(bounded.size), pick]
+        use_grid = coarse_best > chosen_f
+        b_best[bounded] = np.where(use_grid, grid[np.argmax(samples[bounded], axis=1)], chosen_b)
+        at_best[bounded] = np.maximum(chosen_f, coarse_best)
+    feasible = _refined_intervals(fn, grid, samples, required, tolerance)
+    return BestB(b_best, at_best, feasible, grid, samples)

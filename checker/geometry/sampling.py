@@ -1,0 +1,185 @@
+"""Test points for the allowable-cutter search: every surface of a part sampled densely enough
+for the sag tolerance and the spacing limit in config, trimmed-away regions left out, each point
+with its (surface, u, v), in one cKDTree. Cached in memory by (content hash, settings)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from checker.config import GeometryConfig, default_config
+from checker.geometry.evaluate import evaluate
+from checker.part import MeshPart, Part, Surface
+
+_PROBES_PER_SPAN = 4
+_CACHE: dict[tuple, TestPoints] = {}
+_CACHE_MAX = 8
+
+
+@dataclass
+class TestPoints:
+    """M test points in mm in the part frame: `points (M, 3)`, unit `normals (M, 3)` (out of the
+    material), `surface (M,) int32` (-1 for mesh parts), `uv (M, 2)` (nan for mesh parts),
+    `spacing (M,)` mm: the diagonal of the local sample cell, so every kept surface point lies
+    within spacing / 2 (plus the sag tolerance) of a test point; `tree` a cKDTree over points."""
+
+    __test__ = False  # not a pytest class
+
+    points: np.ndarray
+    normals: np.ndarray
+    surface: np.ndarray
+    uv: np.ndarray
+    spacing: np.ndarray
+    tree: cKDTree
+
+
+def sample_part(part: Part, sag: float | None = None, geometry: GeometryConfig | None = None) -> TestPoints:
+    """Test points of the whole part; `sag` (mm) overrides the config's sag tolerance."""
+    cfg = geometry or default_config().geometry
+    sag = float(sag if sag is not None else cfg.sag_tolerance)
+    if sag <= 0:
+        raise ValueError(f"sag tolerance must be positive, got {sag}")
+    key = (part.content_hash, sag, cfg.max_spacing, cfg.max_samples_per_surface, cfg.min_samples_per_direction)
+    hit = _CACHE.get(key)
+    if hit is not None:
+        return hit
+    if part.mesh is not None:
+        pts, nrm, sid, uv, spc = _sample_mesh(part.mesh, cfg.max_spacing)
+    else:
+        chunks = [_sample_surface(s, sag, cfg) for s in part.surfaces]
+        pts, nrm, sid, uv, spc = (np.concatenate([c[i] for c in chunks]) for i in range(5))
+    tp = TestPoints(pts, nrm, sid.astype(np.int32), uv, spc, cKDTree(pts))
+    if len(_CACHE) >= _CACHE_MAX:
+        _CACHE.pop(next(iter(_CACHE)))
+    _CACHE[key] = tp
+    return tp
+
+
+def _span_breaks(knots: np.ndarray, degree: int) -> np.ndarray:
+    """Distinct knot values inside the domain (span boundaries)."""
+    return np.unique(knots[degree:len(knots) - degree])
+
+
+def _probe(breaks: np.ndarray) -> np.ndarray:
+    s = np.linspace(0.0, 1.0, _PROBES_PER_SPAN + 1)
+    return (breaks[:-1, None] + s * np.diff(breaks)[:, None]).ravel()
+
+
+def _counts(breaks, probe_span, d1, d2, sag, max_spacing) -> np.ndarray:
+    """Samples per span for one direction: sag h^2 |S''| / 8 <= sag and h |S'| <= max_spacing."""
+    nspan = len(breaks) - 1
+    d1max = np.zeros(nspan)
+    d2max = np.zeros(nspan)
+    np.maximum.at(d1max, probe_span, d1)
+    np.maximum.at(d2max, probe_span, d2)
+    length = np.diff(breaks)
+    need = np.maximum(length * np.sqrt(d2max / (8.0 * sag)), length * d1max / max_spacing)
+    return np.maximum(need, 1.0)
+
+
+def _grid(breaks: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Parameters uniform within each span, `counts` intervals per span, both ends included."""
+    n = counts.astype(np.int64)
+    span = np.repeat(np.arange(len(n)), n)
+    frac = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)) / n[span]
+    return np.append(breaks[span] + frac * np.diff(breaks)[span], breaks[-1])
+
+
+def _sample_surface(s: Surface, sag: float, cfg: GeometryConfig):
+    bu = _span_breaks(s.knots_u, s.degree_u)
+    bv = _span_breaks(s.knots_v, s.degree_v)
+    pu, pv = _probe(bu), _probe(bv)
+    U, V = np.meshgrid(pu, pv, indexing="ij")
+    ev = evaluate(s, U.ravel(), V.ravel(), order=2)
+    shape = U.shape
+    norm = lambda a: np.linalg.norm(a, axis=1).reshape(shape)  # noqa: E731
+    su = np.repeat(np.arange(len(bu) - 1), _PROBES_PER_SPAN + 1)
+    sv = np.repeat(np.arange(len(bv) - 1), _PROBES_PER_SPAN + 1)
+    cu = _counts(bu, su, norm(ev.du).max(axis=1), norm(ev.duu).max(axis=1), sag, cfg.max_spacing)
+    cv = _counts(bv, sv, norm(ev.dv).max(axis=0), norm(ev.dvv).max(axis=0), sag, cfg.max_spacing)
+    nmin = cfg.min_samples_per_direction
+    cu *= max(1.0, nmin / cu.sum())
+    cv *= max(1.0, nmin / cv.sum())
+    total = (cu.sum() + 1) * (cv.sum() + 1)
+    if total > cfg.max_samples_per_surface:
+        f = np.sqrt(cfg.max_samples_per_surface / total)
+        cu, cv = np.maximum(cu * f, 1.0), np.maximum(cv * f, 1.0)
+    gu, gv = _grid(bu, np.ceil(cu)), _grid(bv, np.ceil(cv))
+    hu, hv = _local_step(gu), _local_step(gv)
+    U, V = np.meshgrid(gu, gv, indexing="ij")
+    HU, HV = np.meshgrid(hu, hv, indexing="ij")
+    u, v, hu, hv = U.ravel(), V.ravel(), HU.ravel(), HV.ravel()
+    if s.trim is not None:
+        keep = s.trim.contains(u, v)
+        u, v, hu, hv = u[keep], v[keep], hu[keep], hv[keep]
+    ev = evaluate(s, u, v)
+    spacing = np.hypot(np.linalg.norm(ev.du, axis=1) * hu, np.linalg.norm(ev.dv, axis=1) * hv)
+    pts, nrm, uv, spc = ev.points, ev.normals, np.column_stack([u, v]), spacing
+    if s.trim is not None:
+        step = float(np.median(spacing)) if spacing.size else cfg.max_spacing
+        bpts, bnrm, buv = _boundary(s, step)
+        pts, nrm, uv = np.concatenate([pts, bpts]), np.concatenate([nrm, bnrm]), np.concatenate([uv, buv])
+        spc = np.concatenate([spc, np.full(len(bpts), step)])
+    return pts, nrm, np.full(len(pts), s.id, dtype=np.int32), uv, spc
+
+
+def _local_step(g: np.ndarray) -> np.ndarray:
+    """Per grid parameter, the larger of its two neighbouring intervals."""
+    d = np.diff(g)
+    return np.maximum(np.append(d, d[-1]), np.insert(d, 0, d[0]))
+
+
+def _boundary(s: Surface, step: float):
+    """Samples along the trim loops, about `step` mm apart (the loop vertices are kept too)."""
+    (u0, u1), (v0, v1) = s.domain
+    loops = [np.vstack([lp, lp[:1]]) for lp in s.trim.loops if len(lp) >= 2]
+    if not loops:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 2))
+    uv = []
+    for lp in loops:  # one pass per loop; each loop is resampled as a whole
+        p3 = evaluate(s, lp[:, 0], lp[:, 1]).points
+        seg = np.linalg.norm(np.diff(p3, axis=0), axis=1)
+        k = np.maximum(np.ceil(seg / step), 1).astype(np.int64)
+        idx = np.repeat(np.arange(len(seg)), k)
+        t = (np.arange(k.sum()) - np.repeat(np.cumsum(k) - k, k)) / k[idx]
+        uv.append(lp[idx] + t[:, None] * (lp[idx + 1] - lp[idx]))
+    uv = np.concatenate(uv)
+    uv[:, 0] = np.clip(uv[:, 0], u0, u1)
+    uv[:, 1] = np.clip(uv[:, 1], v0, v1)
+    ev = evaluate(s, uv[:, 0], uv[:, 1])
+    return ev.points, ev.normals, uv
+
+
+def _sample_mesh(mesh: MeshPart, max_spacing: float):
+    """Mesh vertices (area-weighted normals) and a barycentric lattice on every triangle fine
+    enough for `max_spacing` (triangle normals)."""
+    V, T, N = mesh.vertices, mesh.triangles, mesh.normals
+    tri = V[T]
+    edges = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
+    k = np.maximum(np.ceil(edges / max_spacing), 1).astype(np.int64)
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    vn = np.zeros_like(V)
+    np.add.at(vn, T.ravel(), np.repeat(N * area[:, None], 3, axis=0))
+    vn /= np.maximum(np.linalg.norm(vn, axis=1), 1e-300)[:, None]
+    vspc = np.zeros(len(V))
+    np.maximum.at(vspc, T.ravel(), np.repeat(edges / k, 3))
+    pts, nrm, spc = [V], [vn], [vspc]
+    for kk in np.unique(k):  # one pass per subdivision level (a handful), vectorised inside
+        sel = np.flatnonzero(k == kk)
+        i, j = np.meshgrid(np.arange(kk + 1), np.arange(kk + 1), indexing="ij")
+        lat = np.column_stack([i.ravel(), j.ravel()])
+        lat = lat[(lat.sum(axis=1) <= kk)]
+        corner = (lat.max(axis=1) == kk) | (lat.sum(axis=1) == 0)
+        lat = lat[~corner] / kk
+        if lat.size == 0:
+            continue
+        b = np.column_stack([1.0 - lat.sum(axis=1), lat])  # (L, 3) barycentric
+        p = np.einsum("lc,tcx->tlx", b, tri[sel]).reshape(-1, 3)
+        pts.append(p)
+        nrm.append(np.repeat(N[sel], len(b), axis=0))
+        spc.append(np.repeat(edges[sel] / kk, len(b)))
+    pts, nrm, spc = np.concatenate(pts), np.concatenate(nrm), np.concatenate(spc)
+    m = len(pts)
+    return pts, nrm, np.full(m, -1, dtype=np.int32), np.full((m, 2), np.nan), spc

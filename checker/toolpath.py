@@ -1,0 +1,268 @@
+"""Typed tool path model: plain data filled by the CL readers in `checker.apt`.
+
+Units and frames: every number in `MotionArrays`, `Arc`, `Frame` and the cutters is in mm in the
+part frame (after `CSYS/`/`MSYS/`); `Record.args` keep the numbers exactly as written in the file
+(the file's units and frame) so that the writer can reproduce them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from checker.cutter import Cutter
+
+Value = float | str
+
+
+@dataclass(slots=True)
+class Record:
+    """One logical statement of the file (continuations joined), used or not.
+
+    ``word`` is the major word in upper case (``"GOTO"``, ``"TOOL PATH"``, ``"$$"`` for a comment
+    line); ``args`` the values after ``/`` (floats, or upper-case minor words); ``text`` the raw
+    text of free-text statements (``PPRINT``, ``PARTNO``, ``INSERT``, comments); ``comment`` an
+    inline ``$$`` comment; ``slash`` whether the word was followed by ``/``; ``line`` 1-based.
+    """
+
+    word: str
+    args: tuple[Value, ...] = ()
+    line: int = 0
+    text: str | None = None
+    comment: str | None = None
+    slash: bool = True
+
+    def same_as(self, other: Record, rel: float = 1e-9) -> bool:
+        """Equal word, text and args, numbers to ``rel`` relative (line numbers ignored)."""
+        if (self.word, self.text, self.comment, len(self.args)) != (
+            other.word,
+            other.text,
+            other.comment,
+            len(other.args),
+        ):
+            return False
+        for a, b in zip(self.args, other.args, strict=True):
+            if isinstance(a, str) or isinstance(b, str):
+                if a != b:
+                    return False
+            elif abs(a - b) > rel * max(abs(a), abs(b), 1e-300):
+                return False
+        return True
+
+
+@dataclass(frozen=True, slots=True)
+class Frame:
+    """A coordinate system statement: ``matrix`` (4, 4) maps file-frame mm to part-frame mm.
+
+    ``applied`` is False where the file says its coordinates are already in the world frame
+    (``TRNTYP/WORLD`` before ``CSYS/``): the frame is then only recorded.
+    """
+
+    word: str
+    matrix: np.ndarray
+    line: int
+    applied: bool
+
+
+@dataclass(frozen=True, slots=True)
+class ToolChange:
+    """A ``LOAD/TOOL``/``LOADTL`` statement: the tool number and the cutter active then."""
+
+    line: int
+    tool_number: int | None
+    cutter: Cutter | None
+
+
+@dataclass(slots=True)
+class Operation:
+    """A stretch of the path with one tool: records ``[first_record, end_record)`` and motions
+    ``[first_motion, end_motion)`` of `ToolPath.motion_arrays()` (without arc expansion)."""
+
+    name: str
+    tool_name: str | None = None
+    tool_number: int | None = None
+    cutter: Cutter | None = None
+    first_record: int = 0
+    end_record: int = 0
+    first_motion: int = 0
+    end_motion: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class Motion:
+    """One motion: tool tip (3,) and unit axis (3,) in mm / part frame, feed mm/min (nan: none),
+    spindle rpm (nan: unknown), 1-based file line, operation index."""
+
+    tip: np.ndarray
+    axis: np.ndarray
+    rapid: bool
+    feed: float
+    spindle: float
+    line: int
+    op: int
+
+
+@dataclass(frozen=True, slots=True)
+class Arc:
+    """A ``CIRCLE/`` arc ending at the next ``GOTO``: centre (3,), unit axis (3,) (the motion is
+    counter-clockwise about it, right-hand rule), radius, start and end tips (3,); mm, part
+    frame. A helical arc moves linearly along the axis. ``motion`` is the row of its end GOTO."""
+
+    center: np.ndarray
+    axis: np.ndarray
+    radius: float
+    start: np.ndarray
+    end: np.ndarray
+    line: int
+    motion: int
+
+    @property
+    def sweep(self) -> float:
+        """Swept angle in radians, in (0, 2 pi]; 2 pi when start and end coincide."""
+        u, v = self._radial(self.start), self._radial(self.end)
+        ang = np.arctan2(np.dot(np.cross(u, v), self.axis), np.dot(u, v))
+        tol = 1e-9 * max(self.radius, 1.0)
+        if ang < 0:
+            ang += 2 * np.pi
+        if ang * self.radius <= tol:
+            return 2 * np.pi
+        return float(ang)
+
+    def _radial(self, p: np.ndarray) -> np.ndarray:
+        d = p - self.center
+        return d - np.dot(d, self.axis) * self.axis
+
+    def sample(self, chord_tol: float) -> np.ndarray:
+        """Points (M, 3) along the arc from start to end inclusive, M >= 2, such that the
+        chordal deviation of each segment from the circle is at most ``chord_tol`` mm."""
+        sweep = self.sweep
+        r = self.radius
+        if r <= chord_tol:
+            n = 1
+        else:
+            step = 2.0 * np.arccos(1.0 - chord_tol / r)
+            n = max(1, int(np.ceil(sweep / step)))
+        t = np.linspace(0.0, 1.0, n + 1)
+        u = self._radial(self.start)
+        nu = np.linalg.norm(u)
+        u = u / nu if nu > 0 else _any_normal(self.axis)
+        w = np.cross(self.axis, u)
+        h0 = np.dot(self.start - self.center, self.axis)
+        h1 = np.dot(self.end - self.center, self.axis)
+        ang = t * sweep
+        pts = (
+            self.center
+            + r * (np.cos(ang)[:, None] * u + np.sin(ang)[:, None] * w)
+            + (h0 + t * (h1 - h0))[:, None] * self.axis
+        )
+        pts[0], pts[-1] = self.start, self.end
+        return pts
+
+
+def _any_normal(a: np.ndarray) -> np.ndarray:
+    """A unit vector normal to the unit vector ``a``."""
+    b = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    v = np.cross(a, b)
+    return v / np.linalg.norm(v)
+
+
+@dataclass(frozen=True, slots=True)
+class MotionArrays:
+    """All motions (GOTO, GODLTA, FROM) as arrays, mm and part frame.
+
+    tip (N, 3), axis (N, 3) unit tip -> spindle, rapid (N,) bool, feed (N,) mm/min (nan: none),
+    spindle (N,) rpm (nan: unknown), line (N,) 1-based file line, op (N,) operation index,
+    cycle (N,) bool (inside ``CYCLE/``...``CYCLE/OFF``: a canned-cycle position), arc (N,) index
+    into `ToolPath.arcs` of the arc ending at that row, -1 for straight moves (arc-sampled rows
+    from ``motion_arrays(arc_chord_tol=...)`` carry the arc index too).
+    """
+
+    tip: np.ndarray
+    axis: np.ndarray
+    rapid: np.ndarray
+    feed: np.ndarray
+    spindle: np.ndarray
+    line: np.ndarray
+    op: np.ndarray
+    cycle: np.ndarray
+    arc: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.line)
+
+    def motion(self, i: int) -> Motion:
+        """Row ``i`` as a `Motion`."""
+        return Motion(
+            tip=self.tip[i],
+            axis=self.axis[i],
+            rapid=bool(self.rapid[i]),
+            feed=float(self.feed[i]),
+            spindle=float(self.spindle[i]),
+            line=int(self.line[i]),
+            op=int(self.op[i]),
+        )
+
+    def take(self, idx: np.ndarray) -> MotionArrays:
+        """Rows ``idx`` (an index array) of every field."""
+        return MotionArrays(*(getattr(self, f)[idx] for f in _MOTION_FIELDS))
+
+
+_MOTION_FIELDS = ("tip", "axis", "rapid", "feed", "spindle", "line", "op", "cycle", "arc")
+
+
+@dataclass(slots=True)
+class ToolPath:
+    """A CL file read into memory; see the module docstring for units and frames."""
+
+    path: str
+    dialect: Literal["apt", "clsf"]
+    units: Literal["mm", "inch"]
+    records: list[Record]
+    operations: list[Operation]
+    motions: MotionArrays
+    arcs: list[Arc] = field(default_factory=list)
+    tool_changes: list[ToolChange] = field(default_factory=list)
+    frames: list[Frame] = field(default_factory=list)
+    unknown: dict[str, int] = field(default_factory=dict)
+    ignored: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        """The file name without folders."""
+        return Path(self.path).name
+
+    def motion_arrays(self, arc_chord_tol: float | None = None) -> MotionArrays:
+        """The motions; with ``arc_chord_tol`` (mm) every arc is expanded into points placed
+        before its end row, with the end row's axis, feed, line and operation."""
+        m = self.motions
+        if arc_chord_tol is None or not self.arcs:
+            return m
+        pieces: list[np.ndarray] = []
+        rows: list[np.ndarray] = []
+        prev = 0
+        for arc in self.arcs:
+            inner = arc.sample(arc_chord_tol)[1:-1]
+            rows.append(np.arange(prev, arc.motion))
+            pieces.append(m.tip[prev : arc.motion])
+            rows.append(np.full(len(inner), arc.motion))
+            pieces.append(inner)
+            prev = arc.motion
+        rows.append(np.arange(prev, len(m)))
+        pieces.append(m.tip[prev:])
+        idx = np.concatenate(rows).astype(np.intp)
+        out = m.take(idx)
+        return MotionArrays(
+            np.concatenate(pieces).reshape(-1, 3),
+            out.axis,
+            out.rapid,
+            out.feed,
+            out.spindle,
+            out.line,
+            out.op,
+            out.cycle,
+            out.arc,
+        )

@@ -1,0 +1,83 @@
+"""Part <-> machine kinematics of the horizontal 4-axis machine (DESIGN.md conventions).
+
+A part point ``p`` (part frame, mm) sits at machine position ``Ry(b) (p - c) + c`` where ``c`` is
+``table_center`` and ``b = b_direction * B_word`` (degrees at the interface, radians inside). The
+spindle is machine +Z, so the tool axis seen in the part frame is ``(-sin b, 0, cos b)``.
+All functions take arrays of any length N.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from checker.errors import PathcheckError
+from postproc.machine import Machine
+
+#: sub-steps used to integrate the tip path relative to the part over one block
+PATH_SUBSTEPS = 16
+
+
+def _rotate_y(v: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Rotate vectors ``v (..., 3)`` about +Y by ``theta (...)`` radians (right-hand rule)."""
+    c, s = np.cos(theta), np.sin(theta)
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([c * x + s * z, y, -s * x + c * z], axis=-1)
+
+
+def rotation_rad(b_word: np.ndarray, machine: Machine) -> np.ndarray:
+    """Part rotation about +Y in radians for B words in degrees ``(N,)``."""
+    return np.radians(machine.kinematics.b_direction * np.asarray(b_word, dtype=float))
+
+
+def part_to_machine(tip: np.ndarray, b_word: np.ndarray, machine: Machine) -> np.ndarray:
+    """Machine X, Y, Z ``(N, 3)`` mm (work frame) of part-frame tips ``(N, 3)`` at B words (deg)."""
+    c = np.asarray(machine.kinematics.table_center, dtype=float)
+    return _rotate_y(np.asarray(tip, dtype=float) - c, rotation_rad(b_word, machine)) + c
+
+
+def machine_to_part(xyz: np.ndarray, b_word: np.ndarray, machine: Machine) -> tuple[np.ndarray, np.ndarray]:
+    """Part-frame tip ``(N, 3)`` mm and unit tool axis ``(N, 3)`` for machine X, Y, Z ``(N, 3)``
+    (work frame, mm) at B words ``(N,)`` degrees."""
+    c = np.asarray(machine.kinematics.table_center, dtype=float)
+    theta = rotation_rad(b_word, machine)
+    tip = _rotate_y(np.asarray(xyz, dtype=float) - c, -theta) + c
+    return tip, axis_from_rotation(theta)
+
+
+def axis_from_rotation(theta: np.ndarray) -> np.ndarray:
+    """Part-frame tool axis ``(N, 3)`` for part rotations ``theta (N,)`` radians."""
+    theta = np.asarray(theta, dtype=float)
+    return np.stack([-np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=-1)
+
+
+def rotation_from_axis(axis: np.ndarray, *, j_tolerance: float = 1e-6, lines: np.ndarray | None = None) -> np.ndarray:
+    """Part rotation ``b (N,)`` degrees that puts part-frame axes ``(N, 3)`` along the spindle:
+    ``b = atan2(-i, k)``. An axis with ``|j| > j_tolerance`` is not a 4-axis-about-Y axis."""
+    axis = np.asarray(axis, dtype=float)
+    bad = np.flatnonzero(np.abs(axis[:, 1]) > j_tolerance)
+    if bad.size:
+        k = int(bad[0])
+        line = None if lines is None else int(lines[k])
+        raise PathcheckError(
+            f"tool axis {tuple(np.round(axis[k], 6))} is not a 4-axis axis about Y: expected j = 0 "
+            f"(|j| <= {j_tolerance}), found j = {axis[k, 1]:.6g}",
+            line=line,
+            code="kinematics",
+        )
+    return np.degrees(np.arctan2(-axis[:, 0], axis[:, 2]))
+
+
+def tip_path_length(
+    xyz0: np.ndarray, xyz1: np.ndarray, b0: np.ndarray, b1: np.ndarray, machine: Machine
+) -> np.ndarray:
+    """Length (mm) of the tool tip's path relative to the part over blocks whose machine X, Y, Z
+    ``(N, 3)`` and B words ``(N,)`` (deg) are interpolated linearly from 0 to 1, as a control does.
+    Integrated over PATH_SUBSTEPS chords (exact for blocks without B motion)."""
+    t = np.linspace(0.0, 1.0, PATH_SUBSTEPS + 1)[None, :, None]
+    xyz0, xyz1 = np.asarray(xyz0, dtype=float), np.asarray(xyz1, dtype=float)
+    xyz = xyz0[:, None, :] + t * (xyz1 - xyz0)[:, None, :]
+    b0, b1 = np.asarray(b0, dtype=float), np.asarray(b1, dtype=float)
+    b = b0[:, None] + t[..., 0] * (b1 - b0)[:, None]
+    c = np.asarray(machine.kinematics.table_center, dtype=float)
+    tips = _rotate_y(xyz - c, -rotation_rad(b, machine))
+    return np.linalg.norm(np.diff(tips, axis=1), axis=-1).sum(axis=1)
