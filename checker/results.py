@@ -28,7 +28,7 @@ class PointResult(_Model):
 
     index: int = Field(description="position in `points`")
     kind: Literal["cc", "intermediate"]
-    move: int = Field(description="index of the motion record (GOTO) this pose belongs to or follows")
+    move: int = Field(description="index of the motion (GOTO) this pose is at or follows")
     line: int | None = Field(None, description="line of that record in the CL file")
     cc: Vec3 = Field(description="cutter-contact point, part frame, mm")
     normal: Vec3 = Field(description="unit surface normal at cc, out of the material")
@@ -126,3 +126,19 @@ class ResultsDocument(_Model):
     orientation: Orientation | None = None
     points: list[PointResult]
     gcode: str | None = Field(None, description="path of the corrected G-code, when written")
+
+
+def json_schema() -> dict:
+    """The published JSON schema of the results document (schemas/results.schema.json)."""
+    schema = ResultsDocument.model_json_schema()
+    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    schema["$id"] = f"https://pathcheck.invalid/schemas/results-{SCHEMA_VERSION}.json"
+    return schema
+
+
+if __name__ == "__main__":
+    import json
+    import sys
+
+    json.dump(json_schema(), sys.stdout, indent=2, sort_keys=True)
+    sys.stdout.write("\n")

@@ -51,7 +51,7 @@ def unroll_rollover(words: np.ndarray, mode: str, start: float = 0.0) -> np.ndar
         step = np.where(np.signbit(words) & (delta > 0.0), delta - 360.0, delta)
     else:
         step = np.where(delta > 180.0, delta - 360.0, delta)
-    return start + np.cumsum(step) - (np.mod(start, 360.0) - np.mod(start, 360.0))
+    return start + np.cumsum(step)
 
 
 def range_branches(w: np.ndarray, lo: float, hi: float, lines: np.ndarray | None = None) -> np.ndarray:

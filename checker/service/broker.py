@@ -124,8 +124,13 @@ class Broker:
     def ready_workers(self) -> int:
         return sum(w.ready for w in list(self._workers.values()))
 
-    def worker_pids(self) -> dict[bytes, int]:
-        return {w.identity: w.proc.pid for w in list(self._workers.values())}
+    def worker_pids(self) -> list[int]:
+        """Process ids of the live workers."""
+        return [w.proc.pid for w in list(self._workers.values())]
+
+    def busy_pids(self) -> list[int]:
+        """Process ids of the workers answering a request now."""
+        return [w.proc.pid for w in list(self._workers.values()) if w.job is not None]
 
     # --- the loop ------------------------------------------------------------------------
 

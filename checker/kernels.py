@@ -1,0 +1,243 @@
+"""Numba kernels: the size of the imaginary cutter through a test point (MATH.md, thesis ch. 2).
+
+All inputs are float64 arrays in the TOOL frame (tool axis +z, mm). For a pair (test point P,
+CC point Pcc with unit normal n out of the material) the kernels return the size, in the family's
+allowable variable, of the imaginary cutter that touches Pcc with normal n and passes through P:
+R (axis -> corner centre) for the APT family (flat, bull-nose, general APT), r for the ball family
+(ball, tapered ball). Limits by rule, never NaN: 0 when P is inside the size-0 cutter or the CC
+point cannot be touched tangentially (n_z <= 0 or n_z < sin(theta)), inf when no cutter of the
+family reaches P (below the tangent plane, beyond the R -> inf limiting surface, denominator <= 0).
+
+`tol` (mm, >= 0) is a depth tolerance: P counts as cut only when it lies at least `tol` inside the
+cutter (the profile offset inward by `tol`). `tol = 0` is the exact model of MATH.md.
+
+Contact cases (APT family):
+- fillet contact (sin(theta) <= n_z <= cos(psi)): fillet centre O = Pcc + r n, axis through
+  O + R e, closed form R = (|d|^2 - k^2) / (2 (e.d + k)) with k from the band of dz (MATH.md);
+- tip contact (psi > 0 and n_z > cos(psi), e.g. a drill on a floor): the cone vertex touches Pcc,
+  the axis passes through Pcc, R is the smallest size whose solid contains P;
+- vertical normal (|n_xy| < EPS_H) with psi = 0: e is taken from the caller's `e`; without it the
+  worst case over all directions e is returned, R = (|d| - k) / 2.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+EPS_H = 1e-9  # |n_xy| below this: the normal is vertical, e is not defined by the surface
+EPS_N = 1e-9  # slack on n_z >= sin(theta) (a wall parallel to the taper is still touchable)
+INF = np.inf
+
+FAMILY_APT = 0  # R variable: flat, bull-nose, general APT
+FAMILY_BALL = 1  # r variable: ball, tapered ball
+
+# layout of the parameter vector built by `params`
+_R, _RP, _TOL, _SIN_T, _COS_T, _TAN_T, _SEC_T = 0, 1, 2, 3, 4, 5, 6
+_SIN_P, _COS_P, _TAN_P, _COT_P, _CSC_P, _SEC_P, _FLAT = 7, 8, 9, 10, 11, 12, 13
+
+
+def params(r: float, psi: float, theta: float, tol: float = 0.0) -> np.ndarray:
+    """Constant vector for the kernels: corner radius `r` (mm; ignored by the ball family, whose
+    r is the variable), bottom cone angle `psi` and taper angle `theta` (rad), depth tolerance
+    `tol` (mm)."""
+    flat = psi == 0.0
+    out = np.zeros(14)
+    out[_R] = r
+    out[_RP] = r - tol
+    out[_TOL] = tol
+    out[_SIN_T], out[_COS_T] = math.sin(theta), math.cos(theta)
+    out[_TAN_T], out[_SEC_T] = math.tan(theta), 1.0 / math.cos(theta)
+    out[_SIN_P], out[_COS_P] = math.sin(psi), math.cos(psi)
+    out[_TAN_P], out[_SEC_P] = math.tan(psi), 1.0 / math.cos(psi)
+    out[_COT_P] = 0.0 if flat else 1.0 / math.tan(psi)
+    out[_CSC_P] = 0.0 if flat else 1.0 / math.sin(psi)
+    out[_FLAT] = 1.0 if flat else 0.0
+    return out
+
+
+@njit(cache=True)
+def _k_band(dz, prm):
+    """Profile radius minus R at height dz above the fillet centre (shrunk corner r - tol);
+    -inf below a flat bottom (nothing of the cutter there)."""
+    rp = prm[_RP]
+    flat = prm[_FLAT] > 0.5
+    if rp > 0.0:
+        if dz >= -rp * prm[_SIN_T]:
+            return dz * prm[_TAN_T] + rp * prm[_SEC_T]
+        if dz > -rp * prm[_COS_P]:
+            return math.sqrt(rp * rp - dz * dz)
+        if flat:
+            return -INF
+        return dz * prm[_COT_P] + rp * prm[_CSC_P]
+    # corner radius shrunk below zero: the inward offset of a sharp corner, min of the two lines
+    k = dz * prm[_TAN_T] + rp * prm[_SEC_T]
+    if flat:
+        if dz <= -rp:
+            return -INF
+        return k
+    kc = dz * prm[_COT_P] + rp * prm[_CSC_P]
+    return kc if kc < k else k
+
+
+@njit(cache=True)
+def _apt_tip_contact(qx, qy, qz, prm):
+    """R for tip contact (psi > 0, n_z > cos(psi)): tip at Pcc, axis through Pcc. q = P - Pcc."""
+    rho = math.sqrt(qx * qx + qy * qy)
+    tol = prm[_TOL]
+    rinf = qz * prm[_COT_P] - tol * prm[_CSC_P]  # radius of the R -> inf cutter at this height
+    if rho >= rinf:
+        return INF
+    t = prm[_TAN_P]
+    rp = prm[_RP]
+    c = qz - prm[_R] * prm[_SEC_P]  # height above the fillet centre of the size-0 cutter
+    if _k_band(c, prm) > rho:
+        return 0.0
+    slope = 1.0 - t * prm[_TAN_T]
+    r_taper = (rho - c * prm[_TAN_T] - rp * prm[_SEC_T]) / slope
+    if rp <= 0.0:
+        return max(r_taper, 0.0)
+    r1 = (c + rp * prm[_SIN_T]) / t  # size where P crosses from the taper to the fillet band
+    r2 = (c + rp * prm[_COS_P]) / t  # size where P crosses from the fillet to the cone band
+    if r1 > 0.0 and r1 + _k_band(c - r1 * t, prm) > rho:
+        return min(max(r_taper, 0.0), r1)
+    # fillet band: |P - O(R)| = rp with O(R) = (R, R t + r sec(psi)); entering root
+    a = 1.0 + t * t
+    q = rho + c * t
+    cq = rho * rho + c * c - rp * rp
+    disc = q * q - a * cq
+    s = math.sqrt(disc) if disc > 0.0 else 0.0
+    root = cq / (q + s) if q > 0.0 else (q - s) / a
+    lo = r1 if r1 > 0.0 else 0.0
+    return min(max(root, lo), r2)
+
+
+@njit(cache=True)
+def apt_size(qx, qy, qz, nx, ny, nz, ex, ey, has_e, prm):
+    """R of the imaginary APT-family cutter through P = Pcc + q, touching Pcc with normal n."""
+    if nz <= 0.0 or nz < prm[_SIN_T] - EPS_N:
+        return 0.0
+    if qx * nx + qy * ny + qz * nz <= prm[_TOL]:
+        return INF  # below the tangent plane: the convex cutter never reaches P
+    if prm[_FLAT] < 0.5 and nz > prm[_COS_P]:
+        return _apt_tip_contact(qx, qy, qz, prm)
+    r = prm[_R]
+    dx = qx - r * nx
+    dy = qy - r * ny
+    dz = qz - r * nz
+    k = _k_band(dz, prm)
+    if k == -INF:
+        return INF
+    dd = dx * dx + dy * dy
+    if k >= 0.0 and dd <= k * k:
+        return 0.0
+    nh = math.sqrt(nx * nx + ny * ny)
+    if nh > EPS_H:
+        ux = nx / nh
+        uy = ny / nh
+    else:
+        eh = math.sqrt(ex * ex + ey * ey) if has_e else 0.0
+        if eh <= EPS_H:
+            dn = math.sqrt(dd)  # worst case over e: e along d
+            if dn + k <= 0.0:
+                return INF
+            return max(0.5 * (dn - k), 0.0)
+        ux = ex / eh
+        uy = ey / eh
+    den = ux * dx + uy * dy + k
+    if den <= 0.0:
+        return INF
+    return max((dd - k * k) / (2.0 * den), 0.0)
+
+
+@njit(cache=True)
+def ball_size(qx, qy, qz, nx, ny, nz, prm):
+    """r of the imaginary (tapered) ball end-mill through P = Pcc + q touching Pcc with normal n;
+    sphere centre Pcc + r n, taper angle theta above the sphere (theta = 0: cylinder)."""
+    sin_t = prm[_SIN_T]
+    tol = prm[_TOL]
+    if nz <= 0.0 or nz < sin_t - EPS_N:
+        return 0.0
+    nq = qx * nx + qy * ny + qz * nz
+    if nq <= tol:
+        return INF
+    qh2 = qx * qx + qy * qy
+    den = nz - sin_t
+    num = qz - tol * sin_t
+    if den > EPS_N:
+        rref = num / den  # size at which P's height is the sphere/taper boundary
+    elif num > 0.0:
+        rref = INF
+    else:
+        rref = -INF
+    if rref > 0.0:
+        a = prm[_SEC_T] - nz * prm[_TAN_T]
+        b = qz * prm[_TAN_T] - tol * prm[_SEC_T]
+        if b > 0.0 and qh2 < b * b:
+            return 0.0  # inside the tip cone: every cutter of the family gouges P
+        e1 = (den / prm[_COS_T]) ** 2
+        e2 = 2.0 * (nx * qx + ny * qy + a * b)
+        e3 = b * b - qh2
+        if rref == INF:
+            inside = e2 > 0.0 or (e2 == 0.0 and e3 > 0.0)
+        else:
+            inside = (e1 * rref + e2) * rref + e3 > 0.0 and a * rref + b > 0.0
+        if inside:
+            disc = e2 * e2 - 4.0 * e1 * e3
+            s = math.sqrt(disc) if disc > 0.0 else 0.0
+            if e2 + s > 0.0:
+                root = -2.0 * e3 / (e2 + s)
+            elif e1 > 0.0:
+                root = (s - e2) / (2.0 * e1)
+            else:
+                root = rref
+            return min(max(root, 0.0), rref)
+    rs = (qx * qx + qy * qy + qz * qz - tol * tol) / (2.0 * (nq - tol))
+    return max(rs, rref, 0.0)
+
+
+@njit(cache=True)
+def _one(p, cc, n, e, has_e, family, prm, i, j):
+    """Size for test point p[j] against CC point cc[i] (normal n[i], direction e[i])."""
+    qx = p[j, 0] - cc[i, 0]
+    qy = p[j, 1] - cc[i, 1]
+    qz = p[j, 2] - cc[i, 2]
+    if family == FAMILY_BALL:
+        return ball_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], prm)
+    ex = e[i, 0] if has_e else 0.0
+    ey = e[i, 1] if has_e else 0.0
+    return apt_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], ex, ey, has_e, prm)
+
+
+@njit(cache=True, parallel=True)
+def pair_sizes(p, cc, n, e, has_e, family, prm):
+    """(K,) sizes for K pairs (p[i], cc[i], n[i], e[i]); all (K,3) tool-frame arrays, mm."""
+    k = p.shape[0]
+    out = np.empty(k)
+    for i in prange(k):
+        out[i] = _one(p, cc, n, e, has_e, family, prm, i, i)
+    return out
+
+
+@njit(cache=True, parallel=True)
+def min_sizes(p, cc, n, e, has_e, family, prm, indptr, indices):
+    """For each CC point i the minimum size over its candidate test points
+    p[indices[indptr[i]:indptr[i+1]]] and the index (into p) attaining it; inf and -1 when no
+    candidate limits the size."""
+    m = cc.shape[0]
+    best = np.full(m, INF)
+    arg = np.full(m, -1, dtype=np.int64)
+    for i in prange(m):
+        b = INF
+        a = -1
+        for t in range(indptr[i], indptr[i + 1]):
+            j = indices[t]
+            s = _one(p, cc, n, e, has_e, family, prm, i, j)
+            if s < b:
+                b = s
+                a = j
+        best[i] = b
+        arg[i] = a
+    return best, arg
