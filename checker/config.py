@@ -76,6 +76,21 @@ class ReportConfig(_Section):
     render_workers: PositiveInt = 2
 
 
+class EngineConfig(_Section):
+    max_size: PositiveFloat = 1000.0
+    exclusion: PositiveFloat = 1e-3
+    ring: PositiveFloat = 0.01
+    refine_seeds: PositiveInt = 4
+    refine_iterations: PositiveInt = 12
+    pso_particles: PositiveInt = 64
+    pso_repeat: PositiveInt = 30
+    pso_inertia: tuple[float, float] = (0.1, 0.2)
+    pso_c2: float = Field(0.5, ge=0)
+    pso_c3: float = Field(0.5, ge=0)
+    pso_vmax: PositiveFloat = 0.1
+    pso_max_iterations: PositiveInt = 2000
+
+
 class Config(_Section):
     geometry: GeometryConfig = GeometryConfig()
     check: CheckConfig = CheckConfig()
@@ -83,6 +98,7 @@ class Config(_Section):
     intermediate: IntermediateConfig = IntermediateConfig()
     service: ServiceConfig = ServiceConfig()
     store: StoreConfig = StoreConfig()
+    engine: EngineConfig = EngineConfig()
     report: ReportConfig = ReportConfig()
 
 

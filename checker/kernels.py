@@ -111,7 +111,7 @@ def _apt_tip_contact(qx, qy, qz, prm):
     s = math.sqrt(disc) if disc > 0.0 else 0.0
     root = cq / (q + s) if q > 0.0 else (q - s) / a
     lo = r1 if r1 > 0.0 else 0.0
-    return min(max(root, lo), r2)
+    return max(min(max(root, lo), r2), 0.0)
 
 
 @njit(cache=True)
@@ -211,33 +211,70 @@ def _one(p, cc, n, e, has_e, family, prm, i, j):
     return apt_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], ex, ey, has_e, prm)
 
 
+PARALLEL_MIN = 20_000  # below this many pairs the serial kernels win (no thread start-up)
+
+
 @njit(cache=True, parallel=True)
-def pair_sizes(p, cc, n, e, has_e, family, prm):
-    """(K,) sizes for K pairs (p[i], cc[i], n[i], e[i]); all (K,3) tool-frame arrays, mm."""
-    k = p.shape[0]
-    out = np.empty(k)
-    for i in prange(k):
+def _pair_sizes_par(p, cc, n, e, has_e, family, prm):
+    out = np.empty(p.shape[0])
+    for i in prange(p.shape[0]):
         out[i] = _one(p, cc, n, e, has_e, family, prm, i, i)
     return out
 
 
+@njit(cache=True)
+def _pair_sizes_ser(p, cc, n, e, has_e, family, prm):
+    out = np.empty(p.shape[0])
+    for i in range(p.shape[0]):
+        out[i] = _one(p, cc, n, e, has_e, family, prm, i, i)
+    return out
+
+
+def pair_sizes(p, cc, n, e, has_e, family, prm):
+    """(K,) sizes for K pairs (p[i], cc[i], n[i], e[i]); all (K,3) tool-frame arrays, mm."""
+    if p.shape[0] >= PARALLEL_MIN:
+        return _pair_sizes_par(p, cc, n, e, has_e, family, prm)
+    return _pair_sizes_ser(p, cc, n, e, has_e, family, prm)
+
+
+@njit(cache=True)
+def _min_row(p, cc, n, e, has_e, family, prm, indptr, indices, i):
+    b = INF
+    a = -1
+    for t in range(indptr[i], indptr[i + 1]):
+        j = indices[t]
+        s = _one(p, cc, n, e, has_e, family, prm, i, j)
+        if s < b:
+            b = s
+            a = j
+    return b, a
+
+
 @njit(cache=True, parallel=True)
+def _min_sizes_par(p, cc, n, e, has_e, family, prm, indptr, indices):
+    m = cc.shape[0]
+    best = np.empty(m)
+    arg = np.empty(m, dtype=np.int64)
+    for i in prange(m):
+        best[i], arg[i] = _min_row(p, cc, n, e, has_e, family, prm, indptr, indices, i)
+    return best, arg
+
+
+@njit(cache=True)
+def _min_sizes_ser(p, cc, n, e, has_e, family, prm, indptr, indices):
+    m = cc.shape[0]
+    best = np.empty(m)
+    arg = np.empty(m, dtype=np.int64)
+    for i in range(m):
+        best[i], arg[i] = _min_row(p, cc, n, e, has_e, family, prm, indptr, indices, i)
+    return best, arg
+
+
 def min_sizes(p, cc, n, e, has_e, family, prm, indptr, indices):
     """For each CC point i the minimum size over its candidate test points
     p[indices[indptr[i]:indptr[i+1]]] and the index (into p) attaining it; inf and -1 when no
     candidate limits the size."""
-    m = cc.shape[0]
-    best = np.full(m, INF)
-    arg = np.full(m, -1, dtype=np.int64)
-    for i in prange(m):
-        b = INF
-        a = -1
-        for t in range(indptr[i], indptr[i + 1]):
-            j = indices[t]
-            s = _one(p, cc, n, e, has_e, family, prm, i, j)
-            if s < b:
-                b = s
-                a = j
-        best[i] = b
-        arg[i] = a
-    return best, arg
+    args = (p, cc, n, e, has_e, family, prm, indptr, indices)
+    if len(indices) >= PARALLEL_MIN:
+        return _min_sizes_par(*args)
+    return _min_sizes_ser(*args)

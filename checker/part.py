@@ -51,7 +51,10 @@ class Surface:
         nu, nv = self.ctrlpts.shape[:2]
         if self.ctrlpts.shape != (nu, nv, 3):
             raise ValueError(f"ctrlpts must be (nu, nv, 3), got {self.ctrlpts.shape}")
-        if self.knots_u.size != nu + self.degree_u + 1 or self.knots_v.size != nv + self.degree_v + 1:
+        if (
+            self.knots_u.size != nu + self.degree_u + 1
+            or self.knots_v.size != nv + self.degree_v + 1
+        ):
             raise ValueError(
                 f"knot vectors of sizes {self.knots_u.size}, {self.knots_v.size} do not fit "
                 f"{nu}x{nv} poles of degree {self.degree_u}x{self.degree_v}"
@@ -76,7 +79,9 @@ class Surface:
     def homogeneous(self) -> np.ndarray:
         """(nu, nv, 4) weighted poles (w x, w y, w z, w); w = 1 for polynomial surfaces."""
         w = np.ones(self.ctrlpts.shape[:2]) if self.weights is None else self.weights
-        return np.ascontiguousarray(np.concatenate([self.ctrlpts * w[..., None], w[..., None]], axis=2))
+        return np.ascontiguousarray(
+            np.concatenate([self.ctrlpts * w[..., None], w[..., None]], axis=2)
+        )
 
     def digest(self) -> bytes:
         """sha256 over degrees, knots, poles, weights and flip (for parts built in memory)."""

@@ -69,6 +69,7 @@ MIGRATIONS: tuple[str, ...] = (
     """
     ALTER TABLE jobs ADD COLUMN arrays BLOB;
     ALTER TABLE jobs ADD COLUMN cutter_size REAL;
+    ALTER TABLE jobs ADD COLUMN cutter_kind TEXT;
     CREATE INDEX jobs_path ON jobs (job_path, recorded_at);
     """,
 )
@@ -106,6 +107,7 @@ class JobRow:
     largest_safe_standard: str | None
     elapsed_s: float
     cutter_size: float | None
+    cutter_kind: str | None
 
 
 _ROW_COLUMNS = ", ".join(JobRow.__dataclass_fields__)
@@ -301,7 +303,8 @@ class ResultsStore:
             s, job = doc.summary, doc.job
             row.update(
                 part=job.part, part_hash=job.part_hash, cutter=job.cutter, machine=job.machine,
-                axis_class=job.axis_class, cutter_size=job.cutter_size, points=s.points,
+                axis_class=job.axis_class, cutter_size=job.cutter_size,
+                cutter_kind=job.cutter_kind, points=s.points,
                 **{f"n_{v}": getattr(s.counts, v) for v in VERDICTS},
                 worst_margin=s.worst_margin, worst_depth=s.worst_depth,
                 largest_safe_cutter=s.largest_safe_cutter,

@@ -13,10 +13,13 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
+from checker.errors import PathcheckError
+
 if TYPE_CHECKING:
     from checker.cutter import Cutter
 
 Value = float | str
+MAX_ARC_POINTS = 1_000_000  # per arc, from `Arc.sample`
 
 
 @dataclass(slots=True)
@@ -110,7 +113,8 @@ class Motion:
 class Arc:
     """A ``CIRCLE/`` arc ending at the next ``GOTO``: centre (3,), unit axis (3,) (the motion is
     counter-clockwise about it, right-hand rule), radius, start and end tips (3,); mm, part
-    frame. A helical arc moves linearly along the axis. ``motion`` is the row of its end GOTO."""
+    frame. A helical arc moves linearly along the axis. ``motion`` is the row of its end GOTO;
+    ``turns`` full revolutions are made on top of the angle from start to end (NX ``TIMES,n``)."""
 
     center: np.ndarray
     axis: np.ndarray
@@ -119,18 +123,19 @@ class Arc:
     end: np.ndarray
     line: int
     motion: int
+    turns: int = 0
 
     @property
     def sweep(self) -> float:
-        """Swept angle in radians, in (0, 2 pi]; 2 pi when start and end coincide."""
+        """Swept angle in radians: the angle from start to end in [0, 2 pi) (2 pi when they
+        coincide and ``turns`` is 0) plus 2 pi per extra turn."""
         u, v = self._radial(self.start), self._radial(self.end)
-        ang = np.arctan2(np.dot(np.cross(u, v), self.axis), np.dot(u, v))
-        tol = 1e-9 * max(self.radius, 1.0)
+        ang = float(np.arctan2(np.dot(np.cross(u, v), self.axis), np.dot(u, v)))
         if ang < 0:
             ang += 2 * np.pi
-        if ang * self.radius <= tol:
+        if ang * self.radius <= 1e-9 * max(self.radius, 1.0) and self.turns == 0:
             return 2 * np.pi
-        return float(ang)
+        return ang + 2 * np.pi * self.turns
 
     def _radial(self, p: np.ndarray) -> np.ndarray:
         d = p - self.center
@@ -139,13 +144,24 @@ class Arc:
     def sample(self, chord_tol: float) -> np.ndarray:
         """Points (M, 3) along the arc from start to end inclusive, M >= 2, such that the
         chordal deviation of each segment from the circle is at most ``chord_tol`` mm."""
+        if not chord_tol > 0:
+            raise PathcheckError(f"arc chord tolerance must be > 0 mm, found {chord_tol!r}",
+                                 code="usage")
         sweep = self.sweep
         r = self.radius
         if r <= chord_tol:
             n = 1
         else:
-            step = 2.0 * np.arccos(1.0 - chord_tol / r)
+            x = chord_tol / r  # half-angle step from the sagitta; the sqrt form where 1 - x == 1
+            step = 2.0 * np.arccos(1.0 - x) if x > 1e-8 else 2.0 * np.sqrt(2.0 * x)
             n = max(1, int(np.ceil(sweep / step)))
+        if n > MAX_ARC_POINTS:
+            raise PathcheckError(
+                f"CIRCLE/: sampling this arc (radius {r:.6g} mm, {sweep / (2 * np.pi):.6g} turns) "
+                f"to {chord_tol:g} mm needs {n} points, more than {MAX_ARC_POINTS}",
+                line=self.line,
+                code="usage",
+            )
         t = np.linspace(0.0, 1.0, n + 1)
         u = self._radial(self.start)
         nu = np.linalg.norm(u)

@@ -16,8 +16,33 @@ import numpy as np
 
 from checker.errors import PathcheckError
 
+#: G codes that are canned cycles: a hole at each X/Y of the block, down to Z from the R plane
+CANNED_CYCLES = frozenset(
+    {"73", "76", "81", "82", "83", "84", "84.2", "85", "86", "87", "88", "89"}
+)
+
 _COMMON_G: dict[str, str] = {
-    **{c: "motion" for c in ("0", "1", "2", "3", "80", "73", "76", "81", "82", "83", "84", "85", "86", "87", "88", "89")},
+    **{
+        c: "motion"
+        for c in (
+            "0",
+            "1",
+            "2",
+            "3",
+            "80",
+            "73",
+            "76",
+            "81",
+            "82",
+            "83",
+            "84",
+            "85",
+            "86",
+            "87",
+            "88",
+            "89",
+        )
+    },
     **{c: "plane" for c in ("17", "18", "19")},
     **{c: "distance" for c in ("90", "91")},
     **{c: "feed_mode" for c in ("93", "94", "95")},
@@ -29,9 +54,6 @@ _COMMON_G: dict[str, str] = {
     **{c: "path_control" for c in ("61", "64")},
     **{c: "non_modal" for c in ("4", "10", "28", "30", "53", "92")},
 }
-
-#: G codes that are canned cycles: a hole at each X/Y of the block, down to Z from the R plane
-CANNED_CYCLES = frozenset({"73", "76", "81", "82", "83", "84", "84.2", "85", "86", "87", "88", "89"})
 
 
 def _feed_distance_combined(dxyz: np.ndarray, db: np.ndarray) -> np.ndarray:
@@ -66,10 +88,14 @@ class Dialect:
     block_number_letters: tuple[str, ...]
     program_number_letter: str | None  # "O1000" line after "%"; None: no program number
     named_parameters: bool  # LinuxCNC #<name>
-    letter_assignments: bool  # "R3=1.5" words (MAPPS/Siemens style R parameters in Fanuc-family posts)
+    letter_assignments: (
+        bool  # "R3=1.5" words (MAPPS/Siemens style R parameters in Fanuc-family posts)
+    )
     feed_distance: Callable[[np.ndarray, np.ndarray], np.ndarray]
     format_code: Callable[[str, float], str]
     g94_rule: str  # one line for the README and program headers
+    last_g_wins: bool  # two G codes of one group in a block: Fanuc takes the last, rs274 errs
+    initial_motion: int | None  # motion mode at program start (Fanuc G00; rs274: none)
 
     def group_of(self, code: str, *, path: str | None = None, line: int | None = None) -> str:
         """Modal group of a normalised G code, or a PathcheckError naming it."""
@@ -87,7 +113,18 @@ class Dialect:
 
 FANUC = Dialect(
     name="fanuc",
-    g_groups={**_COMMON_G, "84.2": "motion", "54.1": "coord_system", "15": "polar", "69": "rotation"},
+    g_groups={
+        **_COMMON_G,
+        **{c: "cycle" for c in (*CANNED_CYCLES, "80")},  # Fanuc group 09, apart from G00-G03
+        "5.1": "path_control",
+        "62": "path_control",
+        "60": "non_modal",  # single-direction positioning: a positioning move
+        "43.4": "length_offset",  # tool centre point control
+        "74": "cycle",
+        "54.1": "coord_system",
+        "15": "polar",
+        "69": "rotation",
+    },
     block_number_letters=("N", ":"),  # ":" is Fanuc's alignment sequence number
     program_number_letter="O",
     named_parameters=False,
@@ -95,6 +132,8 @@ FANUC = Dialect(
     feed_distance=_feed_distance_combined,
     format_code=_code_padded,
     g94_rule="F = feed * sqrt(dX^2+dY^2+dZ^2+dB^2) / tip path length (degrees as mm)",
+    last_g_wins=True,
+    initial_motion=0,
 )
 
 LINUXCNC = Dialect(
@@ -120,6 +159,8 @@ LINUXCNC = Dialect(
     feed_distance=_feed_distance_linear_first,
     format_code=_code_plain,
     g94_rule="F = feed * |dXYZ| / tip path length (pure B moves: F = |dB| / block time, deg/min)",
+    last_g_wins=False,
+    initial_motion=None,
 )
 
 DIALECTS: dict[str, Dialect] = {d.name: d for d in (FANUC, LINUXCNC)}

@@ -35,7 +35,9 @@ def part_to_machine(tip: np.ndarray, b_word: np.ndarray, machine: Machine) -> np
     return _rotate_y(np.asarray(tip, dtype=float) - c, rotation_rad(b_word, machine)) + c
 
 
-def machine_to_part(xyz: np.ndarray, b_word: np.ndarray, machine: Machine) -> tuple[np.ndarray, np.ndarray]:
+def machine_to_part(
+    xyz: np.ndarray, b_word: np.ndarray, machine: Machine
+) -> tuple[np.ndarray, np.ndarray]:
     """Part-frame tip ``(N, 3)`` mm and unit tool axis ``(N, 3)`` for machine X, Y, Z ``(N, 3)``
     (work frame, mm) at B words ``(N,)`` degrees."""
     c = np.asarray(machine.kinematics.table_center, dtype=float)
@@ -50,7 +52,9 @@ def axis_from_rotation(theta: np.ndarray) -> np.ndarray:
     return np.stack([-np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=-1)
 
 
-def rotation_from_axis(axis: np.ndarray, *, j_tolerance: float = 1e-6, lines: np.ndarray | None = None) -> np.ndarray:
+def rotation_from_axis(
+    axis: np.ndarray, *, j_tolerance: float = 1e-6, lines: np.ndarray | None = None
+) -> np.ndarray:
     """Part rotation ``b (N,)`` degrees that puts part-frame axes ``(N, 3)`` along the spindle:
     ``b = atan2(-i, k)``. An axis with ``|j| > j_tolerance`` is not a 4-axis-about-Y axis."""
     axis = np.asarray(axis, dtype=float)

@@ -134,7 +134,9 @@ class Machine(_Model):
     def _safe_z(self) -> Machine:
         lo, hi = self.travel.z
         if not lo <= self.program.safe_z <= hi:
-            raise ValueError(f"program.safe_z ({self.program.safe_z}) outside travel.z {self.travel.z}")
+            raise ValueError(
+                f"program.safe_z ({self.program.safe_z}) outside travel.z {self.travel.z}"
+            )
         return self
 
 
@@ -145,9 +147,13 @@ def load_machine_file(path: str | Path) -> Machine:
         with path.open("rb") as fh:
             data = tomllib.load(fh)
     except OSError as err:
-        raise PathcheckError(f"cannot read machine file: {err.strerror}", path=path, code="machine") from err
+        raise PathcheckError(
+            f"cannot read machine file: {err.strerror}", path=path, code="machine"
+        ) from err
     except tomllib.TOMLDecodeError as err:
-        raise PathcheckError(f"machine file is not valid TOML: {err}", path=path, code="machine") from err
+        raise PathcheckError(
+            f"machine file is not valid TOML: {err}", path=path, code="machine"
+        ) from err
     data.setdefault("name", path.stem)
     try:
         return Machine.model_validate(data)

@@ -54,7 +54,9 @@ def unroll_rollover(words: np.ndarray, mode: str, start: float = 0.0) -> np.ndar
     return start + np.cumsum(step)
 
 
-def range_branches(w: np.ndarray, lo: float, hi: float, lines: np.ndarray | None = None) -> np.ndarray:
+def range_branches(
+    w: np.ndarray, lo: float, hi: float, lines: np.ndarray | None = None
+) -> np.ndarray:
     """Branch ``n (N,)`` so that ``w + 360 n`` lies in ``[lo, hi]``: each run keeps one branch as
     long as it can, a new run starts where the path leaves the range. ``w (N,)`` continuous words
     in degrees; a point that fits no branch is a travel-limit error naming its source line."""
@@ -74,7 +76,11 @@ def range_branches(w: np.ndarray, lo: float, hi: float, lines: np.ndarray | None
     start = 0
     while start < w.size:
         best_n, best_end = 0, start
-        for n in range(int(n_lo[start]), int(n_hi[start]) + 1):
+        # the branch that lasts longest; on a tie, the word nearest 0
+        candidates = sorted(
+            range(int(n_lo[start]), int(n_hi[start]) + 1), key=lambda n: abs(w[start] + 360.0 * n)
+        )
+        for n in candidates:
             inside = (w[start:] + 360.0 * n >= lo - 1e-9) & (w[start:] + 360.0 * n <= hi + 1e-9)
             out = np.flatnonzero(~inside)
             end = start + (int(out[0]) if out.size else w.size - start)

@@ -14,10 +14,13 @@ FREE_TEXT = frozenset({"PARTNO", "PPRINT", "INSERT", "TITLE", "REMARK"})
 # a number as APT writes it: 5.  .5  -0.173648  1.0E+02  1.0D+02
 _NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?"
 _NUM_RE = re.compile(_NUM)
-_FAST_NUMS = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:,[+-]?(?:\d+\.?\d*|\.\d+))*")
+# plain decimals of at most 15 integer digits (so |v| < MAX_ABS), no blanks: the fast path
+_FAST = r"[+-]?(?:\d{1,15}(?:\.\d*)?|\.\d+)"
+_FAST_NUMS = re.compile(rf"{_FAST}(?:,{_FAST})*")
 _STATEMENT = re.compile(r"([A-Za-z][A-Za-z0-9_\-]*(?: [A-Za-z][A-Za-z0-9_\-]*)*)\s*(/?)(.*)", re.S)
 _WORD_TOKEN = re.compile(r"[\x21-\x7e](?:[\x20-\x7e]*[\x21-\x7e])?")
 _HAS_LETTER = re.compile(r"[A-Za-z]")
+_NX_TRAILER = re.compile(r"Tool Path Listing has \d+ lines\.?")
 MAX_ABS = 1e15  # larger numbers are malformed input, not coordinates
 
 
@@ -31,9 +34,7 @@ def parse_args(raw: str, word: str, *, path: str, line: int) -> tuple[Value, ...
     if not raw.strip():
         return ()
     if _FAST_NUMS.fullmatch(raw):
-        vals = tuple(map(float, raw.split(",")))
-        if all(abs(v) <= MAX_ABS for v in vals):
-            return vals
+        return tuple(map(float, raw.split(",")))
     out: list[Value] = []
     for pos, tok in enumerate(raw.split(","), start=1):
         tok = tok.strip()
@@ -95,18 +96,20 @@ def lex(
     lines: list[str], *, path: str, column72: bool, header_comments: bool
 ) -> list[Record]:
     """Records of the file. ``header_comments``: lines before the first statement that are not
-    statements (the NX "Information listing" header) become comment records."""
+    statements (the NX "Information listing" header) and its "Tool Path Listing has N lines."
+    trailer become comment records."""
     records: list[Record] = []
     append = records.append
     pending: list[str] = []
     pending_line = 0
     comment: str | None = None
     seen_statement = False
+    fast = _FAST_NUMS.fullmatch
     for no, raw in enumerate(lines, start=1):
         s = (raw[:72] if column72 else raw).rstrip()
-        if not pending and s.startswith("GOTO/") and "$" not in s:
+        if not pending and s.startswith("GOTO/") and fast(s, 5):
             # the common case, kept lean
-            append(Record("GOTO", parse_args(s[5:], "GOTO", path=path, line=no), no))
+            append(Record("GOTO", tuple(map(float, s[5:].split(","))), no))
             seen_statement = True
             continue
         stripped = s.strip()
@@ -117,7 +120,9 @@ def lex(
             continue
         if not pending:
             head = _statement(stripped)
-            if head is None and header_comments and not seen_statement:
+            if head is None and header_comments and (
+                not seen_statement or _NX_TRAILER.fullmatch(stripped)
+            ):
                 append(Record("$$", (), no, text=" " + stripped))
                 continue
             seen_statement = True

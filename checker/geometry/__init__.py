@@ -11,8 +11,14 @@ from checker.part import Part
 
 BESIDE_SUFFIXES = (".step", ".stp", ".igs", ".iges", ".json", ".stl")
 _READERS = {
-    ".json": "geomdl", ".yaml": "geomdl", ".yml": "geomdl",
-    ".step": "step", ".stp": "step", ".igs": "iges", ".iges": "iges", ".stl": "stl",
+    ".json": "geomdl",
+    ".yaml": "geomdl",
+    ".yml": "geomdl",
+    ".step": "step",
+    ".stp": "step",
+    ".igs": "iges",
+    ".iges": "iges",
+    ".stl": "stl",
 }
 _CACHE: dict[tuple[str, str], Part] = {}
 
@@ -40,11 +46,16 @@ def load_part(path: str | Path) -> Part:
     if kind is None:
         raise PathcheckError(
             f"unsupported part file type '{path.suffix}', expected one of "
-            f"{', '.join(sorted(_READERS))}", path=path, code="part")
+            f"{', '.join(sorted(_READERS))}",
+            path=path,
+            code="part",
+        )
     try:
         raw = path.read_bytes()
     except OSError as err:
-        raise PathcheckError(f"cannot read part file: {err.strerror}", path=path, code="part") from err
+        raise PathcheckError(
+            f"cannot read part file: {err.strerror}", path=path, code="part"
+        ) from err
     digest = hashlib.sha256(raw).hexdigest()
     key = (str(path.resolve()), digest)
     if key in _CACHE:
@@ -65,7 +76,9 @@ def _read(kind: str, path: Path, raw: bytes, digest: str) -> Part:
         try:
             text = raw.decode("utf-8")
         except UnicodeDecodeError as err:
-            raise PathcheckError("geomdl exchange file is not UTF-8 text", path=path, code="part") from err
+            raise PathcheckError(
+                "geomdl exchange file is not UTF-8 text", path=path, code="part"
+            ) from err
         surfaces = read_geomdl(path, text)
         faces = len(surfaces)
     else:

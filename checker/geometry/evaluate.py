@@ -17,6 +17,7 @@ import numpy as np
 from checker.part import Part, Surface
 
 _CHUNK = 512
+_PARALLEL_MIN = 50_000  # fewer points: one thread (thread start-up costs more than it saves)
 _MAXDEG = 32
 
 
@@ -83,68 +84,79 @@ def _basis_ders(knots, p, span, x, nd, ders, ndu, a, left, right):
         fac *= p - k
 
 
-@nb.njit(cache=True, parallel=True)
-def _eval_kernel(ku, kv, p, q, Hw, u, v, order, out, normals, flip):
-    """out[i, m] for m = S, Su, Sv (, Suu, Suv, Svv) and unit normals[i] at (u[i], v[i])."""
-    npts = u.shape[0]
+@nb.njit(cache=True)
+def _eval_range(ku, kv, p, q, Hw, u, v, order, out, normals, flip, i0, i1):
+    """out[i, m] for m = S, Su, Sv (, Suu, Suv, Svv) and unit normals[i] for i in [i0, i1)."""
     nu, nv = Hw.shape[0], Hw.shape[1]
-    nchunks = (npts + _CHUNK - 1) // _CHUNK
     sign = -1.0 if flip else 1.0
-    for c in nb.prange(nchunks):
-        Nu = np.empty((3, p + 1))
-        Nv = np.empty((3, q + 1))
-        ndu = np.empty((_MAXDEG + 1, _MAXDEG + 1))
-        a = np.empty((2, _MAXDEG + 1))
-        left = np.empty(_MAXDEG + 1)
-        right = np.empty(_MAXDEG + 1)
-        A = np.empty((6, 4))
-        T = np.empty((3, 4))
-        for i in range(c * _CHUNK, min(npts, (c + 1) * _CHUNK)):
-            x = min(max(u[i], ku[p]), ku[nu])
-            y = min(max(v[i], kv[q]), kv[nv])
-            su = _find_span(ku, p, nu, x)
-            sv = _find_span(kv, q, nv, y)
-            _basis_ders(ku, p, su, x, order, Nu, ndu, a, left, right)
-            _basis_ders(kv, q, sv, y, order, Nv, ndu, a, left, right)
-            A[:, :] = 0.0
-            for ii in range(p + 1):
-                T[:, :] = 0.0
-                row = su - p + ii
-                for jj in range(q + 1):
-                    col = sv - q + jj
-                    for l in range(order + 1):
-                        b = Nv[l, jj]
-                        for m in range(4):
-                            T[l, m] += b * Hw[row, col, m]
-                for m in range(4):
-                    A[0, m] += Nu[0, ii] * T[0, m]
-                    A[1, m] += Nu[1, ii] * T[0, m]
-                    A[2, m] += Nu[0, ii] * T[1, m]
-                    if order >= 2:
-                        A[3, m] += Nu[2, ii] * T[0, m]
-                        A[4, m] += Nu[1, ii] * T[1, m]
-                        A[5, m] += Nu[0, ii] * T[2, m]
-            w = A[0, 3]
-            for m in range(3):
-                S = A[0, m] / w
-                Su = (A[1, m] - A[1, 3] * S) / w
-                Sv = (A[2, m] - A[2, 3] * S) / w
-                out[i, 0, m] = S
-                out[i, 1, m] = Su
-                out[i, 2, m] = Sv
+    # scratch shared by the points of this range
+    Nu = np.empty((3, p + 1))
+    Nv = np.empty((3, q + 1))
+    ndu = np.empty((_MAXDEG + 1, _MAXDEG + 1))
+    a = np.empty((2, _MAXDEG + 1))
+    left = np.empty(_MAXDEG + 1)
+    right = np.empty(_MAXDEG + 1)
+    A = np.empty((6, 4))
+    T = np.empty((3, 4))
+    for i in range(i0, i1):
+        x = min(max(u[i], ku[p]), ku[nu])
+        y = min(max(v[i], kv[q]), kv[nv])
+        su = _find_span(ku, p, nu, x)
+        sv = _find_span(kv, q, nv, y)
+        _basis_ders(ku, p, su, x, order, Nu, ndu, a, left, right)
+        _basis_ders(kv, q, sv, y, order, Nv, ndu, a, left, right)
+        A[:, :] = 0.0
+        for ii in range(p + 1):
+            T[:, :] = 0.0
+            row = su - p + ii
+            for jj in range(q + 1):
+                col = sv - q + jj
+                for l in range(order + 1):
+                    b = Nv[l, jj]
+                    for m in range(4):
+                        T[l, m] += b * Hw[row, col, m]
+            for m in range(4):
+                A[0, m] += Nu[0, ii] * T[0, m]
+                A[1, m] += Nu[1, ii] * T[0, m]
+                A[2, m] += Nu[0, ii] * T[1, m]
                 if order >= 2:
-                    out[i, 3, m] = (A[3, m] - 2.0 * A[1, 3] * Su - A[3, 3] * S) / w
-                    out[i, 4, m] = (A[4, m] - A[1, 3] * Sv - A[2, 3] * Su - A[4, 3] * S) / w
-                    out[i, 5, m] = (A[5, m] - 2.0 * A[2, 3] * Sv - A[5, 3] * S) / w
-            nx = out[i, 1, 1] * out[i, 2, 2] - out[i, 1, 2] * out[i, 2, 1]
-            ny = out[i, 1, 2] * out[i, 2, 0] - out[i, 1, 0] * out[i, 2, 2]
-            nz = out[i, 1, 0] * out[i, 2, 1] - out[i, 1, 1] * out[i, 2, 0]
-            nn = np.sqrt(nx * nx + ny * ny + nz * nz)
-            if nn > 0.0:
-                nn = sign / nn
-            normals[i, 0] = nx * nn
-            normals[i, 1] = ny * nn
-            normals[i, 2] = nz * nn
+                    A[3, m] += Nu[2, ii] * T[0, m]
+                    A[4, m] += Nu[1, ii] * T[1, m]
+                    A[5, m] += Nu[0, ii] * T[2, m]
+        w = A[0, 3]
+        for m in range(3):
+            S = A[0, m] / w
+            Su = (A[1, m] - A[1, 3] * S) / w
+            Sv = (A[2, m] - A[2, 3] * S) / w
+            out[i, 0, m] = S
+            out[i, 1, m] = Su
+            out[i, 2, m] = Sv
+            if order >= 2:
+                out[i, 3, m] = (A[3, m] - 2.0 * A[1, 3] * Su - A[3, 3] * S) / w
+                out[i, 4, m] = (A[4, m] - A[1, 3] * Sv - A[2, 3] * Su - A[4, 3] * S) / w
+                out[i, 5, m] = (A[5, m] - 2.0 * A[2, 3] * Sv - A[5, 3] * S) / w
+        nx = out[i, 1, 1] * out[i, 2, 2] - out[i, 1, 2] * out[i, 2, 1]
+        ny = out[i, 1, 2] * out[i, 2, 0] - out[i, 1, 0] * out[i, 2, 2]
+        nz = out[i, 1, 0] * out[i, 2, 1] - out[i, 1, 1] * out[i, 2, 0]
+        nn = np.sqrt(nx * nx + ny * ny + nz * nz)
+        scale = 0.0
+        for m in range(3):
+            scale += out[i, 1, m] * out[i, 1, m] + out[i, 2, m] * out[i, 2, m]
+        # |Su x Sv| negligible against |Su|^2 + |Sv|^2: a pole, left as 0 for the caller
+        nn = sign / nn if nn > 1e-12 * scale else 0.0
+        normals[i, 0] = nx * nn
+        normals[i, 1] = ny * nn
+        normals[i, 2] = nz * nn
+
+
+@nb.njit(cache=True, parallel=True)
+def _eval_parallel(ku, kv, p, q, Hw, u, v, order, out, normals, flip):
+    """_eval_range over all points in parallel chunks."""
+    n = u.shape[0]
+    for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
+        _eval_range(
+            ku, kv, p, q, Hw, u, v, order, out, normals, flip, c * _CHUNK, min(n, (c + 1) * _CHUNK)
+        )
 
 
 @dataclass
@@ -182,8 +194,23 @@ def _raw_eval(surface: Surface, u: np.ndarray, v: np.ndarray, order: int):
     n = u.shape[0]
     out = np.empty((n, 3 * order, 3))
     normals = np.empty((n, 3))
-    _eval_kernel(surface.knots_u, surface.knots_v, surface.degree_u, surface.degree_v, Hw, u, v,
-                 order, out, normals, bool(surface.flip))
+    kernel_args = (
+        surface.knots_u,
+        surface.knots_v,
+        surface.degree_u,
+        surface.degree_v,
+        Hw,
+        u,
+        v,
+        order,
+        out,
+        normals,
+        bool(surface.flip),
+    )
+    if n >= _PARALLEL_MIN:
+        _eval_parallel(*kernel_args)
+    else:
+        _eval_range(*kernel_args, 0, n)
     return out, normals
 
 

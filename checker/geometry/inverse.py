@@ -9,8 +9,14 @@ from checker.geometry.evaluate import evaluate
 from checker.part import Surface
 
 
-def invert_points(surface: Surface, points: np.ndarray, u: np.ndarray, v: np.ndarray,
-                  iterations: int = 30, tol: float = 1e-12) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def invert_points(
+    surface: Surface,
+    points: np.ndarray,
+    u: np.ndarray,
+    v: np.ndarray,
+    iterations: int = 30,
+    tol: float = 1e-12,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(u, v, distance): parameters of the foot points of `points (N, 3)` mm near the start
     guesses (u, v) (N,), and the remaining distance in mm (small when the point is on the
     surface). Steps are taken with the 2x2 normal equations of [S_u S_v]."""

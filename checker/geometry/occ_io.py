@@ -21,14 +21,21 @@ from checker.geometry.trims import UVTrim
 from checker.part import Surface
 
 _KINDS = {
-    "GeomAbs_Plane": "plane", "GeomAbs_Cylinder": "cylinder", "GeomAbs_Cone": "cone",
-    "GeomAbs_Sphere": "sphere", "GeomAbs_Torus": "torus", "GeomAbs_BezierSurface": "bezier",
-    "GeomAbs_BSplineSurface": "bspline", "GeomAbs_SurfaceOfRevolution": "revolution",
-    "GeomAbs_SurfaceOfExtrusion": "extrusion", "GeomAbs_OffsetSurface": "offset",
+    "GeomAbs_Plane": "plane",
+    "GeomAbs_Cylinder": "cylinder",
+    "GeomAbs_Cone": "cone",
+    "GeomAbs_Sphere": "sphere",
+    "GeomAbs_Torus": "torus",
+    "GeomAbs_BezierSurface": "bezier",
+    "GeomAbs_BSplineSurface": "bspline",
+    "GeomAbs_SurfaceOfRevolution": "revolution",
+    "GeomAbs_SurfaceOfExtrusion": "extrusion",
+    "GeomAbs_OffsetSurface": "offset",
     "GeomAbs_OtherSurface": "other",
 }
-_SAMPLES_PER_KNOT_SPAN = 8
 _CURVE_SAMPLES = 33
+_TRIM_DEFLECTION = 1e-3  # mm: chord deviation of the trim polylines from the face's edges
+_TRIM_ANGLE = 0.2  # rad: angular deflection of the trim polylines
 _MAP_TOL = 1e-9  # mm: trim loop points of converted faces must land this close
 
 
@@ -47,8 +54,11 @@ def read_occ(path: Path, kind: str) -> tuple[list[Surface], int]:
         try:
             surfaces.append(_face_surface(face, len(surfaces)))
         except Exception as err:  # OCC raises its own Standard_Failure types
-            raise PathcheckError(f"face {len(surfaces)}: cannot convert to an exact B-spline: {err}",
-                                 path=path, code="part") from err
+            raise PathcheckError(
+                f"face {len(surfaces)}: cannot convert to an exact B-spline: {err}",
+                path=path,
+                code="part",
+            ) from err
     return surfaces, len(surfaces)
 
 
@@ -75,10 +85,15 @@ def _read_shape(path: Path, kind: str):
         reader = IGESControl_Reader()
     status = reader.ReadFile(str(path))
     if status != IFSelect_RetDone:
-        raise PathcheckError(f"not a readable {kind.upper()} file (OpenCASCADE status {status.name})",
-                             path=path, code="part")
+        raise PathcheckError(
+            f"not a readable {kind.upper()} file (OpenCASCADE status {status.name})",
+            path=path,
+            code="part",
+        )
     if reader.TransferRoots() == 0:
-        raise PathcheckError(f"{kind.upper()} file holds no transferable shape", path=path, code="part")
+        raise PathcheckError(
+            f"{kind.upper()} file holds no transferable shape", path=path, code="part"
+        )
     shape = reader.OneShape()
     if shape.IsNull():
         raise PathcheckError(f"{kind.upper()} file holds no shape", path=path, code="part")
@@ -100,7 +115,9 @@ def _face_surface(face, index: int) -> Surface:
     u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
     converted = not isinstance(geom, Geom_BSplineSurface)
     if converted:
-        bs = GeomConvert.SurfaceToBSplineSurface_s(Geom_RectangularTrimmedSurface(geom, u0, u1, v0, v1))
+        bs = GeomConvert.SurfaceToBSplineSurface_s(
+            Geom_RectangularTrimmedSurface(geom, u0, u1, v0, v1)
+        )
     else:
         bs = geom.Copy()
     if bs.IsUPeriodic():
@@ -108,7 +125,7 @@ def _face_surface(face, index: int) -> Surface:
     if bs.IsVPeriodic():
         bs.SetVNotPeriodic()
     surf = _bspline_data(bs, index, kind, face.Orientation() == TopAbs_REVERSED)
-    loops = _face_loops(face, converted)
+    loops = _face_loops(face)
     if converted and loops:
         loops = _map_loops(geom, surf, loops)
     surf.trim = _trim_or_none(surf, loops)
@@ -126,19 +143,32 @@ def _bspline_data(bs, index: int, kind: str, flip: bool) -> Surface:
             p = bs.Pole(i + 1, j + 1)
             ctrl[i, j] = p.X(), p.Y(), p.Z()
             w[i, j] = bs.Weight(i + 1, j + 1)
-    ku = np.repeat([bs.UKnot(i) for i in range(1, bs.NbUKnots() + 1)],
-                   [bs.UMultiplicity(i) for i in range(1, bs.NbUKnots() + 1)])
-    kv = np.repeat([bs.VKnot(i) for i in range(1, bs.NbVKnots() + 1)],
-                   [bs.VMultiplicity(i) for i in range(1, bs.NbVKnots() + 1)])
+    ku = np.repeat(
+        [bs.UKnot(i) for i in range(1, bs.NbUKnots() + 1)],
+        [bs.UMultiplicity(i) for i in range(1, bs.NbUKnots() + 1)],
+    )
+    kv = np.repeat(
+        [bs.VKnot(i) for i in range(1, bs.NbVKnots() + 1)],
+        [bs.VMultiplicity(i) for i in range(1, bs.NbVKnots() + 1)],
+    )
     rational = bool(np.ptp(w) > 1e-14 * w.max())
     if kind == "bspline" and rational:
         kind = "nurbs"
-    return Surface(id=index, name=f"face_{index}_{kind}", kind=kind, degree_u=bs.UDegree(),
-                   degree_v=bs.VDegree(), knots_u=ku, knots_v=kv, ctrlpts=ctrl,
-                   weights=w if rational else None, flip=flip)
+    return Surface(
+        id=index,
+        name=f"face_{index}_{kind}",
+        kind=kind,
+        degree_u=bs.UDegree(),
+        degree_v=bs.VDegree(),
+        knots_u=ku,
+        knots_v=kv,
+        ctrlpts=ctrl,
+        weights=w if rational else None,
+        flip=flip,
+    )
 
 
-def _face_loops(face, dense: bool) -> list[np.ndarray]:
+def _face_loops(face) -> list[np.ndarray]:
     """One closed (K, 2) (u, v) polyline per wire of the face, edges in wire order."""
     from OCP.BRepAdaptor import BRepAdaptor_Curve2d
     from OCP.BRepTools import BRepTools_WireExplorer
@@ -157,7 +187,7 @@ def _face_loops(face, dense: bool) -> list[np.ndarray]:
             edge = we.Current()
             we.Next()
             c2d = BRepAdaptor_Curve2d(edge, face)
-            t = np.linspace(c2d.FirstParameter(), c2d.LastParameter(), _edge_samples(c2d, dense))
+            t = _edge_params(edge, c2d)
             if edge.Orientation() == TopAbs_REVERSED:
                 t = t[::-1]
             pieces.append(np.array([(q.X(), q.Y()) for q in map(c2d.Value, t)]))
@@ -166,15 +196,20 @@ def _face_loops(face, dense: bool) -> list[np.ndarray]:
     return loops
 
 
-def _edge_samples(c2d, dense: bool) -> int:
-    from OCP.GeomAbs import GeomAbs_CurveType
+def _edge_params(edge, c2d) -> np.ndarray:
+    """Edge parameters whose 3-D chords deviate at most _TRIM_DEFLECTION mm from the edge (the
+    pcurve shares the edge's parameter); uniform for degenerated or non-same-parameter edges."""
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+    from OCP.GCPnts import GCPnts_TangentialDeflection
 
-    kind = c2d.GetType()
-    if kind == GeomAbs_CurveType.GeomAbs_Line:
-        return _CURVE_SAMPLES if dense else 2
-    if kind == GeomAbs_CurveType.GeomAbs_BSplineCurve:
-        return int(np.clip(c2d.NbKnots() * _SAMPLES_PER_KNOT_SPAN, _CURVE_SAMPLES, 4000))
-    return _CURVE_SAMPLES
+    t0, t1 = c2d.FirstParameter(), c2d.LastParameter()
+    if BRep_Tool.Degenerated_s(edge) or not BRep_Tool.SameParameter_s(edge):
+        return np.linspace(t0, t1, _CURVE_SAMPLES)
+    curve = BRepAdaptor_Curve(edge)
+    defl = GCPnts_TangentialDeflection(curve, t0, t1, _TRIM_ANGLE, _TRIM_DEFLECTION, 2)
+    t = np.array([defl.Parameter(i) for i in range(1, defl.NbPoints() + 1)])
+    return np.clip(t, min(t0, t1), max(t0, t1))
 
 
 def _map_loops(geom, surf: Surface, loops: list[np.ndarray]) -> list[np.ndarray]:

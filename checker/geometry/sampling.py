@@ -35,13 +35,21 @@ class TestPoints:
     tree: cKDTree
 
 
-def sample_part(part: Part, sag: float | None = None, geometry: GeometryConfig | None = None) -> TestPoints:
+def sample_part(
+    part: Part, sag: float | None = None, geometry: GeometryConfig | None = None
+) -> TestPoints:
     """Test points of the whole part; `sag` (mm) overrides the config's sag tolerance."""
     cfg = geometry or default_config().geometry
     sag = float(sag if sag is not None else cfg.sag_tolerance)
     if sag <= 0:
         raise ValueError(f"sag tolerance must be positive, got {sag}")
-    key = (part.content_hash, sag, cfg.max_spacing, cfg.max_samples_per_surface, cfg.min_samples_per_direction)
+    key = (
+        part.content_hash,
+        sag,
+        cfg.max_spacing,
+        cfg.max_samples_per_surface,
+        cfg.min_samples_per_direction,
+    )
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
@@ -59,7 +67,7 @@ def sample_part(part: Part, sag: float | None = None, geometry: GeometryConfig |
 
 def _span_breaks(knots: np.ndarray, degree: int) -> np.ndarray:
     """Distinct knot values inside the domain (span boundaries)."""
-    return np.unique(knots[degree:len(knots) - degree])
+    return np.unique(knots[degree : len(knots) - degree])
 
 
 def _probe(breaks: np.ndarray) -> np.ndarray:
@@ -120,7 +128,11 @@ def _sample_surface(s: Surface, sag: float, cfg: GeometryConfig):
     if s.trim is not None:
         step = float(np.median(spacing)) if spacing.size else cfg.max_spacing
         bpts, bnrm, buv = _boundary(s, step)
-        pts, nrm, uv = np.concatenate([pts, bpts]), np.concatenate([nrm, bnrm]), np.concatenate([uv, buv])
+        pts, nrm, uv = (
+            np.concatenate([pts, bpts]),
+            np.concatenate([nrm, bnrm]),
+            np.concatenate([uv, buv]),
+        )
         spc = np.concatenate([spc, np.full(len(bpts), step)])
     return pts, nrm, np.full(len(pts), s.id, dtype=np.int32), uv, spc
 

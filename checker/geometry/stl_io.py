@@ -22,8 +22,9 @@ def read_stl(path: Path, raw: bytes) -> MeshPart:
         raise PathcheckError(f"not a readable STL file: {err}", path=path, code="part") from err
     tri = np.asarray(m.vectors, dtype=np.float64).reshape(-1, 3, 3)
     if tri.size == 0 or not np.isfinite(tri).all():
-        raise PathcheckError("STL file holds no triangles or non-finite coordinates",
-                             path=path, code="part")
+        raise PathcheckError(
+            "STL file holds no triangles or non-finite coordinates", path=path, code="part"
+        )
     normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     length = np.linalg.norm(normals, axis=1)
     keep = length > 0.0
@@ -31,4 +32,6 @@ def read_stl(path: Path, raw: bytes) -> MeshPart:
         raise PathcheckError("STL file holds only zero-area triangles", path=path, code="part")
     tri, normals = tri[keep], normals[keep] / length[keep, None]
     vertices, inverse = np.unique(tri.reshape(-1, 3), axis=0, return_inverse=True)
-    return MeshPart(vertices=vertices, triangles=inverse.reshape(-1, 3).astype(np.int64), normals=normals)
+    return MeshPart(
+        vertices=vertices, triangles=inverse.reshape(-1, 3).astype(np.int64), normals=normals
+    )

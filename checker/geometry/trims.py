@@ -7,10 +7,10 @@ import numba as nb
 import numpy as np
 
 
-@nb.njit(cache=True, parallel=True)
+@nb.njit(cache=True)
 def _crossings(u, v, x0, y0, x1, y1, vmin, dv, nb_, bstart, bedges, out):
     """out[i] = number of loop edges crossed by the ray from (u[i], v[i]) towards +u."""
-    for i in nb.prange(u.shape[0]):
+    for i in range(u.shape[0]):
         b = int((v[i] - vmin) / dv)
         cnt = 0
         if 0 <= b < nb_:
@@ -29,7 +29,9 @@ class LoopSet:
 
     def __init__(self, loops: list[np.ndarray]) -> None:
         self.loops = [np.asarray(lp, dtype=np.float64).reshape(-1, 2) for lp in loops]
-        segs = [np.stack([lp, np.roll(lp, -1, axis=0)], axis=1) for lp in self.loops if len(lp) >= 3]
+        segs = [
+            np.stack([lp, np.roll(lp, -1, axis=0)], axis=1) for lp in self.loops if len(lp) >= 3
+        ]
         seg = np.concatenate(segs) if segs else np.zeros((0, 2, 2))
         seg = seg[seg[:, 0, 1] != seg[:, 1, 1]]  # horizontal edges never cross a +u ray
         self._x0, self._y0 = seg[:, 0, 0].copy(), seg[:, 0, 1].copy()
@@ -57,8 +59,20 @@ class LoopSet:
         v = np.ascontiguousarray(v, dtype=np.float64).ravel()
         out = np.zeros(u.size, dtype=np.int64)
         if self._x0.size:
-            _crossings(u, v, self._x0, self._y0, self._x1, self._y1, self._vmin, self._dv,
-                       self._nb, self._bstart, self._bedges, out)
+            _crossings(
+                u,
+                v,
+                self._x0,
+                self._y0,
+                self._x1,
+                self._y1,
+                self._vmin,
+                self._dv,
+                self._nb,
+                self._bstart,
+                self._bedges,
+                out,
+            )
         return (out & 1).astype(bool)
 
 

@@ -1,20 +1,23 @@
 """The report's pictures, drawn with matplotlib's Agg backend and returned as base64 PNG so the
-page is self-contained. Per job, four panels of one reused figure (drawing is the cost, so the
-figure, its colour bar and legends are built once and only the data changes between jobs):
+page is self-contained. Per job, four panels of one reused figure (drawing text is the cost, so
+the frames, colour bar, legends and axes are drawn once and only the data changes between jobs;
+the titles are the page's captions):
 
 1. allowable-cutter colour map over the CC points (thesis fig. 3-2), log scale in mm;
 2. standard-cutter colour map (thesis figs 4-2, 4-3): the largest standard cutter per CC point;
 3. where the findings are on the part: CC points with gouges, interference and holder hits
    highlighted;
-4. B chosen against best B along the path (degrees over path length, mm); for a job without B,
-   the allowable size along the path against the real cutter size.
+4. B chosen against best B along the path (degrees over % of path length, on one of a few fixed
+   B scales); for a job without B, the allowable size along the path against the real cutter
+   size (log scale, mm).
 
 Maps are projected views of the part frame onto the two coordinates with the largest spread."""
 
 from __future__ import annotations
 
 import base64
-import io
+import struct
+import zlib
 
 import matplotlib
 
@@ -22,12 +25,11 @@ matplotlib.use("Agg")
 
 import numpy as np  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
-from matplotlib.colors import ListedColormap, LogNorm  # noqa: E402
+from matplotlib.cm import ScalarMappable  # noqa: E402
+from matplotlib.colors import LogNorm  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
-from PIL import Image  # noqa: E402
 
 from checker.report.standard import StandardCutters  # noqa: E402
 from checker.results import VERDICTS  # noqa: E402
@@ -38,16 +40,27 @@ VERDICT_COLOURS = {
     "ok": "#c8c8c8", "gouge": "#d62728", "interference": "#ff7f0e", "holder": "#9467bd",
     "inaccessible": "#000000",
 }
-STANDARD_NONE = "#d62728"
-PANEL_TITLES = ("allowable cutter", "standard cutter", "findings on the part", "B along the path")
+STANDARD_NONE = "#d62728"  # no standard cutter fits
+B_RANGES = (10.0, 30.0, 60.0, 90.0, 180.0)  # degrees: the fixed scales of the B panel
 AXES = "XYZ"
 
 
 def png_base64(rgba: np.ndarray) -> str:
-    """A (H, W, 4) uint8 image as base64 PNG text."""
-    buf = io.BytesIO()
-    Image.fromarray(rgba[:, :, :3]).save(buf, format="png", compress_level=1)
-    return base64.b64encode(buf.getvalue()).decode("ascii")
+    """A (H, W, 4) uint8 image as base64 PNG text (RGB, no row filter, fast zlib level)."""
+    h, w = rgba.shape[:2]
+    raw = np.zeros((h, 1 + 3 * w), dtype=np.uint8)  # each row: filter byte 0, then RGB
+    raw[:, 1:].reshape(h, w, 3)[:] = rgba[:, :, :3]
+
+    def chunk(tag: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
+
+    png = b"".join((
+        b"\x89PNG\r\n\x1a\n",
+        chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)),
+        chunk(b"IDAT", zlib.compress(raw.tobytes(), 1)),
+        chunk(b"IEND", b""),
+    ))
+    return base64.b64encode(png).decode("ascii")
 
 
 def _projection(cc: np.ndarray) -> tuple[int, int]:
@@ -64,134 +77,183 @@ def path_length(cc: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(cc, axis=0), axis=1))])
 
 
-class JobPainter:
-    """Draws the four pictures of a job; one instance per process, reused for every job."""
+def paint_map(
+    target: np.ndarray, xy: np.ndarray, rgba: np.ndarray, size: np.ndarray, order: np.ndarray
+) -> None:
+    """Paint points xy (N,2, mm) as filled squares of `size` (N,) pixels and colour rgba (N,4,
+    uint8) onto `target` (H, W, 4, uint8, row 0 at the top), white first, fitted square and
+    padded around the points. `order` (N,) int: higher groups are painted later, on top."""
+    target[:] = 255
+    if len(xy) == 0:
+        return
+    h, w = target.shape[:2]
+    px = min(h, w)
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    half = 0.53 * max(float(np.max(hi - lo)), 1e-6)
+    x0, y0 = 0.5 * (lo + hi) - half
+    col = (w - px) // 2 + ((xy[:, 0] - x0) / (2 * half) * (px - 1)).astype(int)
+    row = (h + px) // 2 - 1 - ((xy[:, 1] - y0) / (2 * half) * (px - 1)).astype(int)
+    for group in np.unique(order):  # a few groups; each vectorised over its points
+        sel = np.nonzero(order == group)[0]
+        d = np.arange(int(size[sel].max())) - int(size[sel].max()) // 2
+        rr = np.clip(row[sel, None, None] + d[None, :, None], 0, h - 1)
+        cc = np.clip(col[sel, None, None] + d[None, None, :], 0, w - 1)
+        target[rr, cc] = rgba[sel, None, None]
 
-    def __init__(self, standard_names: list[str], dpi: int = 72) -> None:
+
+def _rgba_bytes(colours: list) -> np.ndarray:
+    """(K, 4) uint8 RGBA of matplotlib colour specs."""
+    return (255 * np.array([matplotlib.colors.to_rgba(c) for c in colours]) + 0.5).astype(np.uint8)
+
+
+def b_range(values: np.ndarray) -> float:
+    """The smallest of the fixed B scales (degrees, symmetric) that holds all finite values."""
+    finite = np.abs(values[np.isfinite(values)])
+    top = float(finite.max()) if len(finite) else 0.0
+    return next((r for r in B_RANGES if top <= r), B_RANGES[-1])
+
+
+class JobPainter:
+    """Draws the four pictures of a job; one instance per process, reused for every job.
+
+    Everything but the data is drawn once into a background per family of standard cutters and
+    path-panel scale (frames, colour bar, legends, the path panel's axes for each fixed B range
+    and for the size scale); per job only the map images and the path lines are drawn on top
+    (blitting), so no text is laid out per job."""
+
+    def __init__(self, dpi: int = 72) -> None:
         w, h = PANEL_PX
         self.fig = Figure(figsize=(4 * w / dpi, h / dpi), dpi=dpi)
         FigureCanvasAgg(self.fig)
-        self.standard_names = standard_names
-        fw, top, bottom = 0.25, 0.86, 0.12
-        rect = [(k * fw + 0.012, bottom, 0.16, top - bottom) for k in range(4)]
-        rect[3] = (3 * fw + 0.035, bottom + 0.06, 0.205, top - bottom - 0.06)
-        self.axes = [self.fig.add_axes(r) for r in rect]
-        for ax in self.axes[:3]:
+        top, bottom = 0.95, 0.07
+        side = (top - bottom) * h / (4 * w)  # square map axes, as a fraction of figure width
+        maps = [self.fig.add_axes((k / 4 + 0.006, bottom, side, top - bottom)) for k in range(3)]
+        for ax in maps:
             ax.set_xticks([])
             ax.set_yticks([])
-        a_map, s_map, f_map, b_ax = self.axes
-        self.allow = a_map.scatter([], [], c=[], s=6, linewidths=0, cmap="viridis",
-                                   norm=LogNorm(*ALLOWABLE_RANGE))
-        cax = self.fig.add_axes((0.012 + 0.165, bottom, 0.008, top - bottom))
-        self.fig.colorbar(self.allow, cax=cax).set_label("allowable size, mm", fontsize=8)
-        cax.tick_params(labelsize=7)
-        colours = [STANDARD_NONE, *matplotlib.colormaps["tab10"].colors[: len(standard_names)]]
-        self.standard_cmap = ListedColormap(colours)
-        self.std = s_map.scatter([], [], c=[], s=6, linewidths=0, cmap=self.standard_cmap,
-                                 vmin=-1.5, vmax=len(standard_names) - 0.5)
-        s_map.legend(
-            handles=[Patch(color=c, label=n) for c, n in
-                     zip(colours, ["none", *standard_names], strict=True)],
-            loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7, frameon=False,
-        )
-        self.find = f_map.scatter([], [], s=4, linewidths=0)
-        f_map.legend(
-            handles=[Line2D([], [], ls="", marker="o", color=VERDICT_COLOURS[v], label=v)
-                     for v in VERDICTS],
-            loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7, frameon=False,
-        )
-        self.verdict_rgba = np.array(
-            [matplotlib.colors.to_rgba(VERDICT_COLOURS[v]) for v in VERDICTS]
-        )
-        (self.line_a,) = b_ax.plot([], [], ".", ms=2, color="#1f77b4")
-        (self.line_b,) = b_ax.plot([], [], "-", lw=1.2, color="#ff7f0e")
-        self.limit = b_ax.axhline(0.0, color="#d62728", lw=1.0, ls="--")
-        self.b_legend = b_ax.legend(
-            [self.line_a, self.line_b, self.limit], ["", "", ""], fontsize=7, loc="lower left",
-            bbox_to_anchor=(0.0, 1.0), ncol=3, frameon=False, handlelength=1.2,
-            columnspacing=0.8,
-        )
-        b_ax.xaxis.set_major_locator(MaxNLocator(4))
-        b_ax.yaxis.set_major_locator(MaxNLocator(5))
-        b_ax.tick_params(labelsize=7)
-        b_ax.set_xlabel("path length, mm", fontsize=8)
-        self.titles = [
-            self.fig.text(k * fw + 0.01, 0.93, "", fontsize=9, weight="bold") for k in range(4)
+        height = self.fig.bbox.height
+        self.map_boxes = [  # pixel rows and columns inside each map's frame
+            (int(height - b.y1) + 2, int(height - b.y0) - 1, int(b.x0) + 2, int(b.x1) - 1)
+            for b in (ax.bbox for ax in maps)
         ]
+        self.allow_cmap = matplotlib.colormaps["viridis"]
+        self.allow_norm = LogNorm(*ALLOWABLE_RANGE)
+        cax = self.fig.add_axes((0.006 + side + 0.004, bottom, 0.008, top - bottom))
+        bar = self.fig.colorbar(ScalarMappable(self.allow_norm, self.allow_cmap), cax=cax)
+        bar.set_label("allowable size, mm", fontsize=8)
+        cax.tick_params(labelsize=7)
+        maps[2].legend(
+            handles=[Patch(color=VERDICT_COLOURS[v], label=v) for v in VERDICTS],
+            loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7, frameon=False,
+        )
+        self.verdict_rgba = _rgba_bytes([VERDICT_COLOURS[v] for v in VERDICTS])
+        ax = self.fig.add_axes((0.75 + 0.04, bottom + 0.09, 0.2, top - bottom - 0.17))
+        ax.set_xlim(0.0, 100.0)
+        ax.xaxis.set_major_locator(MaxNLocator(5))
+        ax.tick_params(labelsize=7)
+        ax.set_xlabel("position along the path, % of its length", fontsize=8)
+        (self.line_a,) = ax.plot([], [], ".", ms=2, color="#1f77b4", animated=True)
+        (self.line_b,) = ax.plot([], [], "-", lw=1.2, color="#ff7f0e", animated=True)
+        (self.limit,) = ax.plot([], [], "--", lw=1.0, color="#d62728", animated=True)
+        self.path_ax = ax
+        self.standard_map = maps[1]
+        self.backgrounds: dict[tuple, object] = {}
+        self.standard_rgba: dict[tuple[str, ...], np.ndarray] = {}
+
+    def _standard_colours(self, names: tuple[str, ...]) -> np.ndarray:
+        """(K+1, 4) uint8: 'none fits' red, then the standard cutters small to large on the
+        allowable map's colour scale (bright = large)."""
+        if names not in self.standard_rgba:
+            steps = self.allow_cmap(np.linspace(0.05, 1.0, len(names)), bytes=True)
+            self.standard_rgba[names] = np.vstack([_rgba_bytes([STANDARD_NONE]), steps])
+        return self.standard_rgba[names]
+
+    def _background(self, names: tuple[str, ...], scale: float | str) -> object:
+        """The drawn static figure for a family of standard cutters and a path-panel scale (a B
+        range, degrees, or 'size')."""
+        if (names, scale) not in self.backgrounds:
+            ax = self.path_ax
+            for owner in (ax, self.standard_map):
+                if owner.get_legend() is not None:
+                    owner.get_legend().remove()
+            colours = self._standard_colours(names) / 255.0
+            self.standard_map.legend(
+                handles=[Patch(color=c, label=n) for c, n in
+                         zip(colours[::-1], [*names[::-1], "none"], strict=True)],
+                loc="upper left", bbox_to_anchor=(1.0, 1.02), fontsize=6 if len(names) < 16
+                else 5, frameon=False, handlelength=1.0, labelspacing=0.25,
+            )
+            if scale == "size":
+                ax.set_yscale("log")
+                ax.set_ylim(*ALLOWABLE_RANGE)
+                ax.set_ylabel("size, mm", fontsize=8)
+                handles, labels = (self.line_a, self.limit), ("allowable", "real size")
+            else:
+                ax.set_yscale("linear")
+                ax.set_ylim(-scale, scale)
+                ax.yaxis.set_major_locator(MaxNLocator(5, symmetric=True))
+                ax.set_ylabel("B, degrees", fontsize=8)
+                handles, labels = (self.line_a, self.line_b), ("best B", "chosen B")
+            ax.legend(handles, labels, fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.0),
+                      ncol=2, frameon=False, handlelength=1.5)
+            self.fig.canvas.draw()
+            self.backgrounds[names, scale] = self.fig.canvas.copy_from_bbox(self.fig.bbox)
+        return self.backgrounds[names, scale]
 
     def render(
         self, arrays: dict[str, np.ndarray], standard: StandardCutters, cutter_size: float | None
-    ) -> list[str]:
+    ) -> tuple[list[str], dict]:
         """The four pictures (base64 PNG) of one job from its point arrays (see
-        `checker.store.point_arrays`)."""
+        `checker.store.point_arrays`), and facts for their captions: view, extent (mm),
+        min_allowable (mm), findings, has_b."""
         cc, allowable, verdict = arrays["cc"], arrays["allowable"], arrays["verdict"]
         i, j = _projection(cc)
         xy = cc[:, [i, j]]
-        a_map, s_map, f_map, b_ax = self.axes
-        lo, hi = (xy.min(axis=0), xy.max(axis=0)) if len(xy) else (np.zeros(2), np.ones(2))
-        pad = 0.03 * max(float(np.max(hi - lo)), 1e-6)
-        view = f"{AXES[i]}{AXES[j]} view, {hi[0] - lo[0]:.0f} x {hi[1] - lo[1]:.0f} mm"
-        for ax in self.axes[:3]:
-            ax.set_xlim(lo[0] - pad, hi[0] + pad)
-            ax.set_ylim(lo[1] - pad, hi[1] + pad)
-            ax.set_aspect("equal", adjustable="box")
-            ax.set_xlabel(view, fontsize=7)
+        map_px = self.map_boxes[0][1] - self.map_boxes[0][0]
+        dot = max(2, min(7, int(0.8 * map_px / np.sqrt(max(len(xy), 1)))))
         shown = np.where(np.isnan(allowable), ALLOWABLE_RANGE[1], allowable)
-        self.allow.set_offsets(xy)
-        self.allow.set_array(np.clip(shown, *ALLOWABLE_RANGE))
-        self.std.set_offsets(xy)
-        self.std.set_array(standard.largest(allowable).astype(float))
-        order = np.argsort(verdict != 0, kind="stable")  # findings drawn last, on top
-        self.find.set_offsets(xy[order])
-        self.find.set_facecolors(self.verdict_rgba[verdict[order]])
-        self.find.set_sizes(np.where(verdict[order] == 0, 3.0, 14.0))
-        self._path_panel(arrays, cutter_size)
-        n_find = int(np.sum(verdict != 0))
-        texts = (
-            f"{PANEL_TITLES[0]} (min {np.nanmin(allowable, initial=np.inf):.3g} mm)",
-            PANEL_TITLES[1],
-            f"{PANEL_TITLES[2]} ({n_find})",
-            self._path_title,
+        allow_rgba = self.allow_cmap(
+            self.allow_norm(np.clip(shown, *ALLOWABLE_RANGE)), bytes=True
         )
-        for t, s in zip(self.titles, texts, strict=True):
-            t.set_text(s)
-        self.fig.canvas.draw()
-        img = np.asarray(self.fig.canvas.buffer_rgba())
+        std_rgba = self._standard_colours(standard.names)[standard.largest(allowable) + 1]
+        layers = (
+            (allow_rgba, np.zeros(len(xy), dtype=int)), (std_rgba, np.zeros(len(xy), dtype=int)),
+            (self.verdict_rgba[verdict], (verdict != 0).astype(int)),
+        )
+        scale = self._path_lines(arrays, cutter_size)
+        canvas = self.fig.canvas
+        canvas.restore_region(self._background(standard.names, scale))
+        img = np.asarray(canvas.buffer_rgba())
+        for (r0, r1, c0, c1), (rgba, group) in zip(self.map_boxes, layers, strict=True):
+            paint_map(img[r0:r1, c0:c1], xy, rgba, dot + 3 * group, group)
+        for artist in (self.line_a, self.line_b, self.limit):
+            self.fig.draw_artist(artist)
         w = img.shape[1] // 4
-        return [png_base64(img[:, k * w : (k + 1) * w]) for k in range(4)]
+        extent = np.ptp(xy, axis=0) if len(xy) else np.zeros(2)
+        facts = {
+            "view": f"{AXES[i]}{AXES[j]}", "extent": [float(extent[0]), float(extent[1])],
+            "min_allowable": float(np.nanmin(allowable)) if np.isfinite(allowable).any()
+            else None,
+            "findings": int(np.sum(verdict != 0)), "has_b": scale != "size",
+        }
+        return [png_base64(img[:, k * w : (k + 1) * w]) for k in range(4)], facts
 
-    def _path_panel(self, arrays: dict[str, np.ndarray], cutter_size: float | None) -> None:
+    def _path_lines(self, arrays: dict[str, np.ndarray], cutter_size: float | None) -> float | str:
+        """Set the path panel's lines; returns its scale (B range, degrees, or 'size')."""
         cc_only = arrays["kind"]
         s = path_length(arrays["cc"][cc_only])
+        s = 100.0 * s / max(float(s[-1]), 1e-9) if len(s) else s
         b_best, b_chosen = arrays["b_best"][cc_only], arrays["b_chosen"][cc_only]
-        ax = self.axes[3]
-        texts = self.b_legend.get_texts()
         if np.isfinite(b_chosen).any() or np.isfinite(b_best).any():
-            self._path_title = "B chosen vs best B"
             self.line_a.set_data(s, b_best)
             self.line_b.set_data(s, b_chosen)
-            self.limit.set_visible(False)
-            labels = ("best B", "chosen B", "")
-            ax.set_ylabel("B, degrees", fontsize=8)
-            values = np.concatenate([b_best, b_chosen])
-        else:
-            self._path_title = "allowable along the path (no B)"
-            allowable = arrays["allowable"][cc_only]
-            self.line_a.set_data(s, allowable)
-            self.line_b.set_data([], [])
-            self.limit.set_visible(cutter_size is not None)
-            self.limit.set_ydata([cutter_size or 0.0] * 2)
-            labels = ("allowable", "", "real size")
-            ax.set_ylabel("size, mm", fontsize=8)
-            values = np.concatenate([np.clip(allowable, 0, ALLOWABLE_RANGE[1]),
-                                     [cutter_size or 0.0]])
-        for t, label in zip(texts, labels, strict=True):
-            t.set_text(label)
-        finite = values[np.isfinite(values)]
-        lo, hi = (finite.min(), finite.max()) if len(finite) else (0.0, 1.0)
-        margin = 0.05 * max(hi - lo, 1.0)
-        ax.set_ylim(lo - margin, hi + margin)
-        ax.set_xlim(0.0, max(float(s[-1]) if len(s) else 1.0, 1e-6))
+            self.limit.set_data([], [])
+            return b_range(np.concatenate([b_best, b_chosen]))
+        allowable = arrays["allowable"][cc_only]
+        self.line_a.set_data(s, np.where(np.isnan(allowable), ALLOWABLE_RANGE[1], allowable))
+        self.line_b.set_data([], [])
+        self.limit.set_data([0.0, 100.0], [cutter_size or np.nan] * 2)
+        return "size"
 
 
 def trend_picture(nights: list[dict], dpi: int = 72) -> str:

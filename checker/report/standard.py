@@ -1,54 +1,67 @@
 """Standard cutters for the colour map of thesis figs 4-2 and 4-3: at each CC point the largest
-standard cutter of the job's family whose size does not exceed the allowable size."""
+standard cutter of the job's family whose size does not exceed the allowable size. The cutters
+come from the tool library (`config/tools.toml`, same kind and corner radius); a family the
+library lacks falls back to `report.standard_diameters` of the config."""
 
 from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
-_FIRST_NUMBER = re.compile(r"/\s*([-+0-9.eE]+)")
+from checker.cutter import BALL_FAMILY
+from checker.tool_library import ToolLibrary, load_tool_library
+
+_NUMBERS = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 @dataclass(frozen=True)
 class StandardCutters:
-    """Standard diameters (mm, ascending) and their sizes in the allowable variable of a job's
-    family (R for flat/bull-nose/APT, r for ball): size = D/2 - offset, where offset = d/2 - size
-    of the real cutter (0 for flat and ball, the corner radius for a bull-nose)."""
+    """Standard cutters of one family, ascending: names and sizes in the allowable variable
+    (R for flat/bull-nose/APT, r for ball; mm). A size <= 0 is never chosen."""
 
-    diameters: np.ndarray
+    names: tuple[str, ...]
     sizes: np.ndarray
 
-    @property
-    def names(self) -> list[str]:
-        return [f"D{d:g}" for d in self.diameters]
-
     def largest(self, allowable: np.ndarray) -> np.ndarray:
-        """(N,) index into `diameters` of the largest standard cutter with size <= allowable
-        (mm; nan = unbounded), -1 where none fits."""
+        """(N,) index into `names` of the largest standard cutter with size <= allowable (mm;
+        nan = unbounded), -1 where none fits."""
         a = np.where(np.isnan(allowable), np.inf, allowable)
-        return np.searchsorted(self.sizes, a, side="right") - 1
+        index = np.searchsorted(self.sizes, a * (1 + 1e-12) + 1e-12, side="right") - 1
+        index[self.sizes[np.maximum(index, 0)] <= 0] = -1  # too small to exist in this family
+        return index
 
     def name_of(self, index: int) -> str:
         return "none" if index < 0 else self.names[index]
 
 
+@lru_cache(maxsize=1)
+def _library() -> ToolLibrary:
+    return load_tool_library()
+
+
 def standard_cutters(
-    diameters: tuple[float, ...], cutter: str | None, cutter_size: float | None
+    kind: str | None, cutter: str | None, cutter_size: float | None,
+    diameters: tuple[float, ...],
 ) -> StandardCutters:
-    """The standard cutters of the family of `cutter` (an APT CUTTER/ statement) whose real size
-    in the allowable variable is `cutter_size` (mm)."""
+    """The standard cutters of the family of the real cutter (`kind`, its APT CUTTER/d,r,...
+    statement and its size, mm). Library family: same kind (and corner radius r for the R
+    families); otherwise the config diameters D with size D/2 - (d/2 - size of the real
+    cutter), i.e. the real cutter's corner kept."""
+    numbers = [float(x) for x in _NUMBERS.findall((cutter or "").partition("/")[2])]
+    if kind:
+        r = numbers[1] if len(numbers) > 1 and kind not in BALL_FAMILY else None
+        family = _library().family(kind, r)
+        if family:
+            return StandardCutters(
+                tuple(t.name or f"D{t.d:g}" for t in family),
+                np.array([t.size for t in family], dtype=float),
+            )
+    offset = max(numbers[0] / 2.0 - cutter_size, 0.0) if numbers and cutter_size else 0.0
     d = np.sort(np.asarray(diameters, dtype=float))
-    offset = 0.0
-    match = _FIRST_NUMBER.search(cutter or "")
-    if match and cutter_size is not None:
-        try:
-            offset = max(float(match.group(1)) / 2.0 - cutter_size, 0.0)
-        except ValueError:
-            offset = 0.0
-    keep = d / 2.0 - offset > 0
-    return StandardCutters(diameters=d[keep], sizes=d[keep] / 2.0 - offset)
+    return StandardCutters(tuple(f"D{x:g}" for x in d), d / 2.0 - offset)
 
 
 def per_region(

@@ -6,8 +6,11 @@ slope along x. Valleys tighter than the cutter are gouges; a wall at the far edg
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
+from checker.errors import PathcheckError
 from checker.results import (
     Finding,
     JobInfo,
@@ -85,9 +88,10 @@ def synthetic_document(
         ],
         time_s=1.0 + rng.random(),
     )
+    path = path or f"jobs/mould_{seed:03d}.apt"
     job = JobInfo(
-        path=path or f"jobs/mould_{seed:03d}.apt", dialect="apt", units="mm",
-        part=f"jobs/mould_{seed:03d}.json", part_hash=f"{seed:016x}",
+        path=path, dialect="apt", units="mm", part=path.rsplit(".", 1)[0] + ".json",
+        part_hash=f"{seed:016x}",
         cutter=f"CUTTER/{2 * cutter_r:g},{cutter_r:g}", cutter_kind="ball", cutter_size=cutter_r,
         machine="hmc-b" if four_axis else None, axis_class="4-axis-Y" if four_axis else "3-axis",
     )
@@ -99,3 +103,16 @@ def synthetic_document(
             original_total_rotation=0.0, infeasible_points=0,
         )
     return ResultsDocument(job=job, summary=summary, orientation=orientation, points=points)
+
+
+def synthetic_job(apt_path: str, **_: object) -> ResultsDocument:
+    """A stand-in for `checker.job.check_job` in batch tests and benchmarks: the file holds
+    `SEED N` (integers); the document is `synthetic_document(SEED, n=N)` for that path."""
+    text = Path(apt_path).read_text(encoding="utf-8").split()
+    if len(text) != 2 or not all(t.isdigit() for t in text):
+        raise PathcheckError(
+            f"expected 'SEED N' (two integers), found {' '.join(text)[:40]!r}", path=apt_path,
+            line=1, code="parse",
+        )
+    seed, n = map(int, text)
+    return synthetic_document(seed, n=n, four_axis=seed % 2 == 0, path=str(apt_path))

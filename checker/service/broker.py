@@ -1,6 +1,8 @@
 """The service's broker: a ROUTER front end for clients (REQ or DEALER), a ROUTER back end for
 worker processes, and the load-balancing loop between them (pyzmq's load-balancing broker
-pattern: a request goes only to an idle worker, so one slow job never blocks the others).
+pattern: a request goes only to an idle worker, so one slow job never blocks the others). The
+most recently idle worker is taken first, so a client calling again for the same part finds it
+in that worker's part cache.
 
 It is steerable like pyzmq's steerable proxy: `TERMINATE` on its control socket (`stop()`), or
 `request_stop()` from a signal handler, makes it drain: requests in flight are finished, requests
@@ -211,7 +213,7 @@ class Broker:
                     "service is shutting down; retry another instance", code="unavailable"),
                     rid, op)
             else:
-                self._dispatch(self._idle.popleft(), envelope, body)
+                self._dispatch(self._idle.pop(), envelope, body)  # most recently idle first
 
     def _dispatch(self, worker: _Worker, envelope: list[bytes], body: bytes) -> None:
         worker.job = _Job(envelope, time.monotonic())
@@ -284,7 +286,7 @@ class Broker:
                 self._reject(worker.job.envelope, err, worker=worker,
                              elapsed=now - worker.job.started)
             log.warning("worker %d gone (%s)", worker.proc.pid, err.code)
-            if not self._draining:
+            if not (self._draining or self._stop_requested):
                 if self._start_failures >= MAX_START_FAILURES:
                     raise PathcheckError(
                         f"{MAX_START_FAILURES} workers in a row died before they were ready; "

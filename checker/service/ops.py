@@ -72,8 +72,9 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
     cutter = parse_cutter(req.cutter)
     entry, cached, key = cached_part(req.part, state)
     t0 = time.perf_counter()
-    result = engine_allowable(entry.test_points, entry.part, cutter, cc, normals, axes)
-    extra = _best_b(req, entry, cutter, cc, normals) if req.b_range is not None else {}
+    result = engine_allowable(entry.test_points, entry.part, cutter, cc, normals, axes,
+                              config=state.config)
+    extra = {} if req.b_range is None else _best_b(req, entry, cutter, cc, normals, state.config)
     search_s = time.perf_counter() - t0
     points = _points(cc, normals, result, extra)
     return {
@@ -127,32 +128,39 @@ OPS: dict[type, Callable[[Any, WorkerState], dict]] = {
 
 
 def cached_part(spec: p.PartSpec, state: WorkerState) -> tuple[CachedPart, bool, str]:
-    """The loaded and sampled part from the cache (keyed by content hash and sampling
-    settings): `(entry, was_cached, key)`."""
-    geometry = state.config.geometry
-    salt = f"sag={geometry.sag_tolerance};max={geometry.max_samples_per_surface};"
+    """The loaded and sampled part from the cache (keyed by the sha256 of the part's bytes or
+    inline JSON, and the sampling settings): `(entry, was_cached, key)`."""
+    salt = state.config.geometry.model_dump_json()
     if isinstance(spec, p.PartPath):
         path = _existing(spec.path)
         key = file_key(path, salt)
-        entry, cached = state.cache.get(key, lambda: _load_and_sample(path, state.config))
+        load = _library("checker.geometry", "load_part", "allowable")
+        entry, cached = state.cache.get(key, lambda: _sampled(lambda: load(path), state.config))
         return entry, cached, key
     key = json_key(spec.geomdl, salt)
-
-    def build() -> CachedPart:
-        with tempfile.TemporaryDirectory(prefix="pathcheck-part-") as tmp:
-            return _load_and_sample(_part_file(spec, Path(tmp)), state.config)
-
-    entry, cached = state.cache.get(key, build)
+    entry, cached = state.cache.get(key, lambda: _sampled(lambda: _inline(spec), state.config))
     return entry, cached, key
 
 
-def _load_and_sample(path: Path, config: Config) -> CachedPart:
-    load_part = _library("checker.geometry", "load_part", "allowable")
+def _inline(spec: p.PartInline) -> Any:
+    """A Part from inline geomdl exchange JSON (errors name the field `part.geomdl`)."""
+    import json
+
+    from checker.part import Part
+
+    read_geomdl = _library("checker.geometry.geomdl_io", "read_geomdl", "allowable")
+    surfaces = read_geomdl(Path("part.geomdl"), json.dumps(spec.geomdl))
+    if not surfaces:
+        raise PathcheckError("field 'part.geomdl': no surface found", code="part")
+    return Part(surfaces=surfaces, source="<inline geomdl>")
+
+
+def _sampled(load: Callable[[], Any], config: Config) -> CachedPart:
     sample_part = _library("checker.geometry.sampling", "sample_part", "allowable")
     t0 = time.perf_counter()
-    part = load_part(path)
+    part = load()
     t1 = time.perf_counter()
-    test_points = sample_part(part, config.geometry.sag_tolerance)
+    test_points = sample_part(part, config.geometry.sag_tolerance, geometry=config.geometry)
     t2 = time.perf_counter()
     nbytes = deep_nbytes(part) + deep_nbytes(test_points)
     return CachedPart(part, test_points, nbytes, load_s=t1 - t0, sample_s=t2 - t1)
@@ -201,17 +209,29 @@ def _unit_rows(v: np.ndarray, field_name: str, what: str) -> np.ndarray:
 
 
 def _best_b(req: p.AllowableRequest, entry: CachedPart, cutter: Any, cc: np.ndarray,
-            normals: np.ndarray) -> dict[str, Any]:
-    """b_best, allowable_at_best and b_feasible per point (degrees, mm) over `req.b_range`."""
-    best_b = _library("checker.four_axis", "best_b", "allowable with b_range")
-
+            normals: np.ndarray, config: Config) -> dict[str, Any]:
+    """b_best, allowable_at_best and b_feasible per point over `req.b_range` (degrees, mm):
+    the engine evaluated at the tool axis of each trial B (DESIGN.md: (-sin B, 0, cos B))."""
+    engine_allowable = _library("checker.engine", "allowable", "allowable")
+    best_b = _library("checker.four_axis.best_b", "best_b", "allowable with b_range")
+    axes_mod = "checker.four_axis.axes"
+    axis_for_b = _library(axes_mod, "axis_for_b", "allowable with b_range")
+    b_for_axis = _library(axes_mod, "b_for_axis", "allowable with b_range")
+    check_b_range = _library(axes_mod, "check_b_range", "allowable with b_range")
+    fa = config.four_axis
     lo, hi = req.b_range
-    out = best_b(entry.test_points, entry.part, cutter, cc, normals, b_range=(lo, hi))
-    return {
-        "b_best": np.asarray(out.b_best, dtype=float),
-        "allowable_at_best": np.asarray(out.allowable_at_best, dtype=float),
-        "b_feasible": list(out.b_feasible),
-    }
+    check_b_range(lo, hi, fa.b_min, fa.b_max)
+
+    def sizes(rows: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
+        return engine_allowable(entry.test_points, entry.part, cutter, cc[rows], normals[rows],
+                                axis_for_b(b_deg), config=config).size
+
+    reference = np.full(len(cc), float(b_for_axis(np.asarray(req.axis, dtype=float))))
+    out = best_b(sizes, len(cc), b_min=lo, b_max=hi, coarse_step=fa.b_coarse_step,
+                 tolerance=fa.b_tolerance, required=cutter.size + config.check.tolerance,
+                 reference=reference)
+    return {"b_best": out.b_best, "allowable_at_best": out.allowable_at_best,
+            "b_feasible": out.feasible}
 
 
 def _opt(values: np.ndarray) -> list[float | None]:
@@ -221,30 +241,24 @@ def _opt(values: np.ndarray) -> list[float | None]:
 
 
 def _points(cc: np.ndarray, normals: np.ndarray, result: Any, extra: dict[str, Any]) -> list[dict]:
-    """The `points` list of the allowable reply (one dict per CC row)."""
+    """The `points` list of the allowable reply, one `protocol.AllowablePoint` dict per row."""
     n = len(cc)
     size = _opt(result.size)
     lp = np.asarray(result.limiting_point, dtype=float).reshape(n, 3)
-    lp_ok = np.all(np.isfinite(lp), axis=1) & np.isfinite(np.asarray(result.size, dtype=float))
-    surf = np.asarray(result.limiting_surface).reshape(n)
-    verdict = np.asarray(result.verdict).reshape(n)
-    b_best = _opt(extra["b_best"]) if extra else [None] * n
-    at_best = _opt(extra["allowable_at_best"]) if extra else [None] * n
-    feasible = extra.get("b_feasible") or [None] * n
+    surf = np.asarray(result.limiting_surface).reshape(n).tolist()
+    has_lp = (np.all(np.isfinite(lp), axis=1) & np.isfinite(result.size)).tolist()
+    verdict = [str(v) for v in np.asarray(result.verdict).reshape(n)]
+    none = [None] * n
+    b_best = _opt(extra["b_best"]) if extra else none
+    at_best = _opt(extra["allowable_at_best"]) if extra else none
+    feasible = [[[float(a), float(b)] for a, b in iv] for iv in extra["b_feasible"]] \
+        if extra else none
     cc_l, n_l, lp_l = cc.tolist(), normals.tolist(), lp.tolist()
     return [
-        p.AllowablePoint(
-            index=i,
-            cc=cc_l[i],
-            normal=n_l[i],
-            allowable=size[i],
-            limiting_point=lp_l[i] if lp_ok[i] else None,
-            limiting_surface=int(surf[i]) if lp_ok[i] and surf[i] >= 0 else None,
-            verdict=str(verdict[i]),
-            b_best=b_best[i],
-            allowable_at_best=at_best[i],
-            b_feasible=[tuple(map(float, iv)) for iv in feasible[i]] if feasible[i] is not None
-            else None,
-        ).model_dump(exclude_none=False)
+        {"index": i, "cc": cc_l[i], "normal": n_l[i], "allowable": size[i],
+         "limiting_point": lp_l[i] if has_lp[i] else None,
+         "limiting_surface": surf[i] if has_lp[i] and surf[i] >= 0 else None,
+         "verdict": verdict[i], "b_best": b_best[i], "allowable_at_best": at_best[i],
+         "b_feasible": feasible[i]}
         for i in range(n)
     ]

@@ -8,6 +8,7 @@ message, line?}`. Coordinates are mm in the part frame, angles in degrees.
 from __future__ import annotations
 
 import json
+import re
 from typing import Annotated, Any, Literal
 
 from pydantic import (
@@ -238,15 +239,28 @@ def _request_error(err: ValidationError) -> PathcheckError:
                               code="op")
     if kind == "union_tag_invalid":
         return _unknown_op(first["ctx"]["tag"])
-    loc = [str(p) for p in first["loc"][1:]]  # the first element is the op tag
-    field = ".".join(loc) or "request"
+    loc = [str(x) for x in first["loc"][1:] if _is_field(x)]  # [0] is the op tag
     found = _short(first.get("input"))
     if loc == ["v"]:
         return PathcheckError(
             f"protocol version {found} is not supported; this service speaks version "
             f"{PROTOCOL_VERSION}", code="version"
         )
-    return PathcheckError(f"field '{field}': {first['msg']}, found {found}", code="request")
+    msg = first["msg"].removeprefix("Value error, ")
+    if kind == "missing" and isinstance(first["loc"][-1], int):
+        loc, msg = loc[:-1], f"too few items (item {loc[-1]} is missing)"
+    return PathcheckError(f"field '{'.'.join(loc) or 'request'}': {msg}, found {found}",
+                          code="request")
+
+
+_TYPE_TAGS = {"int", "str", "float", "bool", "none", "list", "dict", "tuple"}
+
+
+def _is_field(part: str | int) -> bool:
+    """A location element that names a field or an index (not a union member's type tag)."""
+    return isinstance(part, int) or (
+        re.fullmatch(r"[a-z_][a-z0-9_]*", part) is not None and part not in _TYPE_TAGS
+    )
 
 
 def _short(value: Any, limit: int = 60) -> str:

@@ -1,0 +1,1 @@
+"""Speed measurements, one script per area: `python -m benchmarks.bench_NAME` prints a table."""

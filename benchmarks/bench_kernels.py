@@ -1,0 +1,70 @@
+"""Imaginary-cutter kernel speed. Run: `python -m benchmarks.bench_kernels`.
+
+Pairs (test point, CC point) per second, for each cutter kind, through
+- `Cutter.imaginary_size` on K independent pairs (K,3 arrays; parallel kernel above 20,000 pairs),
+- `Cutter.min_imaginary_size` reducing each CC point's candidate test points (CSR) in one pass,
+and the numba thread count used. Random CC points, normals and test points around them (mm);
+compile time excluded (one warm-up call), best of 3 runs.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numba
+import numpy as np
+
+from checker.cutter import parse_cutter
+
+CUTTERS = {
+    "flat": "CUTTER/10",
+    "bullnose": "CUTTER/12,2",
+    "apt": "CUTTER/8.787953233572349,1.5,3.0,2.0521208599540124,10.0,5.0,60.0",
+    "ball": "CUTTER/10,5",
+    "tapered_ball": "CUTTER/9.1633,5,0,5,0,5,60",
+}
+K = 2_000_000  # independent pairs
+M, N, PER = 200_000, 20_000, 100  # test points, CC points, candidates per CC point
+
+
+def _normals(rng, m: int) -> np.ndarray:
+    nz = rng.uniform(0.2, 1.0, m)
+    a = rng.uniform(0, 2 * np.pi, m)
+    h = np.sqrt(1 - nz**2)
+    return np.stack([h * np.cos(a), h * np.sin(a), nz], axis=1)
+
+
+def _best(fn, runs: int = 3) -> float:
+    fn()
+    out = []
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        fn()
+        out.append(time.perf_counter() - t0)
+    return min(out)
+
+
+def main() -> None:
+    rng = np.random.default_rng(0)
+    p = rng.uniform(-15, 15, (K, 3))
+    cc = rng.uniform(-1, 1, (K, 3))
+    n = _normals(rng, K)
+    pts = rng.uniform(-50, 50, (M, 3))
+    ccs = rng.uniform(-50, 50, (N, 3))
+    ns = _normals(rng, N)
+    indptr = np.arange(N + 1, dtype=np.int64) * PER
+    indices = rng.integers(0, M, N * PER)
+    print(
+        f"numba threads: {numba.get_num_threads()}  pairs: {K:,} independent, "
+        f"{N * PER:,} as {N:,} CC x {PER} candidates"
+    )
+    print(f"{'cutter':<14}{'pairs/s (pairs)':>18}{'pairs/s (CSR min)':>20}")
+    for kind, text in CUTTERS.items():
+        c = parse_cutter(text)
+        t_pairs = _best(lambda c=c: c.imaginary_size(p, cc, n))
+        t_min = _best(lambda c=c: c.min_imaginary_size(pts, ccs, ns, None, indptr, indices))
+        print(f"{kind:<14}{K / t_pairs / 1e6:>15.1f} M{N * PER / t_min / 1e6:>17.1f} M")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,555 @@
+"""`Record`s -> `ToolPath`: a per-record state machine (units, frames, tool, feed, modal axis)
+that collects motions in lists and converts them to mm / part frame in bulk at the end."""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+
+import numpy as np
+
+from checker.apt import frames as fr
+from checker.errors import PathcheckError
+from checker.toolpath import (
+    Arc,
+    Frame,
+    MotionArrays,
+    Operation,
+    Record,
+    ToolChange,
+    ToolPath,
+)
+
+MM_PER_INCH = 25.4
+LENGTH_UNITS = {
+    "INCH": "inch",
+    "INCHES": "inch",
+    "IN": "inch",
+    "MM": "mm",
+    "MILLIMETERS": "mm",
+    "MILLIMETRES": "mm",
+    "METRIC": "mm",
+}
+FEED_UNITS = {"IPM": "inch", "IPR": "inch", "MMPM": "mm", "MMPR": "mm"}
+# known statements that carry nothing the checker uses: kept in `records`, counted in `ignored`
+IGNORED = frozenset(
+    {
+        "$$", "PAINT", "COOLNT", "CUTCOM", "PPRINT", "INSERT", "PARTNO", "END", "FINI",
+        "END-OF-PATH", "SELECT", "TITLE", "REMARK", "UNITS", "UNIT",
+    }
+)
+AXIS_NORM_TOL = 1e-2  # |(i,j,k)| must be 1 to this; CAM systems print 4-7 decimals
+ARC_RADIUS_TOL = 1e-2  # relative mismatch allowed between CIRCLE radius and its end points
+MAX_TURNS = 1000  # full turns of one helical CIRCLE (NX TIMES,n)
+ARC_RADIUS_ABS = 2e-3  # mm, plus this (4-decimal inch files round to 0.0025 mm)
+# indices of angles (not lengths) in the cutter statements, by number of values
+_CUTTER_ANGLES = (4, 5)  # CUTTER/d,r,e,f,alpha,beta,h
+_TLDATA_ANGLES = (3, 4)
+
+
+def file_units(records: list[Record], *, path: str) -> str:
+    """The file's length unit: its ``UNITS``/``UNIT`` statement, else the unit of its first
+    ``FEDRAT`` (NX listings state none), else mm."""
+    found: tuple[str, int] | None = None
+    for rec in records:
+        if rec.word in ("UNITS", "UNIT"):
+            word = rec.args[0] if rec.args else None
+            unit = LENGTH_UNITS.get(word) if isinstance(word, str) else None
+            if unit is None:
+                raise PathcheckError(
+                    f"{rec.word}/: expected INCHES or MM, found {word!r}",
+                    path=path,
+                    line=rec.line,
+                    code="parse",
+                )
+            if found is not None and found[0] != unit:
+                raise PathcheckError(
+                    f"{rec.word}/: units change from {found[0]} (line {found[1]}) to {unit}; "
+                    "expected one unit per file",
+                    path=path,
+                    line=rec.line,
+                    code="parse",
+                )
+            found = (unit, rec.line)
+    if found is not None:
+        return found[0]
+    for rec in records:
+        if rec.word == "FEDRAT":
+            for a in rec.args:
+                if isinstance(a, str) and a in FEED_UNITS:
+                    return FEED_UNITS[a]
+    return "mm"
+
+
+def _err(rec: Record, msg: str, *, path: str, code: str = "parse") -> PathcheckError:
+    return PathcheckError(f"{rec.word}/: {msg}", path=path, line=rec.line, code=code)
+
+
+def _numbers(
+    rec: Record, counts: tuple[int, ...] | None, what: str, *, path: str
+) -> tuple[float, ...]:
+    """The record's values, all numbers, in one of the allowed counts (None: any)."""
+    for pos, a in enumerate(rec.args, start=1):
+        if isinstance(a, str):
+            raise _err(rec, f"expected a number at position {pos} ({what}), found {a!r}", path=path)
+    if counts is not None and len(rec.args) not in counts:
+        allowed = " or ".join(str(c) for c in counts)
+        raise _err(
+            rec, f"expected {allowed} values ({what}), found {len(rec.args)}", path=path
+        )
+    return rec.args  # type: ignore[return-value]
+
+
+def circle_values(rec: Record, *, path: str) -> tuple[tuple[float, ...], int]:
+    """``CIRCLE/xc,yc,zc,i,j,k[,r,...][,TIMES,n]`` -> (numbers, extra full turns n)."""
+    args, turns = rec.args, 0
+    if "TIMES" in args:
+        k = args.index("TIMES")
+        n = args[k + 1] if k + 2 == len(args) else None
+        if isinstance(n, str) or n is None or n != int(n) or not 0 <= n <= MAX_TURNS:
+            found = ",".join(map(str, args[k:]))
+            raise _err(rec, f"expected TIMES,n with a whole 0 <= n <= {MAX_TURNS} at the end, "
+                       f"found {found!r}", path=path)
+        args, turns = args[:k], int(n)
+    v = _numbers(Record(rec.word, args, rec.line), tuple(range(6, 12)),
+                 "xc,yc,zc,i,j,k[,r,...]", path=path)
+    if v[3] == v[4] == v[5] == 0:
+        raise _err(rec, "expected a non-zero circle axis i,j,k, found 0,0,0", path=path)
+    return v, turns
+
+
+class _Reader:
+    """State machine over the records; see `interpret`."""
+
+    def __init__(self, records: list[Record], *, path: str, dialect: str, units: str,
+                 require_cutter: bool) -> None:
+        self.records = records
+        self.path = path
+        self.dialect = dialect
+        self.units = units
+        self.scale = MM_PER_INCH if units == "inch" else 1.0
+        self.require_cutter = require_cutter
+        # motion columns (file units, file frame); feed, spindle, frame, operation and cycle
+        # change seldom: each motion points to a row of `states`, pushed when one changes
+        self.pos: list[tuple[float, float, float]] = []
+        self.ax: list[tuple[float, float, float]] = []
+        self.rapid: list[bool] = []
+        self.line: list[int] = []
+        self.sid: list[int] = []
+        self.states: list[tuple[float, float, float, int, int, bool]] = []
+        self.dirty = True
+        # state
+        self.default_axis = (0.0, 0.0, 1.0)
+        self.axis = self.default_axis
+        self.rapid_next = False
+        self.feed_now = math.nan
+        self.feed_per_rev: float | None = None
+        self.rpm = math.nan
+        self.in_cycle = False
+        self.world = False
+        self.frame_now = -1
+        self.matrices: list[np.ndarray | None] = []
+        self.frames: list[Frame] = []
+        self.tool_defined = False
+        self.cutter = None
+        self.tool_number: int | None = None
+        self.tool_name: str | None = None
+        self.pending_arc: tuple[Record, tuple[float, ...], int, int] | None = None
+        # (CIRCLE, values, turns, frame, end row)
+        self.arc_specs: list[tuple[Record, tuple[float, ...], int, int, int]] = []
+        self.tool_changes: list[ToolChange] = []
+        self.ops: list[Operation] = [Operation(name="")]
+        self.named: list[bool] = [False]
+        self.unknown: Counter[str] = Counter()
+        self.ignored: Counter[str] = Counter()
+
+    # ---- operations ----------------------------------------------------------------------
+    def boundary(self, index: int) -> None:
+        """A statement that starts a new operation once the current one has motions."""
+        op = self.ops[-1]
+        if len(self.line) > op.first_motion:
+            op.end_record, op.end_motion = index, len(self.line)
+            self.ops.append(
+                Operation(
+                    name="",
+                    tool_name=self.tool_name,
+                    tool_number=self.tool_number,
+                    cutter=self.cutter,
+                    first_record=index,
+                    first_motion=len(self.line),
+                )
+            )
+            self.named.append(False)
+            self.dirty = True
+        self.axis = self.default_axis
+
+    def set_tool(self, **kw) -> None:
+        for key, value in kw.items():
+            setattr(self, key, value)
+            setattr(self.ops[-1], key, value)
+
+    # ---- motions -------------------------------------------------------------------------
+    def push_state(self) -> None:
+        """Feed (mm/min, nan), feed per rev (mm, nan), rpm, frame, operation, in cycle."""
+        per_rev = math.nan if self.feed_per_rev is None else self.feed_per_rev
+        self.states.append((self.feed_now, per_rev, self.rpm, self.frame_now,
+                            len(self.ops) - 1, self.in_cycle))
+        self.dirty = False
+
+    def state_of(self, row: int) -> tuple[float, float, float, int, int, bool]:
+        return self.states[self.sid[row]]
+
+    def add_motion(self, rec: Record, xyz: tuple[float, float, float], rapid: bool) -> None:
+        if not rapid and not self.tool_defined and self.require_cutter:
+            raise _err(
+                rec,
+                "feed move before any CUTTER/ or TLDATA/ statement: expected the cutter to be "
+                "defined first (GOTO before any CUTTER/...)",
+                path=self.path,
+                code="cutter",
+            )
+        if self.dirty:
+            self.push_state()
+        self.pos.append(xyz)
+        self.ax.append(self.axis)
+        self.rapid.append(rapid)
+        self.line.append(rec.line)
+        self.sid.append(len(self.states) - 1)
+
+    def goto(self, rec: Record) -> None:
+        a = rec.args
+        n = len(a)
+        if (n != 3 and n != 6) or str in map(type, a):
+            _numbers(rec, (3, 6), "x,y,z[,i,j,k]", path=self.path)
+        if n == 6:
+            self.axis = a[3:]  # type: ignore[assignment]
+        rapid = self.rapid_next
+        self.rapid_next = False
+        self.add_motion(rec, a[:3], rapid)  # type: ignore[arg-type]
+        if self.pending_arc is not None:
+            circle = self.pending_arc[0]
+            if len(self.line) < 2 or self.state_of(-2)[4] != self.state_of(-1)[4]:
+                raise _err(circle, "expected a tool position before the arc, found none",
+                           path=self.path)
+            self.arc_specs.append((*self.pending_arc, len(self.line) - 1))
+            self.pending_arc = None
+
+    def last_position(self, rec: Record) -> np.ndarray:
+        """The last tip in the current file frame, file units."""
+        if not self.pos:
+            raise _err(rec, "expected a tool position before this move, found none",
+                       path=self.path)
+        p = np.asarray(self.pos[-1], dtype=float)
+        last = self.state_of(-1)[3]
+        if last != self.frame_now:
+            s = self.scale
+            old = self.matrices[last] if last >= 0 else None
+            new = self.matrices[self.frame_now] if self.frame_now >= 0 else None
+            p = fr.to_frame(fr.from_frame(p * s, old), new) / s
+        return p
+
+    # ---- one record ----------------------------------------------------------------------
+    def step(self, index: int, rec: Record) -> None:
+        word = rec.word
+        path = self.path
+        if word in _STATE_WORDS:
+            self.dirty = True
+        if self.pending_arc is not None and word in _BREAKS_ARC:
+            raise _err(self.pending_arc[0], f"expected the arc's end GOTO, found {word} at line "
+                       f"{rec.line}", path=path)
+        if word == "RAPID":
+            self.rapid_next = True
+        elif word == "FEDRAT":
+            self.fedrat(rec)
+        elif word in ("GOTO",):
+            self.goto(rec)
+        elif word == "FROM":
+            v = _numbers(rec, (3, 6), "x,y,z[,i,j,k]", path=path)
+            if len(v) == 6:
+                self.axis = v[3:]
+            self.add_motion(rec, v[:3], True)
+        elif word == "GODLTA":
+            self.godlta(rec)
+        elif word == "CIRCLE":
+            values, turns = circle_values(rec, path=path)
+            self.pending_arc = (rec, values, turns, self.frame_now)
+        elif word == "SPINDL":
+            self.spindl(rec)
+        elif word == "CYCLE":
+            first = rec.args[0] if rec.args else "ON"
+            if first == "OFF":
+                self.in_cycle = False
+            elif first != "INIT":
+                self.in_cycle = True
+        elif word in ("CUTTER", "TLDATA"):
+            self.boundary(index)
+            self.cutter_statement(rec)
+        elif word in ("LOAD", "LOADTL"):
+            self.load(index, rec)
+        elif word == "TOOL PATH":
+            self.boundary(index)
+            self.tool_path(rec)
+        elif word in ("CSYS", "MSYS"):
+            self.boundary(index)
+            self.coordinate_system(rec)
+        elif word == "TRNTYP":
+            self.world = bool(rec.args) and rec.args[0] == "WORLD"
+        elif word == "TLAXIS":
+            v = _numbers(rec, (3,), "i,j,k", path=path)
+            self.default_axis = self.axis = v
+        elif word == "MULTAX":
+            if rec.args and rec.args[0] == "OFF":
+                self.axis = self.default_axis
+        elif word in IGNORED:
+            self.ignored[word] += 1
+            self.name_from_comment(rec)
+        else:
+            self.unknown[word] += 1
+
+    def fedrat(self, rec: Record) -> None:
+        nums = [a for a in rec.args if not isinstance(a, str)]
+        words = [a for a in rec.args if isinstance(a, str)]
+        bad = [w for w in words if w not in FEED_UNITS]
+        if len(nums) != 1 or bad or len(words) > 1:
+            found = ",".join(str(a) for a in rec.args) or "nothing"
+            raise _err(rec, f"expected a feed value and an optional IPM/IPR/MMPM/MMPR, found "
+                       f"{found!r}", path=self.path)
+        f = nums[0]
+        if f < 0:
+            raise _err(rec, f"expected a feed >= 0, found {f:g}", path=self.path)
+        unit = words[0] if words else ("IPM" if self.units == "inch" else "MMPM")
+        scale = MM_PER_INCH if unit.startswith("I") else 1.0
+        if unit.endswith("PR"):
+            self.feed_per_rev, self.feed_now = f * scale, math.nan
+        else:
+            self.feed_per_rev, self.feed_now = None, f * scale
+
+    def spindl(self, rec: Record) -> None:
+        words = {a for a in rec.args if isinstance(a, str)}
+        nums = [a for a in rec.args if not isinstance(a, str)]
+        if "OFF" in words:
+            self.rpm = 0.0
+        elif nums and not words & {"SFM", "SMM"}:
+            self.rpm = float(nums[0])
+        elif nums:
+            self.rpm = math.nan
+
+    def godlta(self, rec: Record) -> None:
+        v = _numbers(rec, (1, 3), "d or dx,dy,dz", path=self.path)
+        p = self.last_position(rec)
+        if len(v) == 1:
+            a = np.asarray(self.axis, dtype=float)
+            na = np.linalg.norm(a)
+            if na == 0:
+                raise _err(rec, "expected a tool axis to move along, found 0,0,0", path=self.path)
+            p = p + v[0] * a / na
+        else:
+            p = p + np.asarray(v)
+        rapid = self.rapid_next
+        self.rapid_next = False
+        self.add_motion(rec, tuple(p.tolist()), rapid)  # type: ignore[arg-type]
+
+    def cutter_statement(self, rec: Record) -> None:
+        from checker import cutter as cutter_module  # lazily: written beside this module
+
+        self.tool_defined = True
+        if rec.word == "TLDATA":
+            if not rec.args or rec.args[0] != "MILL":
+                self.set_tool(cutter=None)
+                self.unknown[f"TLDATA/{rec.args[0] if rec.args else ''}"] += 1
+                return
+            rest = Record(rec.word, rec.args[1:], rec.line)
+            v = _numbers(rest, None, "MILL,d,r,h,taper,tip[,...]", path=self.path)
+            mm = [x if k in _TLDATA_ANGLES else x * self.scale for k, x in enumerate(v)]
+            c = cutter_module.cutter_from_tldata(mm, path=self.path, line=rec.line)
+        else:
+            v = _numbers(rec, None, "d[,r,e,f,alpha,beta,h]", path=self.path)
+            angles = _CUTTER_ANGLES if len(v) == 7 else ()
+            mm = [x if k in angles else x * self.scale for k, x in enumerate(v)]
+            c = cutter_module.cutter_from_apt(mm, path=self.path, line=rec.line)
+        self.set_tool(cutter=c)
+
+    def load(self, index: int, rec: Record) -> None:
+        args = rec.args[1:] if rec.word == "LOAD" and rec.args and rec.args[0] == "TOOL" else None
+        if rec.word == "LOADTL":
+            args = rec.args
+        if args is None:
+            self.unknown[f"LOAD/{rec.args[0] if rec.args else ''}"] += 1
+            return
+        if not args or isinstance(args[0], str) or args[0] != int(args[0]) or args[0] < 0:
+            raise _err(rec, f"expected a tool number, found {args[0] if args else 'nothing'!r}",
+                       path=self.path)
+        self.boundary(index)
+        number = int(args[0])
+        name = self.tool_name if self.dialect == "clsf" else f"T{number}"
+        self.set_tool(tool_number=number, tool_name=name)
+        self.tool_changes.append(ToolChange(rec.line, number, self.cutter))
+
+    def tool_path(self, rec: Record) -> None:
+        """NX ``TOOL PATH/op_name,TOOL,tool_name``."""
+        if not rec.args or not isinstance(rec.args[0], str):
+            raise _err(rec, "expected an operation name, found nothing", path=self.path)
+        self.ops[-1].name = rec.args[0]
+        self.named[-1] = True
+        tool = rec.args[2] if len(rec.args) > 2 and rec.args[1] == "TOOL" else None
+        self.set_tool(tool_name=str(tool) if tool is not None else None)
+
+    def name_from_comment(self, rec: Record) -> None:
+        """``$$ ... OPERATION NAME: X`` / ``PPRINT OPERATION NAME : X`` names an unnamed op."""
+        if self.named[-1] or rec.text is None:
+            return
+        k = rec.text.upper().find("OPERATION NAME")
+        if k >= 0:
+            name = rec.text[k + 14 :].lstrip(" :=\t").strip()
+            if name:
+                self.ops[-1].name = name
+                self.named[-1] = True
+
+    def coordinate_system(self, rec: Record) -> None:
+        if rec.word == "CSYS":
+            v = _numbers(rec, (12,), "3x4 matrix row by row", path=self.path)
+            M = fr.csys_matrix(v, self.scale, path=self.path, line=rec.line)
+            applied = not self.world
+        else:
+            v = _numbers(rec, (9,), "origin, X axis, Y axis", path=self.path)
+            M = fr.msys_matrix(v, self.scale, path=self.path, line=rec.line)
+            applied = True
+        self.frames.append(Frame(rec.word, M, rec.line, applied))
+        self.matrices.append(M if applied else None)
+        self.frame_now = len(self.matrices) - 1
+
+    # ---- finish --------------------------------------------------------------------------
+    def arrays(self) -> MotionArrays:
+        n = len(self.line)
+        tip = np.asarray(self.pos, dtype=float).reshape(n, 3) * self.scale
+        axis = np.asarray(self.ax, dtype=float).reshape(n, 3)
+        norm = np.linalg.norm(axis, axis=1)
+        bad = np.flatnonzero(np.abs(norm - 1.0) > AXIS_NORM_TOL)
+        if len(bad):
+            k = bad[0]
+            raise PathcheckError(
+                f"expected a unit tool axis i,j,k, found {tuple(axis[k])} of length {norm[k]:.4g}",
+                path=self.path,
+                line=self.line[k],
+                code="parse",
+            )
+        axis /= norm[:, None]
+        st = np.asarray(self.states, dtype=float).reshape(-1, 6)[self.sid]
+        frame = st[:, 3].astype(np.intp)
+        fr.apply_frames(tip, axis, frame, self.matrices)
+        rapid = np.asarray(self.rapid, dtype=bool)
+        feed = np.where(np.isnan(st[:, 1]), st[:, 0], st[:, 1] * st[:, 2])
+        feed[rapid | ~(feed >= 0)] = np.nan  # rapid moves, and per-rev feeds without rpm
+        axis /= np.linalg.norm(axis, axis=1)[:, None]
+        return MotionArrays(
+            tip=tip,
+            axis=axis,
+            rapid=rapid,
+            feed=feed,
+            spindle=st[:, 2].copy(),
+            line=np.asarray(self.line, dtype=np.int64),
+            op=st[:, 4].astype(np.int64),
+            cycle=st[:, 5].astype(bool),
+            arc=np.full(n, -1, dtype=np.int64),
+        )
+
+    def build_arcs(self, m: MotionArrays) -> list[Arc]:
+        """Arcs in mm / part frame, checked: start and end at the CIRCLE's radius."""
+        if not self.arc_specs:
+            return []
+        k = len(self.arc_specs)
+        v = np.zeros((k, 7))
+        has_r = np.zeros(k, dtype=bool)
+        for n, (_, values, _, _, _) in enumerate(self.arc_specs):
+            v[n, : min(len(values), 7)] = values[:7]
+            has_r[n] = len(values) > 6
+        frame = np.asarray([spec[3] for spec in self.arc_specs], dtype=np.intp)
+        row = np.asarray([spec[4] for spec in self.arc_specs], dtype=np.intp)
+        center = v[:, :3] * self.scale
+        # APT: the motion is counter-clockwise about i,j,k; NX CLSF writes the opposite sense
+        sense = -1.0 if self.dialect == "clsf" else 1.0
+        axis = sense * v[:, 3:6] / np.linalg.norm(v[:, 3:6], axis=1)[:, None]
+        fr.apply_frames(center, axis, frame, self.matrices)
+        axis /= np.linalg.norm(axis, axis=1)[:, None]
+        start, end = m.tip[row - 1], m.tip[row]
+        dist = []
+        for p in (start, end):
+            d = p - center
+            dist.append(np.linalg.norm(d - np.sum(d * axis, axis=1)[:, None] * axis, axis=1))
+        radius = np.where(has_r, v[:, 6] * self.scale, dist[0])
+        worst = np.maximum(np.abs(dist[0] - radius), np.abs(dist[1] - radius))
+        bad = np.flatnonzero((worst > ARC_RADIUS_TOL * radius + ARC_RADIUS_ABS) | (radius <= 0))
+        if len(bad):
+            b = bad[0]
+            raise _err(
+                self.arc_specs[b][0],
+                f"expected the arc's start (line {m.line[row[b] - 1]}) and end (line "
+                f"{m.line[row[b]]}) at radius {radius[b]:.6g} mm from the centre, found "
+                f"{dist[0][b]:.6g} and {dist[1][b]:.6g} mm",
+                path=self.path,
+            )
+        m.arc[row] = np.arange(k)
+        return [
+            Arc(center[n], axis[n], float(radius[n]), start[n], end[n], spec[0].line, int(row[n]),
+                spec[2])
+            for n, spec in enumerate(self.arc_specs)
+        ]
+
+    def finish(self) -> ToolPath:
+        if self.pending_arc is not None:
+            raise _err(self.pending_arc[0], "expected the arc's end GOTO, found the end of file",
+                       path=self.path)
+        op = self.ops[-1]
+        op.end_record, op.end_motion = len(self.records), len(self.line)
+        for k, (o, named) in enumerate(zip(self.ops, self.named, strict=True), start=1):
+            if not named:
+                o.name = f"OP{k}"
+        m = self.arrays()
+        arcs = self.build_arcs(m)
+        return ToolPath(
+            path=self.path,
+            dialect=self.dialect,  # type: ignore[arg-type]
+            units=self.units,  # type: ignore[arg-type]
+            records=self.records,
+            operations=self.ops,
+            motions=m,
+            arcs=arcs,
+            tool_changes=self.tool_changes,
+            frames=self.frames,
+            unknown=dict(self.unknown),
+            ignored=dict(self.ignored),
+        )
+
+
+# statements that change what `_Reader.push_state` records
+_STATE_WORDS = frozenset({"FEDRAT", "SPINDL", "CYCLE", "CSYS", "MSYS"})
+# statements that may not stand between a CIRCLE and its end GOTO
+_BREAKS_ARC = frozenset(
+    {"CIRCLE", "FROM", "GODLTA", "CUTTER", "TLDATA", "LOAD", "LOADTL", "TOOL PATH", "CSYS",
+     "MSYS", "END-OF-PATH", "FINI", "END", "CYCLE"}
+)
+
+
+def interpret(
+    records: list[Record], *, path: str, dialect: str, require_cutter: bool = True
+) -> ToolPath:
+    """The tool path of ``records``. ``require_cutter``: a feed move before any ``CUTTER/`` or
+    ``TLDATA/`` is an error (rapid moves are allowed)."""
+    if not any(r.word != "$$" for r in records):
+        raise PathcheckError(
+            "empty file: expected CL statements (GOTO/, CUTTER/, ...), found none",
+            path=path,
+            line=None,
+            code="parse",
+        )
+    units = file_units(records, path=path)
+    reader = _Reader(records, path=path, dialect=dialect, units=units,
+                     require_cutter=require_cutter)
+    step = reader.step
+    goto = reader.goto
+    for index, rec in enumerate(records):
+        if rec.word == "GOTO" and reader.pending_arc is None:
+            goto(rec)
+        else:
+            step(index, rec)
+    return reader.finish()

@@ -1,0 +1,74 @@
+"""File -> `ToolPath`: decode, refuse binary input, detect the dialect, lex, interpret."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from checker.apt.dialect import detect_dialect
+from checker.apt.interpret import interpret
+from checker.apt.lexer import is_card_image, lex
+from checker.errors import PathcheckError
+from checker.toolpath import ToolPath
+
+# control characters that never occur in text (tab, LF, FF, CR and the DOS EOF mark do)
+_BINARY = re.compile(r"[\x00-\x08\x0b\x0e-\x19\x1b-\x1f\x7f]")
+
+
+def _decode(data: bytes) -> str:
+    """Text of a CL file: UTF-8, else Latin-1 (CAM comments in Windows code pages)."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
+def _refuse_binary(text: str, *, path: str) -> None:
+    m = _BINARY.search(text)
+    if m is not None:
+        raise PathcheckError(
+            f"expected a text CL file, found binary data (byte 0x{ord(m.group()):02x})",
+            path=path,
+            line=text.count("\n", 0, m.start()) + 1,
+            code="parse",
+        )
+
+
+def read_cl_text(
+    text: str,
+    path: str = "<string>",
+    *,
+    column72: bool | None = None,
+    require_cutter: bool = True,
+) -> ToolPath:
+    """A tool path from CL text. ``column72``: ignore text after column 72 (None: only for
+    80-column card images). ``require_cutter``: a feed move before any cutter is an error."""
+    if not text.strip():
+        raise PathcheckError(
+            "empty file: expected CL statements (GOTO/, CUTTER/, ...), found nothing",
+            path=path,
+            code="parse",
+        )
+    _refuse_binary(text, path=path)
+    dialect = detect_dialect(text, path=path)
+    lines = text.split("\n")
+    if column72 is None:
+        column72 = is_card_image([s.rstrip("\r") for s in lines])
+    records = lex(lines, path=path, column72=column72, header_comments=dialect == "clsf")
+    return interpret(records, path=path, dialect=dialect, require_cutter=require_cutter)
+
+
+def read_cl(
+    path: str | Path, *, column72: bool | None = None, require_cutter: bool = True
+) -> ToolPath:
+    """The tool path of an APT-CL or NX CLSF file; bad input raises PathcheckError."""
+    p = Path(path)
+    try:
+        data = p.read_bytes()
+    except OSError as err:
+        raise PathcheckError(
+            f"cannot read CL file: {err.strerror or err}", path=p, code="io"
+        ) from err
+    return read_cl_text(
+        _decode(data), str(p), column72=column72, require_cutter=require_cutter
+    )

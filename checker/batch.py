@@ -1,0 +1,136 @@
+"""Batch runs: check many jobs, on this machine with a process pool or on an existing Dask
+distributed cluster, and record every result (or failure, with its reason) in the store. A job
+that fails is recorded as failed and the batch goes on."""
+
+from __future__ import annotations
+
+import glob
+import importlib
+import time
+import traceback
+from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+
+from checker.errors import PathcheckError
+from checker.results import ResultsDocument
+from checker.store import ResultsStore
+
+CL_SUFFIXES = (".apt", ".aptsource", ".cl", ".cls", ".clsf", ".ncl")
+DEFAULT_JOB_FUNCTION = "checker.job:check_job"
+
+
+@dataclass(frozen=True)
+class JobOutcome:
+    """The result of one job of a batch: the results document as JSON text (None when the job
+    failed) or the reason it failed; elapsed_s in seconds."""
+
+    path: str
+    document: str | None
+    error: str | None
+    elapsed_s: float
+
+    def results(self) -> ResultsDocument | None:
+        return None if self.document is None else ResultsDocument.model_validate_json(
+            self.document
+        )
+
+
+def find_jobs(spec: str | Path) -> list[Path]:
+    """The CL files of a directory (recursively) or matched by a glob pattern, sorted."""
+    path = Path(spec)
+    if path.is_dir():
+        found = [p for p in path.rglob("*") if p.suffix.lower() in CL_SUFFIXES and p.is_file()]
+    elif path.is_file():
+        found = [path]
+    else:
+        found = [Path(p) for p in glob.glob(str(spec), recursive=True) if Path(p).is_file()]
+    if not found:
+        raise PathcheckError(
+            "expected a directory of CL files (" + ", ".join(CL_SUFFIXES) + ") or a glob "
+            "pattern that matches files, found nothing", path=spec, code="usage",
+        )
+    return sorted(found)
+
+
+def _job_function(name: str) -> Callable[..., ResultsDocument]:
+    module, attr = name.split(":")
+    return getattr(importlib.import_module(module), attr)
+
+
+def run_one(path: str, job_function: str = DEFAULT_JOB_FUNCTION) -> JobOutcome:
+    """Check one job (in a pool worker or on a Dask worker); never raises for a bad job."""
+    start = time.perf_counter()
+    try:
+        doc = _job_function(job_function)(path)
+        return JobOutcome(path, doc.model_dump_json(), None, time.perf_counter() - start)
+    except PathcheckError as err:
+        reason = str(err)
+    except Exception as err:  # an engine fault in one job must not stop the batch
+        where = traceback.extract_tb(err.__traceback__)[-1]
+        reason = (
+            f"{path}: internal error {type(err).__name__}: {err} "
+            f"(at {Path(where.filename).name}:{where.lineno})"
+        )
+    return JobOutcome(path, None, reason, time.perf_counter() - start)
+
+
+def _local(paths: list[str], workers: int, job_function: str) -> Iterator[JobOutcome]:
+    if workers <= 1:
+        yield from (run_one(p, job_function) for p in paths)
+        return
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futures = [pool.submit(run_one, p, job_function) for p in paths]
+        for future in as_completed(futures):
+            yield future.result()
+
+
+def _dask(paths: list[str], scheduler: object, job_function: str) -> Iterator[JobOutcome]:
+    """Jobs on a Dask cluster: `scheduler` is an address ('tcp://host:8786') or a Client."""
+    from distributed import Client
+    from distributed import as_completed as dask_completed
+
+    own = not isinstance(scheduler, Client)
+    try:
+        client = Client(scheduler, timeout="10s") if own else scheduler
+    except (OSError, TimeoutError) as err:
+        raise PathcheckError(
+            f"cannot reach the Dask scheduler: {err}", path=str(scheduler), code="usage"
+        ) from err
+    try:
+        futures = client.map(run_one, paths, job_function=job_function, pure=False)
+        for future in dask_completed(futures):
+            yield future.result()
+    finally:
+        if own:
+            client.close()
+
+
+def run_batch(
+    paths: list[str | Path],
+    *,
+    store: ResultsStore | None,
+    workers: int = 1,
+    scheduler: object | None = None,
+    job_function: str = DEFAULT_JOB_FUNCTION,
+    on_result: Callable[[JobOutcome], None] | None = None,
+) -> list[JobOutcome]:
+    """Check every job, record each outcome in `store` as it arrives (source 'batch'), call
+    `on_result` (progress), and return the outcomes in the order of `paths`."""
+    names = [str(p) for p in paths]
+    if scheduler is not None:
+        stream = _dask(names, scheduler, job_function)
+    else:
+        stream = _local(names, workers, job_function)
+    outcomes: dict[str, JobOutcome] = {}
+    for outcome in stream:
+        if store is not None:
+            store.record_job(
+                outcome.results(), error=outcome.error, job_path=outcome.path,
+                elapsed_s=outcome.elapsed_s, source="batch",
+            )
+        outcomes[outcome.path] = outcome
+        if on_result is not None:
+            on_result(outcome)
+    return [outcomes[n] for n in names]

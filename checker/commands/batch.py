@@ -1,0 +1,62 @@
+"""`pathcheck batch DIR_OR_GLOB [--workers N] [--scheduler ADDRESS]`: check many jobs with a
+progress bar, on this machine (process pool) or on an existing Dask cluster; every outcome is
+recorded in the results store. Exit 0 when every job is clean, 1 when any has findings or
+failed."""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import click
+
+
+@click.command()
+@click.argument("jobs", metavar="DIR_OR_GLOB")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="processes on this machine [default: the number of CPUs]")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="run the jobs on this Dask distributed scheduler (tcp://host:8786)")
+@click.option("--store", "store_path", default=None, metavar="FILE",
+              help="results store [default: PATHCHECK_STORE or config store.path]")
+def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str | None) -> None:
+    """Check every CL file of a directory (recursively) or of a glob pattern.
+
+    \b
+    pathcheck batch samples/ --workers 2
+    pathcheck batch 'night/**/*.apt' --scheduler tcp://cluster:8786
+    """
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    from checker.batch import find_jobs, run_batch
+    from checker.store import ResultsStore
+
+    paths = find_jobs(jobs)
+    console = Console(stderr=True)
+    counts = {"ok": 0, "findings": 0, "failed": 0}
+    with ResultsStore(store_path) as store, Progress(
+        TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+        TextColumn("{task.fields[last]}"), console=console, transient=False,
+    ) as progress:
+        task = progress.add_task("checking", total=len(paths), last="")
+
+        def advance(outcome) -> None:
+            doc = outcome.results()
+            status = "failed" if doc is None else (
+                "ok" if doc.summary.counts.ok == doc.summary.points else "findings"
+            )
+            counts[status] += 1
+            progress.update(task, advance=1, last=f"{os.path.basename(outcome.path)}: {status}")
+            if outcome.error:
+                progress.console.print(f"[red]failed[/red] {outcome.error}", markup=True,
+                                       highlight=False)
+
+        run_batch(paths, store=store, workers=workers or os.cpu_count() or 1,
+                  scheduler=scheduler, on_result=advance)
+        where = store.path
+    click.echo(
+        f"{len(paths)} jobs: {counts['ok']} clean, {counts['findings']} with findings, "
+        f"{counts['failed']} failed; recorded in {where}"
+    )
+    sys.exit(0 if counts["ok"] == len(paths) else 1)

@@ -1,0 +1,61 @@
+"""`pathcheck check-gcode PROG.nc --machine NAME [--part PART] [--cutter "CUTTER/..."]`: read an
+existing program in the machine's dialect, apply the machine kinematics back into the part frame
+and report its moves."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+
+@click.command()
+@click.argument("program", type=click.Path(dir_okay=False, path_type=Path))
+@click.option(
+    "--machine", "machine_name", default=None, help="machine name or .toml (default fanuc-hmc)"
+)
+@click.option("--dialect", default=None, help="override the machine's dialect (fanuc, linuxcnc)")
+@click.option(
+    "--units", type=click.Choice(["mm", "inch"]), default=None, help="units before G20/G21"
+)
+@click.option(
+    "--part", type=click.Path(dir_okay=False, path_type=Path), default=None, help="part file"
+)
+@click.option("--cutter", "cutter_text", default=None, help='cutter, e.g. "CUTTER/6,3"')
+@click.option(
+    "--json",
+    "json_out",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="write the summary as JSON to this file",
+)
+def check_gcode(program: Path, machine_name, dialect, units, part, cutter_text, json_out) -> None:
+    """Read PROG (G-code) for a machine and report its moves in the part frame.
+
+    \b
+    pathcheck check-gcode prog.nc --machine fanuc-hmc
+    pathcheck check-gcode prog.ngc --machine linuxcnc-hmc --json out.json
+    """
+    from checker.errors import PathcheckError
+    from postproc.describe import describe_program, format_program_summary
+    from postproc.machine import load_machine
+    from postproc.reader import read_gcode
+    from postproc.replay import part_motions
+
+    machine = load_machine(machine_name)
+    if cutter_text is not None:
+        from checker.cutter import parse_cutter
+
+        parse_cutter(cutter_text)
+    if part is not None and not part.is_file():
+        raise PathcheckError(
+            "part file not found: expected an existing file", path=part, code="part"
+        )
+    moves = read_gcode(program, dialect or machine.dialect, units=units or machine.units)
+    doc = describe_program(moves, part_motions(moves, machine), machine)
+    click.echo(format_program_summary(doc))
+    if json_out is not None:
+        from postproc.writer import write_program
+
+        write_program(json.dumps(doc, indent=2) + "\n", json_out)

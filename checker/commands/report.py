@@ -1,0 +1,31 @@
+"""`pathcheck report [--since 24h] [--out report.html]`: the nightly page over the results
+store, with a JSON and a CSV summary beside it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+
+@click.command()
+@click.option("--since", default="24h", show_default=True,
+              help="jobs recorded in this last period: 24h, 90m, 7d, 3600s")
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
+              default=Path("report.html"), show_default=True,
+              help="the HTML page; .json and .csv summaries are written beside it")
+@click.option("--store", "store_path", default=None, metavar="FILE",
+              help="results store [default: PATHCHECK_STORE or config store.path]")
+def report(since: str, out: Path, store_path: str | None) -> None:
+    """Write one self-contained HTML page (no network needed to view it) of the jobs of the
+    night: a table, per job the allowable- and standard-cutter maps, B along the path and where
+    the findings are, and trends against previous nights."""
+    from checker.report import build_report, parse_since
+    from checker.store import ResultsStore
+
+    since_s = parse_since(since)
+    with ResultsStore(store_path) as store:
+        files = build_report(store, out, since_s=since_s)
+    what = f"{files.jobs} jobs" if files.jobs else "no jobs"
+    click.echo(f"{what}, {files.pictures} pictures: {files.html} ({files.json.name}, "
+               f"{files.csv.name} beside it)")

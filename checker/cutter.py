@@ -1,0 +1,453 @@
+"""The cutter model of MATH.md (flat, ball, bull-nose, general APT, tapered ball) and its parsers.
+
+A `Cutter` is plain data (mm, radians) plus the family's closed forms: the imaginary-cutter size
+(compiled in `checker.kernels`), the tool tip from a contact, the profile radius and the signed
+distance of its solid of revolution. Tool frame: tip at the origin, axis +z.
+
+Statements: APT `CUTTER/d`, `CUTTER/d,r`, `CUTTER/d,r,e,f,alpha,beta,h` (ISO 4343; angles in
+degrees) and Siemens NX `TLDATA/MILL,D,R1,L,B,A[,XC,YC[,R2,X2,Y2]]` (D diameter, R1 lower corner
+radius, L length, B taper angle, A tip angle, XC/YC lower corner centre; the upper corner R2 is
+validated and ignored: it rounds the top of the flutes, outside the cutting model).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from checker import kernels
+from checker.errors import PathcheckError
+
+KINDS = ("flat", "ball", "bullnose", "apt", "tapered_ball")
+BALL_FAMILY = ("ball", "tapered_ball")
+_ANGLE_DIGITS = 12  # angles are kept as radians(round(degrees, 12)) so CUTTER/ text round-trips
+
+
+def _consistency_tol(d: float) -> float:
+    """Slack (mm) for redundant values written with 4-6 decimals (NX writes 1e-4 inch)."""
+    return 2e-3 + 1e-4 * max(d, 1.0)
+
+
+def diameter_from(R: float, r: float, psi: float, theta: float) -> float:
+    """APT diameter d where the bottom line meets the side line (thesis eq. 2.5), mm."""
+    if psi == 0.0 and theta == 0.0:
+        return 2.0 * (R + r)
+    q = math.pi / 4.0 - theta / 2.0
+    return 2.0 * R + 2.0 * r * math.sin(q + psi / 2.0) / math.cos(q - psi / 2.0)
+
+
+def _canonical_angle(a: float) -> float:
+    return math.radians(round(math.degrees(a), _ANGLE_DIGITS))
+
+
+@dataclass(frozen=True)
+class Cutter:
+    """One cutter. `d` APT diameter, `r` corner radius, `R` axis -> corner centre, `H` length
+    (0: unknown), holder/shank values None when unknown; mm. `psi` bottom cone angle and
+    `theta` taper angle in radians."""
+
+    kind: str
+    d: float
+    r: float
+    R: float
+    psi: float = 0.0
+    theta: float = 0.0
+    H: float = 0.0
+    flute_length: float | None = None
+    shank_diameter: float | None = None
+    holder_diameter: float | None = None
+    holder_length: float | None = None
+    stickout: float | None = None
+    name: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise PathcheckError(
+                f"cutter kind must be one of {', '.join(KINDS)}, found {self.kind!r}",
+                code="cutter",
+            )
+        object.__setattr__(self, "psi", _canonical_angle(float(self.psi)))
+        object.__setattr__(self, "theta", _canonical_angle(float(self.theta)))
+
+    @property
+    def size(self) -> float:
+        """The allowable variable: R for flat, bull-nose and APT; r for ball and tapered ball."""
+        return self.r if self.kind in BALL_FAMILY else self.R
+
+    @property
+    def family(self) -> int:
+        return kernels.FAMILY_BALL if self.kind in BALL_FAMILY else kernels.FAMILY_APT
+
+    def with_size(self, s: float) -> Cutter:
+        """Same family (r, psi, theta or, for balls, theta), new size `s` (mm); d recomputed."""
+        s = float(s)
+        if self.kind in BALL_FAMILY:
+            d = diameter_from(0.0, s, self.psi, self.theta)
+            return replace(self, r=s, R=0.0, d=d)
+        return replace(self, R=s, d=diameter_from(s, self.r, self.psi, self.theta))
+
+    @property
+    def f(self) -> float:
+        """Height of the corner centre above the tip, mm (APT `f`)."""
+        return self.R * math.tan(self.psi) + self.r / math.cos(self.psi)
+
+    def to_apt(self) -> str:
+        """`CUTTER/d,r,e,f,alpha,beta,h` (degrees) that parses back to an equal cutter."""
+        vals = (
+            self.d, self.r, self.R, self.f,
+            math.degrees(self.psi), math.degrees(self.theta), self.H,
+        )
+        return "CUTTER/" + ",".join(repr(float(v)) for v in vals)
+
+    # ---- closed forms ---------------------------------------------------------------------
+    def kernel_params(self, tol: float = 0.0) -> np.ndarray:
+        """Constants for `checker.kernels` (depth tolerance `tol`, mm); read-only, cached."""
+        return _params(self.r, self.psi, self.theta, float(tol))
+
+    def imaginary_size(
+        self,
+        p: np.ndarray,
+        cc: np.ndarray,
+        n: np.ndarray,
+        e: np.ndarray | None = None,
+        *,
+        tol: float = 0.0,
+    ) -> np.ndarray:
+        """(K,) size (allowable variable, mm) of the imaginary cutter of this family that touches
+        cc[i] with unit normal n[i] and passes through p[i]; (K,3) tool-frame arrays. `e` (K,3)
+        is used only where n is vertical (else the worst case over directions). 0 / inf by the
+        rules of `checker.kernels`, never NaN."""
+        p, cc, n = (_as_k3(a, name) for a, name in ((p, "p"), (cc, "cc"), (n, "n")))
+        if not (len(p) == len(cc) == len(n)):
+            raise ValueError("p, cc and n must have the same length")
+        ee, has_e = _e_arg(e, len(p))
+        return kernels.pair_sizes(p, cc, n, ee, has_e, self.family, self.kernel_params(tol))
+
+    def min_imaginary_size(
+        self,
+        p: np.ndarray,
+        cc: np.ndarray,
+        n: np.ndarray,
+        e: np.ndarray | None,
+        indptr: np.ndarray,
+        indices: np.ndarray,
+        *,
+        tol: float = 0.0,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Per CC point (N,) the minimum imaginary size over its candidate test points
+        p[indices[indptr[i]:indptr[i+1]]] (CSR, p (M,3)) and the index into p attaining it
+        (-1 when nothing limits: size inf). Tool frame, mm."""
+        p = _as_k3(p, "p")
+        cc, n = _as_k3(cc, "cc"), _as_k3(n, "n")
+        if len(cc) != len(n):
+            raise ValueError("cc and n must have the same length")
+        indptr = np.ascontiguousarray(indptr, dtype=np.int64)
+        indices = np.ascontiguousarray(indices, dtype=np.int64)
+        if indptr.shape != (len(cc) + 1,):
+            raise ValueError("indptr must have length N + 1")
+        if len(indices) and (indices.min() < 0 or indices.max() >= len(p)):
+            raise ValueError("candidate index out of range")
+        ee, has_e = _e_arg(e, len(cc))
+        return kernels.min_sizes(
+            p, cc, n, ee, has_e, self.family, self.kernel_params(tol), indptr, indices
+        )
+
+    def tip_from_contact(
+        self, cc: np.ndarray, n: np.ndarray, axis: np.ndarray, e: np.ndarray | None = None
+    ) -> np.ndarray:
+        """(N,3) tool tip (part frame, mm) of this cutter touching cc with unit normal n at tool
+        axis `axis` (N,3 or 3). Fillet contact: tip = cc + r n + R e - (R tan psi + r sec psi) a;
+        tip contact (psi > 0, n.a > cos psi): tip = cc; vertical normal: e from `e`, else the
+        axis passes through the fillet's lowest point (tip below cc for a flat bottom)."""
+        cc, n = _as_k3(cc, "cc"), _as_k3(n, "n")
+        a = np.broadcast_to(np.asarray(axis, dtype=float), cc.shape)
+        a = a / np.linalg.norm(a, axis=1, keepdims=True)
+        na = np.einsum("ij,ij->i", n, a)
+        perp = n - na[:, None] * a
+        nh = np.linalg.norm(perp, axis=1)
+        vertical = nh <= kernels.EPS_H
+        ev = np.zeros_like(perp)
+        ev[~vertical] = perp[~vertical] / nh[~vertical, None]
+        if e is not None and vertical.any():
+            eg = np.broadcast_to(np.asarray(e, dtype=float), cc.shape)
+            eg = eg - np.einsum("ij,ij->i", eg, a)[:, None] * a
+            en = np.linalg.norm(eg, axis=1)
+            use = vertical & (en > kernels.EPS_H)
+            ev[use] = eg[use] / en[use, None]
+        tip = cc + self.r * n + self.R * ev - self.f * a
+        if self.psi > 0.0:
+            tipc = na > math.cos(self.psi)
+            tip[tipc] = cc[tipc]
+        return tip
+
+    def profile_radius(self, z: np.ndarray) -> np.ndarray:
+        """(N,) radius of the cutter's solid of revolution at height z (mm) above the tip;
+        0 below the tip and above H (H > 0)."""
+        z = np.asarray(z, dtype=float)
+        R = 0.0 if self.kind in BALL_FAMILY else self.R
+        r, psi, theta = self.r, self.psi, self.theta
+        dz = z - self.f
+        with np.errstate(invalid="ignore"):
+            taper = R + dz * math.tan(theta) + r / math.cos(theta)
+            fillet = R + np.sqrt(np.maximum(r * r - dz * dz, 0.0))
+            cone = z / math.tan(psi) if psi > 0.0 else np.where(z >= 0.0, R, 0.0)
+        out = np.where(
+            dz >= -r * math.sin(theta), taper, np.where(dz > -r * math.cos(psi), fillet, cone)
+        )
+        out = np.where(z < 0.0, 0.0, out)
+        if self.H > 0.0:
+            out = np.where(z > self.H, 0.0, out)
+        return out
+
+    def signed_distance(self, pts: np.ndarray) -> np.ndarray:
+        """(N,) signed distance (mm) from tool-frame points (tip at origin, axis +z) to the
+        cutter solid (flutes up to H; unbounded above when H = 0): negative inside."""
+        pts = _as_k3(pts, "pts")
+        rho = np.hypot(pts[:, 0], pts[:, 1])
+        z = pts[:, 2]
+        R = 0.0 if self.kind in BALL_FAMILY else self.R
+        r, psi, th = self.r, self.psi, self.theta
+        zo = self.f
+        c = np.array([R + r * math.sin(psi), zo - r * math.cos(psi)])
+        b = np.array([R + r * math.cos(th), zo - r * math.sin(th)])
+        top = self.H if self.H > 0.0 else max(1e6, 10.0 * (zo + R + r))
+        a = np.array([b[0] + (top - b[1]) * math.tan(th), top])
+        q = np.stack([rho, z], axis=1)
+        dist = np.minimum(_seg_dist(q, np.zeros(2), c), _seg_dist(q, b, a))
+        if self.H > 0.0:
+            dist = np.minimum(dist, _seg_dist(q, a, np.array([0.0, top])))
+        if r > 0.0:
+            dist = np.minimum(dist, _arc_dist(q, np.array([R, zo]), r, -(math.pi / 2 - psi), -th))
+        prof = self.profile_radius(z)
+        inside = (z >= 0.0) & (rho <= prof) & (z <= top)
+        return np.where(inside, -dist, dist)
+
+
+@lru_cache(maxsize=256)
+def _params(r: float, psi: float, theta: float, tol: float) -> np.ndarray:
+    out = kernels.params(r, psi, theta, tol)
+    out.flags.writeable = False
+    return out
+
+
+def _seg_dist(q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from 2D points q (N,2) to the segment a-b."""
+    ab = b - a
+    L2 = float(ab @ ab)
+    t = np.clip(((q - a) @ ab) / L2, 0.0, 1.0) if L2 > 0 else np.zeros(len(q))
+    return np.linalg.norm(q - (a + t[:, None] * ab), axis=1)
+
+
+def _arc_dist(q: np.ndarray, o: np.ndarray, r: float, a0: float, a1: float) -> np.ndarray:
+    """Distance from 2D points q (N,2) to the arc of radius r about o between angles a0 < a1."""
+    v = q - o
+    ang = np.arctan2(v[:, 1], v[:, 0])
+    on = (ang >= a0) & (ang <= a1)
+    d_arc = np.abs(np.hypot(v[:, 0], v[:, 1]) - r)
+    e0 = o + r * np.array([math.cos(a0), math.sin(a0)])
+    e1 = o + r * np.array([math.cos(a1), math.sin(a1)])
+    d_end = np.minimum(np.linalg.norm(q - e0, axis=1), np.linalg.norm(q - e1, axis=1))
+    return np.where(on, d_arc, d_end)
+
+
+def _as_k3(a: np.ndarray, name: str) -> np.ndarray:
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (K, 3), got {a.shape}")
+    return a
+
+
+def _e_arg(e: np.ndarray | None, k: int) -> tuple[np.ndarray, bool]:
+    if e is None:
+        return np.zeros((1, 3)), False
+    e = _as_k3(e, "e")
+    if len(e) != k:
+        raise ValueError("e must have the same length as cc")
+    return e, True
+
+
+# ---- parsing and validation -------------------------------------------------------------------
+
+
+def _fail(msg: str, path: str | Path | None, line: int | None) -> PathcheckError:
+    return PathcheckError(msg, path=path, line=line, code="cutter")
+
+
+def _check_values(values, names, path, line, stmt: str) -> list[float]:
+    out = []
+    for v, nm in zip(values, names, strict=True):
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            raise _fail(f"{stmt}: {nm} must be a number, found {v!r}", path, line) from None
+        if not math.isfinite(x):
+            raise _fail(f"{stmt}: {nm} must be a finite number, found {v!r}", path, line)
+        if x < 0.0:
+            raise _fail(f"{stmt}: {nm} must be >= 0, found {x:g}", path, line)
+        out.append(x)
+    return out
+
+
+def _kind_of(r: float, R: float, psi: float, theta: float) -> str:
+    if psi == 0.0 and theta == 0.0:
+        return "flat" if r == 0.0 else ("ball" if R == 0.0 else "bullnose")
+    return "tapered_ball" if (psi == 0.0 and R == 0.0 and r > 0.0) else "apt"
+
+
+def _check_angles(psi_deg, theta_deg, path, line, stmt) -> None:
+    if psi_deg + theta_deg >= 90.0:
+        raise _fail(
+            f"{stmt}: bottom angle {psi_deg:g} and taper angle {theta_deg:g} degrees must each be "
+            "below 90 and sum below 90",
+            path,
+            line,
+        )
+
+
+def _make(d, r, R, psi_deg, theta_deg, H, path, line, stmt) -> Cutter:
+    _check_angles(psi_deg, theta_deg, path, line, stmt)
+    if abs(R) <= 1e-9 * d:
+        R = 0.0  # a corner radius of half the diameter (rounding in the file): a ball
+    if d <= 0.0:
+        raise _fail(f"{stmt}: diameter must be > 0, found {d:g}", path, line)
+    psi, theta = math.radians(psi_deg), math.radians(theta_deg)
+    return Cutter(_kind_of(r, R, psi, theta), d, r, R, psi, theta, H)
+
+
+def _check_redundant(d, r, e, f, a_deg, b_deg, path, line, stmt, names) -> None:
+    """d and f repeat what r, e, alpha, beta say (eq. 2.5; f = e tan(alpha) + r sec(alpha)):
+    name the value that disagrees."""
+    nd, nr, ne, nf = names
+    psi, th = math.radians(a_deg), math.radians(b_deg)
+    tol = _consistency_tol(d)
+    d_exp = diameter_from(e, r, psi, th)
+    f_exp = e * math.tan(psi) + r / math.cos(psi)
+    d_ok, f_ok = abs(d - d_exp) <= tol, abs(f - f_exp) <= tol
+    if d_ok and f_ok:
+        return
+    if not d_ok and f_ok:
+        raise _fail(
+            f"{stmt}: {nd}={d:g} is inconsistent with {nr}={r:g}, {ne}={e:g}, angles {a_deg:g}/"
+            f"{b_deg:g} deg: eq. 2.5 gives {nd}={d_exp:.6g}",
+            path,
+            line,
+        )
+    if d_ok and not f_ok:
+        raise _fail(
+            f"{stmt}: {nf}={f:g} is inconsistent with {ne}={e:g}, {nr}={r:g}, bottom angle "
+            f"{a_deg:g} deg: expected {nf}={f_exp:.6g} (height of the corner centre)",
+            path,
+            line,
+        )
+    e_from_d = 0.5 * (d - (diameter_from(0.0, r, psi, th)))
+    raise _fail(
+        f"{stmt}: {ne}={e:g} is inconsistent with both {nd}={d:g} (which implies {ne}="
+        f"{e_from_d:.6g}) and {nf}={f:g} (expected {nf}={f_exp:.6g} for this {ne})",
+        path,
+        line,
+    )
+
+
+def cutter_from_apt(
+    values: list[float], *, path: str | Path | None = None, line: int | None = None
+) -> Cutter:
+    """Cutter from the values of an APT `CUTTER/` statement (mm, angles in degrees):
+    1 value (d: flat), 2 (d, r: bull-nose, ball when r = d/2, flat when r = 0) or 7
+    (d, r, e, f, alpha, beta, h: e = R, alpha = psi, beta = theta, h = H)."""
+    stmt = "CUTTER"
+    n = len(values)
+    if n == 1:
+        (d,) = _check_values(values, ("d",), path, line, stmt)
+        return _make(d, 0.0, d / 2.0, 0.0, 0.0, 0.0, path, line, stmt)
+    if n == 2:
+        d, r = _check_values(values, ("d", "r"), path, line, stmt)
+        if r > d / 2.0 * (1 + 1e-12):
+            raise _fail(
+                f"{stmt}: corner radius r={r:g} is larger than half the diameter d={d:g}",
+                path,
+                line,
+            )
+        R = 0.0 if r >= d / 2.0 else d / 2.0 - r
+        return _make(d, r, R, 0.0, 0.0, 0.0, path, line, stmt)
+    if n == 7:
+        names = ("d", "r", "e", "f", "alpha", "beta", "h")
+        d, r, e, f, a, b, h = _check_values(values, names, path, line, stmt)
+        _check_angles(a, b, path, line, stmt)
+        _check_redundant(d, r, e, f, a, b, path, line, stmt, ("d", "r", "e", "f"))
+        return _make(d, r, e, a, b, h, path, line, stmt)
+    raise _fail(
+        f"{stmt}: expected 1, 2 or 7 values (d | d,r | d,r,e,f,alpha,beta,h), found {n}",
+        path,
+        line,
+    )
+
+
+def cutter_from_tldata(
+    values: list[float], *, path: str | Path | None = None, line: int | None = None
+) -> Cutter:
+    """Cutter from the numbers after `TLDATA/MILL,` (mm, degrees): 5 (D, R1, L, B taper, A tip),
+    7 (+ XC, YC: corner centre radial and axial distance) or 10 (+ R2, X2, Y2: upper corner,
+    validated and ignored)."""
+    stmt = "TLDATA/MILL"
+    n = len(values)
+    if n not in (5, 7, 10):
+        raise _fail(
+            f"{stmt}: expected 5, 7 or 10 values (D,R1,L,B,A[,XC,YC[,R2,X2,Y2]]), found {n}",
+            path,
+            line,
+        )
+    names = ("diameter", "lower radius", "length", "taper angle", "tip angle",
+             "corner centre x", "corner centre y", "upper radius", "upper centre x",
+             "upper centre y")[:n]
+    v = _check_values(values, names, path, line, stmt)
+    d, r, L, taper, tip = v[:5]
+    _check_angles(tip, taper, path, line, stmt)
+    if n == 5:
+        R = 0.5 * (d - diameter_from(0.0, r, math.radians(tip), math.radians(taper)))
+        if R + _consistency_tol(d) < 0.0:
+            raise _fail(
+                f"{stmt}: lower radius {r:g} is larger than half the diameter {d:g} allows "
+                f"(taper {taper:g}, tip {tip:g} deg)",
+                path,
+                line,
+            )
+        R = max(R, 0.0)
+    else:
+        R, f = v[5], v[6]
+        _check_redundant(
+            d, r, R, f, tip, taper, path, line, stmt,
+            ("diameter", "lower radius", "corner centre x", "corner centre y"),
+        )
+    return _make(d, r, R, tip, taper, L, path, line, stmt)
+
+
+def parse_cutter(
+    text: str, *, path: str | Path | None = None, line: int | None = None
+) -> Cutter:
+    """Cutter from a whole statement: "CUTTER/10,2", "CUTTER/d,r,e,f,a,b,h" or
+    "TLDATA/MILL,D,R1,L,B,A..." (values in mm)."""
+    s = " ".join(str(text).split())
+    word, sep, rest = s.partition("/")
+    word = word.strip().upper()
+    if not sep or word not in ("CUTTER", "TLDATA"):
+        raise _fail(
+            f"expected a cutter statement 'CUTTER/d[,r[,e,f,alpha,beta,h]]' or "
+            f"'TLDATA/MILL,...', found {s[:60]!r}",
+            path,
+            line,
+        )
+    parts = [t.strip() for t in rest.split(",")]
+    if word == "TLDATA":
+        if not parts or parts[0].upper() != "MILL":
+            found = parts[0] if parts else ""
+            raise _fail(
+                f"TLDATA: only TLDATA/MILL is a milling cutter, found TLDATA/{found}", path, line
+            )
+        return cutter_from_tldata(parts[1:], path=path, line=line)
+    if parts == [""]:
+        parts = []
+    return cutter_from_apt(parts, path=path, line=line)

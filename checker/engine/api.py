@@ -1,0 +1,241 @@
+"""`allowable(...)`: the allowable cutter size at many CC points (any tool axes): global scan with
+sound pruning over the test points, batched local refinement in (u, v), verdicts."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.config import Config, default_config
+from checker.engine.candidates import CellGrid, build_grid
+from checker.engine.family import family_bounds
+from checker.engine.frames import group_axes, tool_rotation
+from checker.engine.refine import refine
+from checker.engine.search import scan
+from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes
+from checker.engine.verdict import verdicts
+from checker.errors import PathcheckError
+from checker.geometry.evaluate import evaluate_mixed
+from checker.geometry.sampling import TestPoints
+from checker.part import Part
+
+_KNN = 16
+_GRAPH_K = 8
+_RING = np.array([(np.cos(a), np.sin(a)) for a in np.arange(8) * np.pi / 4])
+_GRIDS_MAX = 32
+
+
+@dataclass
+class AllowableResult:
+    """Per CC row (N,): `size` allowable size in the cutter's variable (R for flat, bull-nose
+    and APT, r for ball and tapered ball), mm, inf = unbounded; `limiting_point (N, 3)` part
+    frame, mm (nan if none); `limiting_surface` (-1 if none); `limiting_uv (N, 2)`; `verdict`
+    for the real cutter; `margin` = size - real size (mm); `evaluations` of the imaginary size."""
+
+    size: np.ndarray
+    limiting_point: np.ndarray
+    limiting_surface: np.ndarray
+    limiting_uv: np.ndarray
+    verdict: np.ndarray
+    margin: np.ndarray
+    evaluations: np.ndarray
+
+
+def _rows3(a, n: int | None, what: str) -> np.ndarray:
+    arr = np.asarray(a, dtype=np.float64)
+    if arr.ndim == 1 and arr.shape == (3,) and n is not None:
+        arr = np.broadcast_to(arr, (n, 3))
+    if arr.ndim != 2 or arr.shape[1] != 3 or (n is not None and arr.shape[0] != n):
+        raise PathcheckError(f"{what}: expected an (N, 3) array, found shape {arr.shape}", code="input")
+    if not np.isfinite(arr).all():
+        raise PathcheckError(f"{what}: expected finite numbers, found nan or inf", code="input")
+    return np.ascontiguousarray(arr)
+
+
+def _unit(a: np.ndarray, what: str) -> np.ndarray:
+    norm = np.linalg.norm(a, axis=1)
+    if (norm < 1e-12).any():
+        raise PathcheckError(f"{what}: expected non-zero vectors, found a zero vector at row "
+                             f"{int(np.argmax(norm < 1e-12))}", code="input")
+    return a / norm[:, None]
+
+
+def _neighbours(tp: TestPoints) -> np.ndarray:
+    """(M, 8) nearest other test points of every test point (cached): the sample graph in
+    which the scan looks for local minima."""
+    cache = _cache_of(tp)
+    hit = cache.get("knn")
+    if hit is None:
+        k = min(_GRAPH_K + 1, len(tp.points))
+        _, nb = tp.tree.query(tp.points, k=k)
+        hit = np.ascontiguousarray(nb.reshape(len(tp.points), k)[:, 1:], dtype=np.int64)
+        cache["knn"] = hit
+    return hit
+
+
+def _cache_of(tp: TestPoints) -> dict:
+    """Per-TestPoints cache (lives and dies with the object)."""
+    return tp.__dict__.setdefault("_engine_cache", {})
+
+
+def _tool_grid(tp: TestPoints, axis: np.ndarray) -> tuple[np.ndarray, CellGrid]:
+    """Test points rotated into the tool frame of `axis` and their cell grid (cached)."""
+    grids = _cache_of(tp).setdefault("grids", {})
+    key = tuple(np.round(axis, 12).tolist())
+    hit = grids.get(key)
+    if hit is None:
+        Q = tool_rotation(axis)
+        hit = (Q, build_grid(tp.points @ Q.T))
+        if len(grids) >= _GRIDS_MAX:
+            grids.pop(next(iter(grids)))
+        grids[key] = hit
+    return hit
+
+
+def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.0, 0.0, 1.0), *,
+              cc_surface=None, cc_uv=None, toward=None, method: str = "exact",
+              seed: int | None = None, config: Config | None = None) -> AllowableResult:
+    """Allowable size at N CC points `cc (N, 3)` with unit normals `normals (N, 3)` (out of the
+    material) and tool axes `axes (N, 3)` or (3,) (tip -> spindle), all part frame, mm. The
+    minimum over all test points of every surface, refined in (u, v) to the true minimum.
+    `cc_surface (N,)`, `cc_uv (N, 2)`: the CC point's own surface and parameters (better
+    curvature limit; else the nearest test point's surface is used for the verdict). `toward
+    (N, 3)`: a direction from the CC point towards the tool axis (from the CL data) for normals
+    along the axis. `method`: "exact" (this engine) or "pso" (thesis baseline, `seed`)."""
+    cfg = config or default_config()
+    if method not in ("exact", "pso"):
+        raise PathcheckError(f"unknown method '{method}', expected 'exact' or 'pso'", code="input")
+    cc = _rows3(cc, None, "cc")
+    n_rows = len(cc)
+    normals = _unit(_rows3(normals, n_rows, "normals"), "normals")
+    axes = _unit(_rows3(axes, n_rows, "axes"), "axes")
+    tw = None if toward is None else _rows3(toward, n_rows, "toward")
+    tp = test_points
+    if cc_surface is None:
+        _, near = tp.tree.query(cc)
+        own = tp.surface[near].astype(np.int64)
+    else:
+        own = np.asarray(cc_surface, dtype=np.int64).reshape(n_rows)
+    size = np.full(n_rows, np.inf)
+    lim_p = np.full((n_rows, 3), np.nan)
+    lim_s = np.full(n_rows, -1, dtype=np.int64)
+    lim_uv = np.full((n_rows, 2), np.nan)
+    evals = np.zeros(n_rows, dtype=np.int64)
+    faces_away = np.zeros(n_rows, dtype=bool)
+    keys, group = group_axes(axes)
+    for g, axis in enumerate(keys):
+        rows = np.flatnonzero(group == g)
+        Q, grid = _tool_grid(tp, axis)
+        n_t = normals[rows] @ Q.T
+        away = n_t[:, 2] <= 1e-12
+        faces_away[rows[away]] = True
+        rows, n_t = rows[~away], n_t[~away]
+        if rows.size == 0:
+            continue
+        cc_t = cc[rows] @ Q.T
+        e_t, degen = horizontal_e(n_t, None if tw is None else tw[rows] @ Q.T)
+        fam = family_bounds(cutter, cc_t, n_t, e_t, degen, float(grid.xyz[:, 2].max()))
+        frame = RowFrame(cc_t, n_t, e_t, degen, fam, cfg.engine.exclusion)
+        uv_own = None if cc_uv is None else np.asarray(cc_uv, dtype=np.float64).reshape(n_rows, 2)[rows]
+        if method == "pso":
+            from checker.engine.pso import pso_search
+
+            found = pso_search(part, cutter, frame, Q, np.random.default_rng(seed), cfg.engine)
+        else:
+            found = _exact(tp, part, cutter, frame, Q, grid, own[rows], uv_own, cfg)
+        s, p, sid, uv, ev = found
+        size[rows], lim_p[rows], lim_s[rows], lim_uv[rows], evals[rows] = s, p, sid, uv, ev
+    size = np.where(size > cfg.engine.max_size, np.inf, size)
+    unbounded = ~np.isfinite(size)
+    lim_p[unbounded], lim_s[unbounded], lim_uv[unbounded] = np.nan, -1, np.nan
+    dist = np.linalg.norm(lim_p - cc, axis=1)
+    real = float(cutter.size)
+    verdict = verdicts(size, real, cfg.check.tolerance, faces_away, (lim_s == own) & (lim_s >= 0),
+                       np.where(np.isfinite(dist), dist, np.inf),
+                       cfg.check.gouge_neighbourhood * 0.5 * float(cutter.d))
+    size[faces_away] = 0.0
+    return AllowableResult(size, lim_p, lim_s, lim_uv, verdict, size - real, evals)
+
+
+def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, grid: CellGrid,
+           own: np.ndarray, uv_own: np.ndarray | None, cfg: Config):
+    """Scan + refinement for the rows of one tool axis; returns per row (size, limiting point
+    (part frame), surface, uv, evaluations)."""
+    eng = cfg.engine
+    n = len(frame.cc)
+    rows = np.arange(n)
+    k = min(_KNN, len(tp.points))
+    _, knn = tp.tree.query(frame.cc @ Q, k=k)
+    knn = knn.reshape(n, k)
+    s_ub = pair_sizes(cutter, frame, np.repeat(rows, k), grid.xyz[knn.ravel()]).reshape(n, k).min(axis=1)
+    spacing = float(tp.spacing.max()) if len(tp.spacing) else 0.0
+    slack = 0.5 * spacing + cfg.geometry.sag_tolerance
+    s0 = max(float(cutter.size), 4.0 * spacing, 1e-3)
+    s_start = np.where(np.isfinite(s_ub), s_ub, s0)
+    sc = scan(cutter, frame, grid, s_start, eng.max_size, slack, eng.refine_seeds, _neighbours(tp))
+    size, arg = sc.best.copy(), sc.arg
+    has = arg >= 0
+    lim_p = np.full((n, 3), np.nan)
+    lim_p[has] = tp.points[arg[has]]
+    lim_s = np.where(has, tp.surface[np.maximum(arg, 0)], -1).astype(np.int64)
+    lim_uv = np.full((n, 2), np.nan)
+    lim_uv[has] = tp.uv[arg[has]]
+    evals = sc.evaluations + k
+    if not part.surfaces:
+        return size, lim_p, lim_s, lim_uv, evals
+    srow, ssid, suv, sstep = _seed_starts(tp, part, sc, spacing)
+    if uv_own is not None:
+        ring = _ring_starts(part, cutter, frame, Q, own, uv_own, eng.ring)
+        if ring is not None:
+            srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in zip((srow, ssid, suv, sstep), ring, strict=True))
+            evals += 8 * (own >= 0)
+    if srow.size:
+        ref = refine(part, cutter, frame, Q, srow, ssid, suv, sstep, eng.refine_iterations)
+        np.add.at(evals, srow, ref.evaluations)
+        order = np.lexsort((ref.size, srow))
+        first = np.ones(order.size, dtype=bool)
+        first[1:] = srow[order][1:] != srow[order][:-1]
+        pick = order[first]
+        r = srow[pick]
+        better = ref.size[pick] < size[r]
+        r, pick = r[better], pick[better]
+        size[r], lim_p[r], lim_s[r], lim_uv[r] = ref.size[pick], ref.point[pick], ssid[pick], ref.uv[pick]
+    return size, lim_p, lim_s, lim_uv, evals
+
+
+def _seed_starts(tp: TestPoints, part: Part, sc, spacing: float):
+    """Refinement starts from the scan's seeds: rows, surfaces, uv and stencil half-widths."""
+    srow, col = np.nonzero(sc.seeds >= 0)
+    idx = sc.seeds[srow, col]
+    keep = tp.surface[idx] >= 0
+    srow, idx = srow[keep], idx[keep]
+    sid = tp.surface[idx].astype(np.int64)
+    uv = tp.uv[idx]
+    ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
+    half = tp.spacing[idx]
+    step = np.column_stack([half / np.maximum(np.linalg.norm(ev.du, axis=1), 1e-12),
+                            half / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
+    return srow, sid, uv, step
+
+
+def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, own: np.ndarray,
+                 uv_own: np.ndarray, ring_mm: float):
+    """Best of 8 points `ring_mm` around each CC point on its own surface (the curvature
+    limit), as a refinement start per row; None when no row has its own surface."""
+    rows = np.flatnonzero((own >= 0) & np.isfinite(uv_own).all(axis=1))
+    if rows.size == 0:
+        return None
+    sid = own[rows]
+    ev = evaluate_mixed(part, sid, uv_own[rows, 0], uv_own[rows, 1])
+    step = np.column_stack([ring_mm / np.maximum(np.linalg.norm(ev.du, axis=1), 1e-12),
+                            ring_mm / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
+    dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
+    lo, hi = dom[sid, :, 0], dom[sid, :, 1]
+    uv = np.clip(uv_own[rows, None, :] + _RING[None] * step[:, None, :], lo[:, None], hi[:, None])
+    r8 = np.repeat(rows, 8)
+    pts = evaluate_mixed(part, np.repeat(sid, 8), uv[..., 0].ravel(), uv[..., 1].ravel()).points
+    f = pair_sizes(cutter, frame, r8, pts @ Q.T).reshape(-1, 8)
+    k = np.argmin(f, axis=1)
+    ok = np.isfinite(f[np.arange(rows.size), k])
+    return rows[ok], sid[ok], uv[np.arange(rows.size), k][ok], step[ok]

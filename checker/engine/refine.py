@@ -1,0 +1,118 @@
+"""Batched local refinement in (u, v): every start (a CC row and a point on one surface) takes
+the same few quadratic-model steps at once. Each step evaluates a 3x3 stencil, fits the
+quadratic (central differences), takes the bounded Newton step when the model is convex (the
+best stencil point otherwise), and shrinks the stencil as it converges. Steps stay inside the
+surface domain; points outside a trim count as inf. The answer is the best point evaluated."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.engine.sizes import RowFrame, pair_sizes
+from checker.geometry.evaluate import evaluate_mixed
+from checker.part import Part
+
+_OFFS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.float64)
+
+
+@dataclass
+class Refined:
+    """Per start: `size (S,)` mm, `uv (S, 2)`, `point (S, 3)` part frame, `evaluations (S,)`."""
+
+    size: np.ndarray
+    uv: np.ndarray
+    point: np.ndarray
+    evaluations: np.ndarray
+
+
+class _Objective:
+    """Imaginary size of surface points (surface id, u, v) for given rows; trims honoured."""
+
+    def __init__(self, part: Part, cutter, frame: RowFrame, Q: np.ndarray) -> None:
+        self.part, self.cutter, self.frame, self.Q = part, cutter, frame, Q
+        self.trimmed = [s.id for s in part.surfaces if s.trim is not None]
+
+    def __call__(self, rows, sid, u, v):
+        ev = evaluate_mixed(self.part, sid, u, v)
+        f = pair_sizes(self.cutter, self.frame, rows, ev.points @ self.Q.T)
+        for s in self.trimmed:
+            sel = np.flatnonzero(sid == s)
+            if sel.size:
+                out = ~np.asarray(self.part.surfaces[s].trim.contains(u[sel], v[sel]), dtype=bool)
+                f[sel[out]] = np.inf
+        return f, ev.points
+
+
+def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray, sid: np.ndarray,
+           uv: np.ndarray, step: np.ndarray, iterations: int = 8) -> Refined:
+    """Refine S starts: `rows (S,)` CC rows of `frame`, `sid (S,)` surfaces, `uv (S, 2)` start
+    parameters, `step (S, 2)` initial stencil half-widths in parameter units."""
+    obj = _Objective(part, cutter, frame, Q)
+    dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))], dtype=np.float64)
+    lo, hi = dom[sid, :, 0], dom[sid, :, 1]
+    width = hi - lo
+    hmin = 1e-10 * np.maximum(width, 1e-300)
+    cur = np.clip(uv, lo, hi)
+    f, pts = obj(rows, sid, cur[:, 0], cur[:, 1])
+    best_f, best_uv, best_p = f.copy(), cur.copy(), pts.copy()
+    h = np.clip(step, hmin, 0.25 * width)
+    evals = np.ones(len(rows), dtype=np.int64)
+    s9 = np.repeat(np.arange(len(rows)), 9)
+    for _ in range(iterations):
+        c = np.clip(best_uv, lo + h, hi - h)
+        UV = (c[:, None, :] + _OFFS[None] * h[:, None, :]).reshape(-1, 2)
+        F, P = obj(rows[s9], sid[s9], UV[:, 0], UV[:, 1])
+        F = F.reshape(-1, 9)
+        P = P.reshape(-1, 9, 3)
+        UV = UV.reshape(-1, 9, 2)
+        ar = np.arange(len(rows))
+        k = np.where(F[:, 4] <= F.min(axis=1), 4, np.argmin(F, axis=1))
+        _keep_best(best_f, best_uv, best_p, F[ar, k], UV[ar, k], P[ar, k])
+        g, Hm = _quadratic(F, h)
+        new = np.clip(_newton(c, g, Hm, h, UV[ar, k], np.isfinite(F).all(axis=1)), lo, hi)
+        fn, pn = obj(rows, sid, new[:, 0], new[:, 1])
+        newton_won = fn < best_f
+        _keep_best(best_f, best_uv, best_p, fn, new, pn)
+        evals += 10
+        shrink = np.where(k == 4, 0.25, 0.5)[:, None] * h
+        jump = np.clip(2.0 * np.abs(new - c), 0.125 * h, h)
+        h = np.clip(np.where(newton_won[:, None], jump, shrink), hmin, 0.25 * width)
+    return Refined(best_f, best_uv, best_p, evals)
+
+
+def _keep_best(best_f, best_uv, best_p, f, uv, p) -> None:
+    better = f < best_f
+    best_f[better], best_uv[better], best_p[better] = f[better], uv[better], p[better]
+
+
+def _quadratic(F: np.ndarray, h: np.ndarray):
+    """Gradient (S, 2) and Hessian (S, 2, 2) of the quadratic through the 3x3 stencil values
+    F (S, 9) (row-major over du in -1, 0, 1 then dv), half-widths h (S, 2)."""
+    with np.errstate(invalid="ignore"):
+        f = F.reshape(-1, 3, 3)
+        hu, hv = h[:, 0], h[:, 1]
+        gu = (f[:, 2, 1] - f[:, 0, 1]) / (2 * hu)
+        gv = (f[:, 1, 2] - f[:, 1, 0]) / (2 * hv)
+        huu = (f[:, 2, 1] - 2 * f[:, 1, 1] + f[:, 0, 1]) / hu**2
+        hvv = (f[:, 1, 2] - 2 * f[:, 1, 1] + f[:, 1, 0]) / hv**2
+        huv = (f[:, 2, 2] - f[:, 2, 0] - f[:, 0, 2] + f[:, 0, 0]) / (4 * hu * hv)
+    g = np.stack([gu, gv], axis=1)
+    Hm = np.stack([np.stack([huu, huv], axis=1), np.stack([huv, hvv], axis=1)], axis=1)
+    return g, Hm
+
+
+def _newton(c, g, Hm, h, fallback, finite):
+    """Newton step from the stencil centre, at most 2 half-widths per coordinate; the best
+    stencil point where the model is not finite or not convex."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        det = Hm[:, 0, 0] * Hm[:, 1, 1] - Hm[:, 0, 1] ** 2
+        du = -(Hm[:, 1, 1] * g[:, 0] - Hm[:, 0, 1] * g[:, 1])
+        dv = -(Hm[:, 0, 0] * g[:, 1] - Hm[:, 0, 1] * g[:, 0])
+    ok = finite & (Hm[:, 0, 0] > 0) & (det > 0)
+    safe = np.where(ok, det, 1.0)
+    d = np.stack([du / safe, dv / safe], axis=1)
+    d = np.where(np.isfinite(d), d, 0.0)
+    scale = np.min(np.where(np.abs(d) > 2 * h, 2 * h / np.maximum(np.abs(d), 1e-300), 1.0), axis=1)
+    return np.where(ok[:, None], c + d * scale[:, None], fallback)

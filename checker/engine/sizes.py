@@ -1,0 +1,55 @@
+"""Imaginary sizes of (row, point) pairs in the tool frame, through the cutter's kernels, with the
+engine's rules on top: a point within `exclusion` mm of the CC point is the CC point itself (not
+a test point), and a point above the length of the cutter that would touch it is not cut."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.engine.family import FamilyBounds
+
+_EPS_H = 1e-9
+
+
+@dataclass
+class RowFrame:
+    """The CC rows of one tool axis, tool frame, mm: `cc`, unit `n`, unit horizontal `e` (N, 3)
+    (zero where undefined: normal along the axis and no tool position, the kernels then take the
+    worst case over directions); `degenerate (N,)` those rows; `fam` the pruning bounds."""
+
+    cc: np.ndarray
+    n: np.ndarray
+    e: np.ndarray
+    degenerate: np.ndarray
+    fam: FamilyBounds
+    exclusion: float
+
+
+def horizontal_e(n: np.ndarray, toward: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Unit horizontal e (N, 3) from the normals' horizontal part, else from `toward` (N, 3)
+    (a horizontal direction, e.g. CC -> tool axis); and the mask of rows left undefined."""
+    e = np.zeros_like(n)
+    h = np.hypot(n[:, 0], n[:, 1])
+    ok = h > _EPS_H
+    e[ok, :2] = n[ok, :2] / h[ok, None]
+    if toward is not None:
+        th = np.hypot(toward[:, 0], toward[:, 1])
+        use = ~ok & (th > _EPS_H)
+        e[use, :2] = toward[use, :2] / th[use, None]
+        ok |= use
+    return e, ~ok
+
+
+def pair_sizes(cutter, frame: RowFrame, rows: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Imaginary size (K,) mm for pairs (row `rows (K,)`, tool-frame point `p (K, 3)`); inf for
+    points the cutter family cannot touch, 0 for points inside every cutter."""
+    cc, n = frame.cc[rows], frame.n[rows]
+    size = cutter.imaginary_size(p, cc, n, frame.e[rows])
+    q = p - cc
+    near = np.einsum("ij,ij->i", q, q) < frame.exclusion ** 2
+    fam = frame.fam
+    tip = fam.z0[rows] - fam.t[rows] * np.where(np.isfinite(size), size, 0.0)
+    too_high = p[:, 2] - tip > fam.length
+    return np.where(near | too_high, np.inf, size)

@@ -1,0 +1,285 @@
+"""CL -> CC: the contact point of a cutter at a CL position (tip, axis) on a part, by the
+closest approach between the cutter and the exact NURBS surfaces.
+
+Distance from points to a cutter goes through its core: every cutter of the APT family with a
+flat or conical bottom is the core (a solid of revolution of a wedge in the profile plane) grown
+by a ball of the corner radius r. The core's wedge has its corner at the fillet centre
+C = (rho = R, h = h_O), h_O = R tan(psi) + r sec(psi) above the tip; its lower side rises from C
+towards the axis with slope tan(psi) (the bottom offset by r), its outer side leaves C upwards
+with taper theta (the side offset by r). Signed distance to the cutter = distance to the core - r
+(exact outside the core; at a conical tip, psi > 0, the grown core is rounded where the real
+tip is sharp, short of it by r (sec(psi) - 1) along the axis).
+
+All inputs in mm in the part frame: tips (N,3), unit axes (N,3) (tip -> spindle), points (N,3).
+The contact minimises the core distance over the part: start at the best of the k test points
+nearest to the fillet-centre level (or at the CAM's own contact point where the CL file gives
+one), then a batched, damped Newton iteration in (u, v) on dist^2 / 2, for all N at once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.geometry.evaluate import evaluate_mixed
+from checker.geometry.sampling import TestPoints
+from checker.part import Part
+
+_CANDIDATES = 64       # test points tried per CL position
+_ITERATIONS = 40       # Newton steps at most
+_TOL = 1e-10           # mm: stop when the step moves the point less than this
+
+
+@dataclass(frozen=True)
+class Core:
+    """The core of a cutter: corner radius `r`, corner-centre radius `R`, bottom cone angle
+    `psi` and taper angle `theta` (rad); mm. `h_o` is the corner-centre height above the tip."""
+
+    r: float
+    R: float
+    psi: float = 0.0
+    theta: float = 0.0
+
+    @property
+    def h_o(self) -> float:
+        return self.R * np.tan(self.psi) + self.r / np.cos(self.psi)
+
+    @classmethod
+    def of(cls, cutter) -> Core:
+        """The core of any object with `r`, `R`, `psi`, `theta` attributes (a `Cutter`)."""
+        return cls(float(cutter.r), float(cutter.R), float(getattr(cutter, "psi", 0.0) or 0.0),
+                   float(getattr(cutter, "theta", 0.0) or 0.0))
+
+
+@dataclass
+class CoreProjection:
+    """Nearest core points of N points: `q (N,3)` on the core, `dist (N,)` (0 inside the core),
+    `hess (N,3,3)` the Hessian of dist^2/2 with respect to the point (exact for psi = theta = 0,
+    the in-plane part exact and the circumferential part approximate otherwise)."""
+
+    q: np.ndarray
+    dist: np.ndarray
+    hess: np.ndarray
+
+
+def _frame(points: np.ndarray, tips: np.ndarray, axes: np.ndarray):
+    """Height h above the tip, radial distance rho and unit radial direction w (N,3)."""
+    d = points - tips
+    h = np.einsum("ij,ij->i", d, axes)
+    wv = d - h[:, None] * axes
+    rho = np.linalg.norm(wv, axis=1)
+    # any direction perpendicular to the axis where the point is on it
+    perp = np.cross(axes, np.where(np.abs(axes[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
+    perp /= np.linalg.norm(perp, axis=1)[:, None]
+    safe = rho > 1e-12
+    w = np.where(safe[:, None], wv / np.where(safe, rho, 1.0)[:, None], perp)
+    return h, rho, w
+
+
+def _profile_nearest(core: Core, rho: np.ndarray, h: np.ndarray):
+    """Nearest point (rq, hq) of the core's wedge in the profile plane, and which piece holds
+    it: 0 inside, 1 lower side, 2 corner C, 3 outer side."""
+    R, ho = core.R, core.h_o
+    # lower side: from C towards the axis, direction t1 = (-cos psi, -sin psi); outer normal
+    t1 = np.array([-np.cos(core.psi), -np.sin(core.psi)])
+    n1 = np.array([np.sin(core.psi), -np.cos(core.psi)])
+    # outer side: from C upwards, direction t3 = (sin theta, cos theta); outer normal
+    t3 = np.array([np.sin(core.theta), np.cos(core.theta)])
+    n3 = np.array([np.cos(core.theta), -np.sin(core.theta)])
+    dr, dh = rho - R, h - ho
+    s1 = dr * n1[0] + dh * n1[1]          # > 0 below the lower side
+    s3 = dr * n3[0] + dh * n3[1]          # > 0 outside the outer side
+    a1 = dr * t1[0] + dh * t1[1]          # along the lower side from C
+    a3 = dr * t3[0] + dh * t3[1]          # along the outer side from C
+    len1 = R / np.cos(core.psi)           # the lower side reaches the axis
+    piece = np.zeros(rho.shape, dtype=np.int8)
+    on1 = (s1 > 0) & (a1 > 0)
+    on3 = (s3 > 0) & (a3 > 0) & ~on1
+    corner = ((s1 > 0) | (s3 > 0)) & ~on1 & ~on3
+    piece[on1], piece[corner], piece[on3] = 1, 2, 3
+    a1c = np.minimum(a1, len1)
+    rq = np.where(on1, R + a1c * t1[0], np.where(on3, R + a3 * t3[0], np.where(corner, R, rho)))
+    hq = np.where(on1, ho + a1c * t1[1], np.where(on3, ho + a3 * t3[1], np.where(corner, ho, h)))
+    return rq, hq, piece, (n1, n3)
+
+
+def project_to_core(
+    core: Core, points: np.ndarray, tips: np.ndarray, axes: np.ndarray
+) -> CoreProjection:
+    """Nearest core point of each point (N,3), its distance and the Hessian of dist^2/2."""
+    h, rho, w = _frame(points, tips, axes)
+    rq, hq, piece, (n1, n3) = _profile_nearest(core, rho, h)
+    q = tips + hq[:, None] * axes + rq[:, None] * w
+    dist = np.hypot(rho - rq, h - hq)
+    aa = np.einsum("ni,nj->nij", axes, axes)
+    ww = np.einsum("ni,nj->nij", w, w)
+    circ = np.eye(3)[None] - aa - ww
+    # in-plane Hessian: n n^T on a side, the identity at the corner, zero inside
+    nl = np.where((piece == 1)[:, None], n1[0] * w + n1[1] * axes, n3[0] * w + n3[1] * axes)
+    inplane = np.where((piece == 2)[:, None, None], aa + ww, np.einsum("ni,nj->nij", nl, nl))
+    inplane = np.where((piece == 0)[:, None, None], 0.0, inplane)
+    ratio = np.where(rho > 1e-12, 1.0 - rq / np.where(rho > 1e-12, rho, 1.0), 0.0)
+    hess = inplane + np.where((piece == 0)[:, None, None], 0.0, ratio[:, None, None] * circ)
+    return CoreProjection(q, dist, hess)
+
+
+def signed_distance(
+    core: Core, points: np.ndarray, tips: np.ndarray, axes: np.ndarray
+) -> np.ndarray:
+    """Signed distance (N,) mm of each point to the cutter solid (negative inside), via the core:
+    exact outside the cutter and for penetrations shallower than r."""
+    return project_to_core(core, points, tips, axes).dist - core.r
+
+
+@dataclass
+class Contacts:
+    """Per CL position: `cc (N,3)` the contact point on the part (mm, part frame), `normal (N,3)`
+    the unit surface normal there (out of the material), `surface (N,)` its surface id (-1 on a
+    mesh part), `uv (N,2)` its parameters (nan on a mesh part), `gap (N,)` mm the signed
+    clearance between the cutter and the part (negative: the cutter penetrates that deep)."""
+
+    cc: np.ndarray
+    normal: np.ndarray
+    surface: np.ndarray
+    uv: np.ndarray
+    gap: np.ndarray
+
+
+def cl_to_cc(part: Part, test_points: TestPoints, cutter, tips: np.ndarray, axes: np.ndarray,
+             contact: np.ndarray | None = None) -> Contacts:
+    """Contact points of `cutter` (a `Cutter`: r, R, psi, theta) at CL positions `tips (N,3)`,
+    unit `axes (N,3)` on `part`, sampled as `test_points`. `contact (N,3)`: CC points the CL file
+    gives (rows of nan where it gives none) used as starting points."""
+    tips = np.ascontiguousarray(tips, dtype=np.float64).reshape(-1, 3)
+    axes = np.ascontiguousarray(axes, dtype=np.float64).reshape(-1, 3)
+    axes = axes / np.linalg.norm(axes, axis=1)[:, None]
+    core = Core.of(cutter)
+    start = _start(test_points, core, tips, axes, contact)
+    if part.mesh is not None or len(part.surfaces) == 0:
+        pts = test_points.points[start]
+        gap = signed_distance(core, pts, tips, axes)
+        sid = test_points.surface[start].astype(np.int64)
+        return Contacts(pts, test_points.normals[start], sid, test_points.uv[start], gap)
+    sid = test_points.surface[start].astype(np.int64)
+    uv = _refine(part, core, tips, axes, sid, test_points.uv[start].copy())
+    ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
+    gap = signed_distance(core, ev.points, tips, axes)
+    return Contacts(ev.points, ev.normals, sid, uv, gap)
+
+
+def _start(tp: TestPoints, core: Core, tips, axes, contact) -> np.ndarray:
+    """Index of the starting test point per CL position: the nearest to the given CC point,
+    else the one of least signed distance among the k nearest to the fillet-centre level."""
+    k = min(_CANDIDATES, len(tp.points))
+    ref = tips + core.h_o * axes
+    _, idx = tp.tree.query(ref, k=k)
+    idx = idx.reshape(len(tips), k)
+    n = len(tips)
+    sd = signed_distance(core, tp.points[idx.ravel()], np.repeat(tips, k, 0), np.repeat(axes, k, 0))
+    best = idx[np.arange(n), np.argmin(sd.reshape(n, k), axis=1)]
+    if contact is not None:
+        contact = np.asarray(contact, dtype=np.float64).reshape(-1, 3)
+        given = np.isfinite(contact).all(axis=1)
+        if given.any():
+            best[given] = tp.tree.query(contact[given])[1]
+    return best
+
+
+def _objective(part, core, tips, axes, sid, uv, order):
+    ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1], order=order)
+    proj = project_to_core(core, ev.points, tips, axes)
+    return ev, proj, 0.5 * proj.dist**2
+
+
+def _refine(part: Part, core: Core, tips, axes, sid, uv) -> np.ndarray:
+    """Damped Newton on f(u, v) = dist(S(u, v), core)^2 / 2 per row, inside each domain
+    (wrapping around where a surface is closed, e.g. at the seam of a revolved surface)."""
+    dom = np.array([[s.domain[0], s.domain[1]] for s in part.surfaces])       # (S, 2, 2)
+    lo, hi = dom[sid, :, 0], dom[sid, :, 1]
+    closed = _closed(part)[sid]
+    active = np.ones(len(tips), dtype=bool)
+    for _ in range(_ITERATIONS):
+        a = np.flatnonzero(active)
+        if a.size == 0:
+            break
+        ev, proj, f = _objective(part, core, tips[a], axes[a], sid[a], uv[a], 2)
+        d = ev.points - proj.q
+        J = np.stack([ev.du, ev.dv], axis=2)                                   # (K,3,2)
+        g = np.einsum("kij,ki->kj", J, d)
+        H = np.einsum("kia,kij,kjb->kab", J, proj.hess, J)
+        H[:, 0, 0] += np.einsum("ki,ki->k", d, ev.duu)
+        H[:, 0, 1] += np.einsum("ki,ki->k", d, ev.duv)
+        H[:, 1, 1] += np.einsum("ki,ki->k", d, ev.dvv)
+        H[:, 1, 0] = H[:, 0, 1]
+        step = _newton_or_gradient(H, g, J)
+        step = _on_bounds(step, H, g, J, uv[a], lo[a], hi[a], closed[a])
+        small = np.linalg.norm(np.einsum("kij,kj->ki", J, step), axis=1) < _TOL
+        # halve the step until f decreases; rows that never decrease have converged
+        t = np.ones(a.size)
+        pending = ~small
+        improved = np.zeros(a.size, dtype=bool)
+        for _ in range(30):
+            p = np.flatnonzero(pending)
+            if p.size == 0:
+                break
+            ap = a[p]
+            trial = _inside(uv[ap] + t[p, None] * step[p], lo[ap], hi[ap], closed[ap])
+            _, _, f_new = _objective(part, core, tips[ap], axes[ap], sid[ap], trial, 1)
+            ok = f_new <= f[p]
+            uv[ap[ok]] = trial[ok]
+            improved[p[ok]] = f_new[ok] < f[p[ok]]
+            pending[p[ok]] = False
+            t[p[~ok]] *= 0.5
+        active[a] = improved
+    return uv
+
+
+def _on_bounds(step, H, g, J, uv, lo, hi, closed) -> np.ndarray:
+    """Where a row sits on a domain bound and the step would leave it, hold that parameter and
+    take the 1-D Newton (or gradient) step in the other (an active-set step)."""
+    out = ((uv <= lo) & (step < 0) | (uv >= hi) & (step > 0)) & ~closed
+    G = np.einsum("kia,kia->ka", J, J)
+    step = step.copy()
+    for k in (0, 1):
+        one = out[:, 1 - k] & ~out[:, k]
+        curv = np.where(H[:, k, k] > 1e-12 * G[:, k], H[:, k, k], G[:, k])
+        step[one, k] = -g[one, k] / curv[one]
+        step[one, 1 - k] = 0.0
+    step[out.all(axis=1)] = 0.0
+    return step
+
+
+def _closed(part: Part) -> np.ndarray:
+    """(S, 2) bool: whether each surface closes on itself in u and in v (its two opposite
+    boundary curves coincide), so that a parameter step may wrap around."""
+    out = np.zeros((len(part.surfaces), 2), dtype=bool)
+    t = np.linspace(0.0, 1.0, 7)
+    for s in part.surfaces:
+        (u0, u1), (v0, v1) = s.domain
+        vv, uu = v0 + (v1 - v0) * t, u0 + (u1 - u0) * t
+        pu = evaluate_mixed(part, np.full(14, s.id), np.r_[np.full(7, u0), np.full(7, u1)],
+                            np.r_[vv, vv]).points
+        pv = evaluate_mixed(part, np.full(14, s.id), np.r_[uu, uu],
+                            np.r_[np.full(7, v0), np.full(7, v1)]).points
+        size = np.ptp(s.ctrlpts.reshape(-1, 3), axis=0).max()
+        out[s.id] = [np.abs(pu[:7] - pu[7:]).max() < 1e-9 * size,
+                     np.abs(pv[:7] - pv[7:]).max() < 1e-9 * size]
+    return out
+
+
+def _inside(uv: np.ndarray, lo: np.ndarray, hi: np.ndarray, closed: np.ndarray) -> np.ndarray:
+    """Parameters brought into the domain: wrapped in closed directions, else clamped."""
+    wrapped = lo + np.mod(uv - lo, hi - lo)
+    return np.where(closed, wrapped, np.clip(uv, lo, hi))
+
+
+def _newton_or_gradient(H: np.ndarray, g: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """Newton step -H^-1 g where H is positive definite, else a Gauss-Newton step on the
+    first fundamental form (a descent direction)."""
+    det = H[:, 0, 0] * H[:, 1, 1] - H[:, 0, 1] ** 2
+    G = np.einsum("kia,kib->kab", J, J)
+    scale = np.trace(G, axis1=1, axis2=2)
+    pd = (H[:, 0, 0] > 1e-12 * scale) & (det > 1e-12 * scale**2)
+    M = np.where(pd[:, None, None], H, G + 1e-12 * scale[:, None, None] * np.eye(2))
+    return -np.linalg.solve(M, g[..., None])[..., 0]

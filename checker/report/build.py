@@ -1,0 +1,159 @@
+"""Build the nightly report from the results store: the HTML page, and a JSON and a CSV summary
+beside it (same stem) for other systems. Pictures of many jobs are drawn in a few processes."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+from checker.config import Config, default_config
+from checker.errors import PathcheckError
+from checker.report.page import render_page
+from checker.report.pictures import JobPainter, trend_picture
+from checker.report.standard import per_region, standard_cutters
+from checker.report.trends import DAY_S, compare, nights
+from checker.store import JobRow, ResultsStore
+
+PARALLEL_FROM = 8  # jobs; fewer are drawn in this process (starting workers costs more)
+CSV_COLUMNS = (
+    "id", "recorded_at", "job_path", "status", "error", "points", "ok", "gouge", "interference",
+    "holder", "inaccessible", "worst_margin", "worst_depth", "largest_safe_cutter",
+    "largest_safe_standard", "regions", "previous_gouges", "elapsed_s", "cutter", "part",
+    "part_hash", "machine", "axis_class",
+)
+
+
+@dataclass(frozen=True)
+class ReportFiles:
+    html: Path
+    json: Path
+    csv: Path
+    jobs: int
+    pictures: int
+
+
+# per process: the open store, the painter and the standard diameters (see _painter_setup)
+_STATE: tuple[ResultsStore, JobPainter, tuple[float, ...]] | None = None
+
+
+def _painter_setup(store_path: str, diameters: tuple[float, ...], dpi: int) -> None:
+    global _STATE
+    _STATE = (ResultsStore(store_path), JobPainter(dpi), diameters)
+
+
+def _draw(task: tuple) -> tuple[int, list[str], dict, list]:
+    """Pictures, their facts and the per-region standard cutters of one job (runs in a worker
+    or in this process)."""
+    job_id, kind, cutter, cutter_size = task
+    store, painter, diameters = _STATE
+    arrays = store.arrays(job_id)
+    standard = standard_cutters(kind, cutter, cutter_size, diameters)
+    regions = per_region(standard, arrays["allowable"][arrays["kind"]],
+                         arrays["surface"][arrays["kind"]])
+    return job_id, *painter.render(arrays, standard, cutter_size), regions
+
+
+def _draw_all(store: ResultsStore, rows: list[JobRow], cfg: Config) -> dict[int, tuple]:
+    tasks = [(r.id, r.cutter_kind, r.cutter, r.cutter_size) for r in rows if r.status != "failed"]
+    setup = (str(store.path), cfg.report.standard_diameters, cfg.report.picture_dpi)
+    workers = min(cfg.report.render_workers, os.cpu_count() or 1, len(tasks))
+    if len(tasks) < PARALLEL_FROM or workers < 2:
+        _painter_setup(*setup)
+        try:
+            return {t[0]: _draw(t)[1:] for t in tasks}
+        finally:
+            _STATE[0].close()
+    with ProcessPoolExecutor(workers, initializer=_painter_setup, initargs=setup) as pool:
+        chunk = max(1, len(tasks) // (4 * workers))
+        return {job_id: rest for job_id, *rest in pool.map(_draw, tasks, chunksize=chunk)}
+
+
+def job_summary(row: JobRow, previous: JobRow | None) -> dict:
+    """The row of one job in the table, JSON and CSV (mm, s, UTC epoch s)."""
+    return {
+        "id": row.id, "recorded_at": row.recorded_at, "job_path": row.job_path,
+        "status": row.status, "error": row.error, "points": row.points, "ok": row.n_ok,
+        "gouge": row.n_gouge, "interference": row.n_interference, "holder": row.n_holder,
+        "inaccessible": row.n_inaccessible, "worst_margin": row.worst_margin,
+        "worst_depth": row.worst_depth, "largest_safe_cutter": row.largest_safe_cutter,
+        "largest_safe_standard": row.largest_safe_standard, "regions": [],
+        "previous_gouges": None if previous is None else previous.n_gouge,
+        "elapsed_s": row.elapsed_s, "cutter": row.cutter, "part": row.part,
+        "part_hash": row.part_hash, "machine": row.machine, "axis_class": row.axis_class,
+    }
+
+
+def parse_since(text: str) -> float:
+    """'24h', '90m', '7d', '3600s' or a bare number of hours -> seconds."""
+    units = {"s": 1.0, "m": 60.0, "h": 3600.0, "d": DAY_S}
+    t = text.strip().lower()
+    scale = units.get(t[-1:])
+    try:
+        value = float(t[:-1] if scale else t) * (scale or 3600.0)
+    except ValueError:
+        value = -1.0
+    if not value > 0:
+        raise PathcheckError(
+            f"--since: expected a positive duration like 24h, 90m or 7d, found '{text}'",
+            code="usage",
+        )
+    return value
+
+
+def build_report(
+    store: ResultsStore, out: str | Path, *, since_s: float = DAY_S, now: float | None = None,
+    config: Config | None = None,
+) -> ReportFiles:
+    """Write the page `out` and `out` with .json and .csv suffixes, over the jobs recorded in
+    the last `since_s` seconds before `now` (UTC epoch s, default: the present)."""
+    cfg = config or default_config()
+    until = time.time() if now is None else now
+    since = until - since_s
+    out = Path(out)
+    history = store.jobs(since=until - cfg.report.trend_nights * DAY_S, until=until)
+    rows = store.jobs(since=since, until=until)
+    jobs = [job_summary(r, store.previous(r.job_path, r.recorded_at)) for r in rows]
+    drawn = _draw_all(store, rows, cfg)
+    for j in jobs:
+        j["pictures"], j["facts"], j["regions"] = drawn.get(j["id"], ([], None, []))
+    per_night = nights(history, until, cfg.report.trend_nights)
+    trend_png = trend_picture(per_night, cfg.report.picture_dpi) if history else None
+    html = render_page(jobs, since, until, trend_png, compare(per_night))
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(html, encoding="utf-8")
+        _write_json(out.with_suffix(".json"), jobs, since, until, per_night)
+        _write_csv(out.with_suffix(".csv"), jobs)
+    except OSError as err:
+        raise PathcheckError(f"cannot write the report: {err.strerror}", path=out,
+                             code="report") from err
+    pictures = sum(len(j["pictures"]) for j in jobs) + (trend_png is not None)
+    return ReportFiles(out, out.with_suffix(".json"), out.with_suffix(".csv"), len(jobs), pictures)
+
+
+def _plain(job: dict) -> dict:
+    return {k: v for k, v in job.items() if k not in ("pictures", "facts")}
+
+
+def _write_json(path: Path, jobs: list[dict], since: float, until: float, per_night: list) -> None:
+    doc = {
+        "tool": "pathcheck", "kind": "report", "since": since, "until": until,
+        "totals": {s: sum(j["status"] == s for j in jobs) for s in ("ok", "findings", "failed")},
+        "jobs": [_plain(j) for j in jobs], "nights": per_night,
+    }
+    path.write_text(json.dumps(doc, indent=1), encoding="utf-8")
+
+
+def _write_csv(path: Path, jobs: list[dict]) -> None:
+    with path.open("w", newline="", encoding="utf-8") as fh:
+        writer = csv.DictWriter(fh, fieldnames=CSV_COLUMNS)
+        writer.writeheader()
+        for j in jobs:
+            row = _plain(j)
+            row["regions"] = " ".join(f"S{s}:{n}" for s, n in j["regions"])
+            writer.writerow(row)

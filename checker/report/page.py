@@ -1,0 +1,148 @@
+"""The report's HTML page: one self-contained file (inline CSS, pictures as data: URIs, no script,
+no network), built from the job summaries, the pictures and the trends."""
+
+from __future__ import annotations
+
+import time
+from html import escape
+
+CSS = """
+body{font:14px/1.4 system-ui,sans-serif;margin:1.5em;color:#222;background:#fff}
+h1{margin:0 0 .2em}h2{margin-top:1.5em;border-bottom:1px solid #ccc}
+table{border-collapse:collapse;margin:.5em 0}th,td{border:1px solid #ccc;padding:2px 7px}
+th{background:#f0f0f0;text-align:left}td.n{text-align:right;font-variant-numeric:tabular-nums}
+tr.failed td{background:#fde2e2}tr.findings td.status{background:#ffe9c7;font-weight:bold}
+tr.ok td.status{background:#dff3df}.empty{font-size:1.3em;padding:1em;background:#f6f6f6}
+.job{margin:1em 0 2em}.pics{display:flex;flex-wrap:wrap;gap:6px}
+figure{margin:0;max-width:330px}figcaption{font-size:12px;color:#555}.meta{color:#555;font-size:12px}
+"""
+
+
+def _num(value: float | int | None, fmt: str = "{:.3f}") -> str:
+    return "&ndash;" if value is None else escape(fmt.format(value))
+
+
+def _utc(t: float) -> str:
+    return time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime(t))
+
+
+def _img(b64: str, alt: str) -> str:
+    return f'<img class="pic" alt="{escape(alt)}" src="data:image/png;base64,{b64}">'
+
+
+def _job_table(jobs: list[dict]) -> str:
+    head = (
+        "<tr><th>#</th><th>job</th><th>status</th><th>points</th><th>gouges</th>"
+        "<th>interferences</th><th>holder hits</th><th>worst depth, mm</th>"
+        "<th>worst margin, mm</th><th>largest safe standard cutter per region</th>"
+        "<th>vs previous run</th><th>time, s</th></tr>"
+    )
+    rows = []
+    for j in jobs:
+        if j["status"] == "failed":
+            detail = f'<td colspan="8">failed: {escape(j["error"] or "")}</td>'
+        else:
+            std = j["largest_safe_standard"]
+            regions = ", ".join(f"S{s}: {escape(n)}" for s, n in j["regions"]) or (
+                escape(std) if std else "&ndash;"
+            )
+            detail = (
+                f'<td class="n">{j["points"]}</td><td class="n">{j["gouge"]}</td>'
+                f'<td class="n">{j["interference"]}</td><td class="n">{j["holder"]}</td>'
+                f'<td class="n">{_num(j["worst_depth"])}</td>'
+                f'<td class="n">{_num(j["worst_margin"])}</td><td>{regions}</td>'
+                f'<td class="n">{_delta(j)}</td>'
+            )
+        rows.append(
+            f'<tr class="job {j["status"]}" id="row-{j["id"]}"><td class="n">{j["id"]}</td>'
+            f'<td><a href="#job-{j["id"]}">{escape(j["job_path"])}</a></td>'
+            f'<td class="status">{j["status"]}</td>{detail}'
+            f'<td class="n">{_num(j["elapsed_s"], "{:.2f}")}</td></tr>'
+        )
+    return f'<table class="jobs">{head}{"".join(rows)}</table>'
+
+
+def _delta(job: dict) -> str:
+    prev = job["previous_gouges"]
+    if prev is None:
+        return "first run"
+    d = job["gouge"] - prev
+    return "same gouges" if d == 0 else f"{d:+d} gouges"
+
+
+def _trend_table(rows: list[tuple]) -> str:
+    head = (
+        "<tr><th></th><th>tonight</th><th>previous night</th>"
+        "<th>mean of earlier nights</th></tr>"
+    )
+    body = "".join(
+        f'<tr><th>{escape(q)}</th><td class="n">{_num(a, "{:g}")}</td>'
+        f'<td class="n">{_num(b, "{:g}")}</td><td class="n">{_num(c, "{:.2f}")}</td></tr>'
+        for q, a, b, c in rows
+    )
+    return f'<table class="trend">{head}{body}</table>'
+
+
+def _captions(job: dict) -> tuple[str, ...]:
+    f = job["facts"]
+    view = f"{f['view']} view, {f['extent'][0]:.0f} x {f['extent'][1]:.0f} mm"
+    least = "unbounded" if f["min_allowable"] is None else f"{f['min_allowable']:.3g} mm"
+    return (
+        f"Allowable cutter ({view}): colour = allowable size at each CC point, log scale; "
+        f"smallest {least}",
+        f"Standard cutter ({view}): the largest standard cutter that fits at each CC point",
+        f"Findings on the part ({view}): {f['findings']} points with gouge, interference or "
+        "holder hit, highlighted",
+        "B chosen against best B along the path" if f["has_b"]
+        else "Allowable size along the path (log scale, mm) against the real cutter (dashed)",
+    )
+
+
+def _job_section(job: dict) -> str:
+    captions = _captions(job)
+    figs = "".join(
+        f"<figure>{_img(b64, cap)}<figcaption>{escape(cap)}</figcaption></figure>"
+        for b64, cap in zip(job["pictures"], captions, strict=True)
+    )
+    meta = " &middot; ".join(
+        escape(f"{k}: {job[k]}") for k in ("cutter", "part", "machine", "axis_class") if job[k]
+    )
+    return (
+        f'<section class="job" id="job-{job["id"]}"><h3>#{job["id"]} '
+        f'{escape(job["job_path"])} &mdash; {job["status"]}</h3>'
+        f'<div class="meta">{meta}</div><div class="pics">{figs}</div></section>'
+    )
+
+
+def render_page(
+    jobs: list[dict], since: float, until: float, trend_png: str | None, trend_rows: list[tuple]
+) -> str:
+    """The whole page. `jobs` are the summaries of `build.job_summary` with `pictures` (base64
+    PNG, four per job that did not fail) and `facts` (see `JobPainter.render`); times are UTC
+    epoch seconds."""
+    counts = {s: sum(j["status"] == s for j in jobs) for s in ("ok", "findings", "failed")}
+    parts = [
+        "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">",
+        f"<title>pathcheck report {_utc(until)}</title><style>{CSS}</style></head><body>",
+        "<h1>pathcheck nightly report</h1>",
+        f'<p class="meta">jobs recorded from {_utc(since)} to {_utc(until)}</p>',
+    ]
+    if not jobs:
+        parts.append(
+            f'<p class="empty" id="no-jobs">No jobs were recorded between {_utc(since)} and '
+            f"{_utc(until)}.</p>"
+        )
+    else:
+        parts.append(
+            f'<p class="totals"><b>{len(jobs)}</b> jobs: <b>{counts["ok"]}</b> clean, '
+            f'<b>{counts["findings"]}</b> with findings, <b>{counts["failed"]}</b> failed.</p>'
+        )
+    parts.append("<h2>Trends against previous nights</h2>")
+    if trend_png:
+        parts.append(_img(trend_png, "jobs and gouge points per night"))
+    parts.append(_trend_table(trend_rows))
+    if jobs:
+        parts += ["<h2>Jobs</h2>", _job_table(jobs), "<h2>Pictures per job</h2>"]
+        parts += [_job_section(j) for j in jobs if j["status"] != "failed"]
+    parts.append("</body></html>")
+    return "\n".join(parts)

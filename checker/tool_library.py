@@ -1,0 +1,197 @@
+"""The library of standard cutters (`config/tools.toml`), validated on load.
+
+Each `[[tool]]` gives `name`, `kind` (flat | ball | bullnose | apt | tapered_ball), `d` (APT
+diameter), `r` (corner radius; a ball's defaults to d/2), optional `bottom_angle` / `taper_angle`
+(degrees), `flute_length`, `length` (cutting length H; defaults to the flute length), optional
+`shank_diameter`, `holder_diameter`, `holder_length`, `stickout`, and `units` ("mm" or "inch", the
+unit of every length of that tool). Inside everything is mm and radians.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, ValidationError, model_validator
+
+from checker.cutter import BALL_FAMILY, Cutter, diameter_from
+from checker.errors import PathcheckError
+
+DEFAULT_TOOLS = Path(__file__).resolve().parents[1] / "config" / "tools.toml"
+_INCH = 25.4
+
+
+class ToolSpec(BaseModel):
+    """One `[[tool]]` entry as written in the file (its own units, degrees)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    name: str = Field(min_length=1)
+    kind: Literal["flat", "ball", "bullnose", "apt", "tapered_ball"]
+    units: Literal["mm", "inch"] = "mm"
+    d: PositiveFloat
+    r: float | None = Field(None, ge=0)
+    bottom_angle: float = Field(0.0, ge=0, lt=90)
+    taper_angle: float = Field(0.0, ge=0, lt=90)
+    flute_length: PositiveFloat
+    length: PositiveFloat | None = None
+    shank_diameter: PositiveFloat | None = None
+    holder_diameter: PositiveFloat | None = None
+    holder_length: PositiveFloat | None = None
+    stickout: PositiveFloat | None = None
+
+    @model_validator(mode="after")
+    def _geometry(self) -> ToolSpec:
+        r = self.corner_radius
+        angled = self.bottom_angle > 0.0 or self.taper_angle > 0.0
+        if not angled and r > self.d / 2 * (1 + 1e-12):
+            raise ValueError(f"corner radius r={r:g} is larger than half the diameter d={self.d:g}")
+        if self.kind == "flat" and r != 0.0:
+            raise ValueError(f"a flat end-mill has r = 0, found r={r:g}")
+        if self.kind == "bullnose" and not 0.0 < r < self.d / 2:
+            raise ValueError(f"a bull-nose end-mill needs 0 < r < d/2, found r={r:g}")
+        if self.kind in ("flat", "ball", "bullnose") and (self.bottom_angle or self.taper_angle):
+            raise ValueError(f"a {self.kind} end-mill has no bottom or taper angle")
+        if self.kind == "tapered_ball" and self.taper_angle <= 0.0:
+            raise ValueError("a tapered ball end-mill needs taper_angle > 0")
+        if self.bottom_angle + self.taper_angle >= 90.0:
+            raise ValueError("bottom_angle + taper_angle must be below 90 degrees")
+        if self.kind in BALL_FAMILY:
+            psi, th = math.radians(self.bottom_angle), math.radians(self.taper_angle)
+            d_exp = diameter_from(0.0, r, psi, th)
+            if abs(d_exp - self.d) > 1e-6 * self.d:
+                raise ValueError(f"d={self.d:g} disagrees with r={r:g} (eq. 2.5 gives {d_exp:.6g})")
+        elif self.radial_distance < 0.0:
+            raise ValueError(f"r={r:g} leaves no room for the diameter d={self.d:g}")
+        if self.length is not None and self.length < self.flute_length:
+            raise ValueError("length must be >= flute_length")
+        return self
+
+    @property
+    def corner_radius(self) -> float:
+        if self.r is not None:
+            return self.r
+        if self.kind in BALL_FAMILY:
+            psi, th = math.radians(self.bottom_angle), math.radians(self.taper_angle)
+            return self.d / diameter_from(0.0, 1.0, psi, th)
+        return 0.0
+
+    @property
+    def radial_distance(self) -> float:
+        """R (tool's own units) from d by eq. 2.5; 0 for the ball family."""
+        if self.kind in BALL_FAMILY:
+            return 0.0
+        psi, th = math.radians(self.bottom_angle), math.radians(self.taper_angle)
+        return 0.5 * (self.d - diameter_from(0.0, self.corner_radius, psi, th))
+
+    def to_cutter(self) -> Cutter:
+        """The cutter in mm and radians."""
+        k = _INCH if self.units == "inch" else 1.0
+
+        def mm(v: float | None) -> float | None:
+            return None if v is None else v * k
+
+        return Cutter(
+            kind=self.kind,
+            d=self.d * k,
+            r=self.corner_radius * k,
+            R=max(self.radial_distance, 0.0) * k,
+            psi=math.radians(self.bottom_angle),
+            theta=math.radians(self.taper_angle),
+            H=(self.length or self.flute_length) * k,
+            flute_length=mm(self.flute_length),
+            shank_diameter=mm(self.shank_diameter),
+            holder_diameter=mm(self.holder_diameter),
+            holder_length=mm(self.holder_length),
+            stickout=mm(self.stickout),
+            name=self.name,
+        )
+
+
+class ToolLibrary:
+    """Validated standard cutters, by name and by family."""
+
+    def __init__(self, tools: list[Cutter], path: Path | None = None) -> None:
+        self.tools = list(tools)
+        self.path = path
+        self._by_name = {t.name: t for t in self.tools}
+
+    def __len__(self) -> int:
+        return len(self.tools)
+
+    def __getitem__(self, name: str) -> Cutter:
+        try:
+            return self._by_name[name]
+        except KeyError:
+            raise PathcheckError(
+                f"no tool named {name!r} in the tool library", path=self.path, code="tools"
+            ) from None
+
+    def family(self, kind_family: str, r: float | None = None) -> list[Cutter]:
+        """Cutters of kind `kind_family` (and corner radius r, mm, for the R families, or taper
+        angle equal for balls), ascending by size."""
+        out = [t for t in self.tools if t.kind == kind_family]
+        if r is not None and kind_family not in BALL_FAMILY:
+            out = [t for t in out if abs(t.r - r) <= 1e-9 * max(1.0, r)]
+        return sorted(out, key=lambda t: t.size)
+
+    def largest_not_exceeding(
+        self, kind_family: str, size: float, r: float | None = None
+    ) -> Cutter | None:
+        """The largest cutter of the family whose size (R, or r for balls; mm) is <= `size`;
+        None when every one is larger. `r` restricts bull-nose/APT cutters to that corner."""
+        idx = self.pick_many(kind_family, np.array([size], dtype=float), r)[0]
+        return None if idx < 0 else self.family(kind_family, r)[idx]
+
+    def pick_many(
+        self, kind_family: str, sizes: np.ndarray, r: float | None = None
+    ) -> np.ndarray:
+        """(N,) index into `family(kind_family, r)` of the largest cutter not exceeding each
+        allowable size (mm), -1 where none fits (NaN sizes: -1)."""
+        fam = self.family(kind_family, r)
+        s = np.array([t.size for t in fam], dtype=float)
+        sizes = np.asarray(sizes, dtype=float)
+        idx = np.searchsorted(s, sizes * (1 + 1e-12) + 1e-12, side="right") - 1
+        return np.where(np.isnan(sizes), -1, idx)
+
+
+def load_tool_library(path: str | Path | None = None) -> ToolLibrary:
+    """Read and validate a tool library (default `config/tools.toml`); a bad entry raises
+    PathcheckError naming the tool and the field."""
+    path = Path(path) if path is not None else DEFAULT_TOOLS
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise PathcheckError("tool library not found", path=path, code="tools") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raise PathcheckError(f"not valid TOML: {err}", path=path, code="tools") from None
+    extra = sorted(set(data) - {"tool"})
+    if extra:
+        raise PathcheckError(
+            f"expected only [[tool]] tables, found {', '.join(extra)}", path=path, code="tools"
+        )
+    entries = data.get("tool", [])
+    if not isinstance(entries, list) or not entries:
+        raise PathcheckError("expected at least one [[tool]] table", path=path, code="tools")
+    tools: list[Cutter] = []
+    seen: set[str] = set()
+    for i, raw in enumerate(entries, 1):
+        label = raw.get("name", f"#{i}") if isinstance(raw, dict) else f"#{i}"
+        try:
+            spec = ToolSpec.model_validate(raw)
+        except ValidationError as err:
+            first = err.errors()[0]
+            if first["loc"]:
+                field = ".".join(str(x) for x in first["loc"])
+                what = f"field {field}: {first['msg']} (found {first.get('input')!r})"
+            else:
+                what = first["msg"].removeprefix("Value error, ")
+            raise PathcheckError(f"tool {label!r}: {what}", path=path, code="tools") from None
+        if spec.name in seen:
+            raise PathcheckError(f"tool {spec.name!r} is defined twice", path=path, code="tools")
+        seen.add(spec.name)
+        tools.append(spec.to_cutter())
+    return ToolLibrary(tools, path)

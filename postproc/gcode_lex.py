@@ -1,0 +1,180 @@
+"""Lexing one G-code block: comments, block delete, words, parameters and bracketed expressions
+(rs274ngc and Fanuc macro style), per the dialect's table. Values that cannot be known when
+reading (a HAL pin, an unset parameter) are NaN, not an error: they become an error only where a
+move needs them."""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+from checker.errors import PathcheckError
+from postproc.dialects import Dialect
+
+_NUMBER = re.compile(r"[0-9]*\.?[0-9]*")
+_FUNCTIONS = {
+    "ABS": abs,
+    "SQRT": math.sqrt,
+    "SIN": lambda v: math.sin(math.radians(v)),
+    "COS": lambda v: math.cos(math.radians(v)),
+    "TAN": lambda v: math.tan(math.radians(v)),
+    "ROUND": round,
+    "FIX": math.floor,
+    "FUP": math.ceil,
+}
+
+
+@dataclass
+class Block:
+    """One block: words in order as (letter, value), parameter assignments, comments, and
+    whether it is block-deleted (``/``)."""
+
+    words: list[tuple[str, float]] = field(default_factory=list)
+    assignments: list[tuple[str, float]] = field(default_factory=list)
+    comments: list[str] = field(default_factory=list)
+    deleted: bool = False
+
+
+def split_comments(raw: str, *, path: str | None, line: int) -> tuple[str, list[str]]:
+    """Code text without comments, and the comments: ``( ... )`` anywhere, ``;`` to the end of
+    the line (LinuxCNC comment, Fanuc end of block)."""
+    comments: list[str] = []
+    code: list[str] = []
+    pos = 0
+    while pos < len(raw):
+        ch = raw[pos]
+        if ch == "(":
+            end = raw.find(")", pos)
+            if end < 0:
+                raise PathcheckError(
+                    f"comment opened with '(' at column {pos + 1} is not closed: expected ')'",
+                    path=path,
+                    line=line,
+                    code="gcode",
+                )
+            comments.append(raw[pos + 1 : end].strip())
+            pos = end + 1
+        elif ch == ";":
+            comments.append(raw[pos + 1 :].strip())
+            break
+        else:
+            code.append(ch)
+            pos += 1
+    return "".join(code), comments
+
+
+class _Cursor:
+    """Recursive-descent reader over a block with spaces removed and letters upper case."""
+
+    def __init__(self, text: str, params: dict[str, float], dialect: Dialect, path, line):
+        self.s, self.pos, self.params, self.dialect = text, 0, params, dialect
+        self.path, self.line = path, line
+
+    def fail(self, expected: str) -> PathcheckError:
+        found = self.s[self.pos : self.pos + 12] or "end of block"
+        return PathcheckError(
+            f"expected {expected}, found '{found}' in block '{self.s}'",
+            path=self.path,
+            line=self.line,
+            code="gcode",
+        )
+
+    def peek(self) -> str:
+        return self.s[self.pos] if self.pos < len(self.s) else ""
+
+    def number(self) -> float:
+        match = _NUMBER.match(self.s, self.pos)
+        text = match.group(0) if match else ""
+        if not any(c.isdigit() for c in text):
+            raise self.fail("a number")
+        self.pos += len(text)
+        return float(text)
+
+    def param_name(self) -> str:
+        self.pos += 1  # '#'
+        if self.peek() == "<":
+            if not self.dialect.named_parameters:
+                raise self.fail(f"a numbered parameter (#<name> is not {self.dialect.name})")
+            end = self.s.find(">", self.pos)
+            if end < 0:
+                raise self.fail("'>' closing a parameter name")
+            name = self.s[self.pos + 1 : end]
+            self.pos = end + 1
+            return name
+        return str(int(self.number()))
+
+    def real(self) -> float:
+        """A real value: optional sign, then number, [expression], #parameter or FUNC[...]."""
+        sign = 1.0
+        while self.peek() in "+-" and self.peek():
+            sign = -sign if self.peek() == "-" else sign
+            self.pos += 1
+        ch = self.peek()
+        if ch == "[":
+            self.pos += 1
+            value = self.expression()
+            if self.peek() != "]":
+                raise self.fail("']'")
+            self.pos += 1
+            return sign * value
+        if ch == "#":
+            return sign * self.params.get(self.param_name(), math.nan)
+        for name, fn in _FUNCTIONS.items():
+            if self.s.startswith(name + "[", self.pos):
+                self.pos += len(name)
+                arg = self.real()
+                return sign * (fn(arg) if math.isfinite(arg) else math.nan)
+        return sign * self.number()
+
+    def expression(self) -> float:
+        value = self.term()
+        while self.peek() in ("+", "-") and self.peek():
+            op = self.s[self.pos]
+            self.pos += 1
+            rhs = self.term()
+            value = value + rhs if op == "+" else value - rhs
+        return value
+
+    def term(self) -> float:
+        value = self.real()
+        while self.peek() in ("*", "/") and self.peek():
+            op = self.s[self.pos]
+            self.pos += 1
+            rhs = self.real()
+            value = value * rhs if op == "*" else (value / rhs if rhs else math.nan)
+        return value
+
+
+def lex_block(raw: str, dialect: Dialect, params: dict[str, float], *, path=None, line=0) -> Block:
+    """Words of one program line (1-based ``line``). ``params`` are the parameter values before
+    this block (rs274 rule: assignments take effect after the block)."""
+    code, comments = split_comments(raw, path=path, line=line)
+    text = "".join(code.split()).upper()
+    block = Block(comments=comments)
+    if text.startswith("/"):
+        block.deleted = True
+        text = text[1:]
+    cur = _Cursor(text, params, dialect, path, line)
+    while cur.pos < len(text):
+        ch = cur.peek()
+        if ch == "#":
+            name = cur.param_name()
+            if cur.peek() != "=":
+                raise cur.fail(f"'=' after parameter #{name}")
+            cur.pos += 1
+            block.assignments.append((name, cur.real()))
+        elif ch in dialect.block_number_letters and not ch.isalpha():
+            cur.pos += 1  # Fanuc ':' alignment sequence number
+            block.words.append(("N", cur.number()))
+        elif ch.isalpha():
+            cur.pos += 1
+            if dialect.letter_assignments and re.match(r"[0-9]+=", text[cur.pos :]):
+                index = cur.number()
+                cur.pos += 1  # '='
+                block.assignments.append((f"{ch}{int(index)}", cur.real()))
+            else:
+                block.words.append((ch, cur.real()))
+        else:
+            raise cur.fail("a word (a letter and a value)")
+    return block

@@ -1,0 +1,407 @@
+"""G-code reader: a program in a dialect -> its motion blocks in the work frame (machine axes),
+with modal state (motion, plane, distance, feed mode, units, tool, spindle, coolant) resolved.
+
+Interpreted: G0-G3 (arcs by I/J/K or R, planes G17-G19), canned cycles G73/G76/G81-G89 (each hole
+as rapid down to R, feed to Z, rapid back to R or the initial level), G20/G21 (converted to mm),
+G90/G91, G93/G94/G95, G28/G30 (the named axes go home: unknown in the work frame), G53 (machine-frame move: the named
+linear axes become unknown), G92 and G10 L20 (set the position), T/M6, S/M3/M4/M5, M7/M8/M9,
+A/B/C words. Other codes of the dialect table are accepted and counted. Unknown positions are NaN.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from checker.errors import PathcheckError
+from postproc.dialects import CANNED_CYCLES, Dialect, get_dialect
+from postproc.gcode_lex import Block, lex_block
+
+MM_PER_INCH = 25.4
+#: row kinds
+PROGRAMMED, CYCLE, HOME, MACHINE_FRAME = 0, 1, 2, 3
+_AXES = "XYZABC"
+_PLANES = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}  # (u, v, normal) axis indices
+_ARC_OFFSETS = "IJK"
+
+
+@dataclass(frozen=True)
+class GcodeMoves:
+    """Motion rows of a program in order. ``xyz (N,3)`` end point, work frame, mm (NaN unknown);
+    ``abc (N,3)`` rotary words at the end, degrees as written (NaN never set); ``motion (N,)`` 0
+    rapid, 1 linear, 2 CW arc, 3 CCW arc; ``center (N,3)`` arc centre mm (NaN otherwise) in
+    ``plane (N,)`` 17/18/19; ``feed (N,)`` F in effect (mm/min for G94, 1/min for G93, mm/rev for
+    G95) and ``feed_mode (N,)``; ``tool``, ``spindle`` (signed rpm, 0 stopped), ``coolant`` (0, 7,
+    8; -1 unknown) in effect; ``line (N,)`` program line (1-based); ``kind (N,)`` PROGRAMMED,
+    CYCLE, HOME or MACHINE_FRAME."""
+
+    path: str
+    dialect: str
+    units: str
+    xyz: np.ndarray
+    abc: np.ndarray
+    motion: np.ndarray
+    center: np.ndarray
+    plane: np.ndarray
+    feed: np.ndarray
+    feed_mode: np.ndarray
+    tool: np.ndarray
+    spindle: np.ndarray
+    coolant: np.ndarray
+    line: np.ndarray
+    kind: np.ndarray
+    comments: tuple[tuple[int, str], ...] = ()
+    other: dict[str, int] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.line)
+
+
+@dataclass
+class _State:
+    scale: float
+    units: str
+    pos: np.ndarray  # XYZABC, mm / degrees
+    motion: int | None = None
+    cycle: str | None = None
+    plane: int = 17
+    absolute: bool = True
+    arc_absolute: bool = False
+    feed_mode: int = 94
+    feed: float = math.nan
+    tool: int = 0
+    next_tool: int = 0
+    speed: float = math.nan
+    spindle_dir: int = 0
+    coolant: int = -1
+    retract_initial: bool = True  # G98
+    cycle_r: float = math.nan
+    cycle_z: float = math.nan
+    cycle_initial: float = math.nan
+
+
+class _Program:
+    """Accumulates rows while the state machine walks the blocks."""
+
+    def __init__(self, dialect: Dialect, path: str, units: str):
+        self.dialect, self.path = dialect, path
+        scale = MM_PER_INCH if units == "inch" else 1.0
+        self.st = _State(
+            scale=scale, units=units, pos=np.full(6, np.nan), motion=dialect.initial_motion
+        )
+        self.rows: dict[str, list] = {
+            k: []
+            for k in (
+                "xyz",
+                "abc",
+                "motion",
+                "center",
+                "plane",
+                "feed",
+                "feed_mode",
+                "tool",
+                "spindle",
+                "coolant",
+                "line",
+                "kind",
+            )
+        }
+        self.comments: list[tuple[int, str]] = []
+        self.other: Counter[str] = Counter()
+        self.params: dict[str, float] = {}
+        self.units_seen: str | None = None
+
+    def error(self, message: str, line: int) -> PathcheckError:
+        return PathcheckError(message, path=self.path, line=line, code="gcode")
+
+    def emit(self, pos: np.ndarray, motion: int, line: int, kind: int, center=None) -> None:
+        st = self.st
+        r = self.rows
+        r["xyz"].append(pos[:3].copy())
+        r["abc"].append(pos[3:].copy())
+        r["motion"].append(motion)
+        r["center"].append(np.full(3, np.nan) if center is None else center)
+        r["plane"].append(st.plane)
+        r["feed"].append(st.feed)
+        r["feed_mode"].append(st.feed_mode)
+        r["tool"].append(st.tool)
+        spindle = 0.0 if st.spindle_dir == 0 else st.spindle_dir * st.speed
+        r["spindle"].append(spindle)
+        r["coolant"].append(st.coolant)
+        r["line"].append(line)
+        r["kind"].append(kind)
+        st.pos = pos.copy()
+
+    # -- one block -------------------------------------------------------------------------
+    def block(self, block: Block, line: int) -> None:
+        self.comments += [(line, c) for c in block.comments if c]
+        g_codes: dict[str, str] = {}
+        m_codes: list[int] = []
+        words: dict[str, float] = {}
+        tools: list[float] = []
+        for letter, value in block.words:
+            if letter == "G":
+                code = f"{value:g}"
+                group = self.dialect.group_of(code, path=self.path, line=line)
+                if group in g_codes and not self.dialect.last_g_wins:
+                    raise self.error(
+                        f"G{g_codes[group]} and G{code} are both in modal group '{group}': "
+                        "expected one per block",
+                        line,
+                    )
+                g_codes[group] = code
+            elif letter == "M":
+                m_codes.append(int(value))
+            elif letter == "T":
+                tools.append(value)
+            elif letter in ("N", "O"):
+                continue
+            elif letter in words:
+                raise self.error(
+                    f"word {letter} appears twice in the block: expected it once", line
+                )
+            else:
+                words[letter] = value
+        for name, _ in block.assignments:
+            self.other[f"{name.rstrip('0123456789') if name[0].isalpha() else '#'}="] += 1
+        self._modes(g_codes, words, m_codes, tools, line)
+        self._motion(g_codes, words, line)
+        for name, value in block.assignments:
+            self.params[name] = value
+
+    def _modes(
+        self,
+        g: dict[str, str],
+        words: dict[str, float],
+        m_codes: list[int],
+        tools: list[float],
+        line: int,
+    ) -> None:
+        st = self.st
+        if "units" in g:
+            st.units = "inch" if g["units"] == "20" else "mm"
+            st.scale = MM_PER_INCH if st.units == "inch" else 1.0
+            self.units_seen = self.units_seen or st.units
+        if "feed_mode" in g:
+            st.feed_mode = int(g["feed_mode"])
+        if "F" in words:
+            f = words["F"]
+            st.feed = f if st.feed_mode == 93 else f * st.scale
+        if "S" in words:
+            st.speed = words["S"]
+        if tools:
+            st.next_tool = int(tools[0])
+        for m in m_codes:
+            if m == 6:
+                st.tool = st.next_tool
+                if len(tools) > 1:
+                    st.next_tool = int(tools[1])
+            elif m in (3, 4, 5):
+                st.spindle_dir = {3: 1, 4: -1, 5: 0}[m]
+            elif m in (7, 8, 9):
+                st.coolant = 0 if m == 9 else m
+            elif m not in (0, 1, 2, 30):
+                self.other[f"M{m}"] += 1
+        if "plane" in g:
+            st.plane = int(g["plane"])
+        if "distance" in g:
+            st.absolute = g["distance"] == "90"
+        if "arc_distance" in g:
+            st.arc_absolute = g["arc_distance"] == "90.1"
+        if "return_mode" in g:
+            st.retract_initial = g["return_mode"] == "98"
+        for group in (
+            "cutter_comp",
+            "length_offset",
+            "coord_system",
+            "path_control",
+            "polar",
+            "rotation",
+        ):
+            if group in g:
+                self.other[f"G{g[group]}"] += 1
+
+    def _target(self, words: dict[str, float]) -> tuple[np.ndarray, bool]:
+        """End position of the block's axis words (absolute or incremental) and whether any."""
+        st = self.st
+        pos = st.pos.copy()
+        given = False
+        for k, letter in enumerate(_AXES):
+            if letter in words:
+                given = True
+                value = words[letter] * (st.scale if k < 3 else 1.0)
+                pos[k] = value if st.absolute else pos[k] + value
+        return pos, given
+
+    def _motion(self, g: dict[str, str], words: dict[str, float], line: int) -> None:
+        st = self.st
+        non_modal = g.get("non_modal")
+        if non_modal == "4":  # dwell: X/P are the time
+            return
+        for code in (g.get("cycle"), g.get("motion")):  # Fanuc: cycles in their own group
+            if code in CANNED_CYCLES:
+                if st.cycle is None:
+                    st.cycle_initial = st.pos[2]
+                st.cycle = code
+            elif code == "80":
+                st.cycle = None
+            elif code is not None:
+                st.cycle, st.motion = None, int(code)
+        target, given = self._target(words)
+        if non_modal in ("10", "92"):
+            self.other[f"G{non_modal}"] += 1
+            if non_modal == "92" or words.get("L") == 20:
+                st.pos = np.where(
+                    np.isin(np.arange(6), [k for k, a in enumerate(_AXES) if a in words]),
+                    target,
+                    st.pos,
+                )
+            return
+        if non_modal in ("28", "30"):
+            homed = [k for k, a in enumerate("XYZ") if a in words]
+            target[homed] = np.nan  # at the reference point: unknown in the work frame
+            self.emit(target, 0, line, HOME)
+            return
+        defines = g.get("motion") in CANNED_CYCLES or g.get("cycle") in CANNED_CYCLES
+        if st.cycle is not None and (given or defines):
+            self._cycle(target, words, line)
+            return
+        if st.motion in (2, 3) and any(k in words for k in _ARC_OFFSETS):
+            given = True  # I/J/K without an end point: a full circle (Fanuc)
+        if not given:
+            return
+        if st.motion is None:
+            raise self.error(
+                "axis words without a motion mode: expected G0, G1, G2 or G3 first", line
+            )
+        if non_modal == "53":  # machine coordinates: unknown in the work frame
+            target[[k for k, a in enumerate("XYZ") if a in words]] = np.nan
+            self.emit(target, st.motion, line, MACHINE_FRAME)
+            return
+        center = self._arc_center(target, words, line) if st.motion in (2, 3) else None
+        self.emit(target, st.motion, line, PROGRAMMED, center)
+
+    def _arc_center(self, end: np.ndarray, words: dict[str, float], line: int) -> np.ndarray:
+        st = self.st
+        u, v, w = _PLANES[st.plane]
+        start = st.pos[:3]
+        center = start.copy()
+        if "R" in words:
+            radius = words["R"] * st.scale
+            d = end[[u, v]] - start[[u, v]]
+            chord = float(np.hypot(*d))
+            if chord == 0.0 or chord > 2 * abs(radius) + 1e-9:
+                raise self.error(
+                    f"arc radius R{words['R']:g} cannot join the start and end points "
+                    f"(chord {chord:.4f} mm)",
+                    line,
+                )
+            h = math.sqrt(max(radius**2 - chord**2 / 4, 0.0))
+            left = np.array([-d[1], d[0]]) / chord
+            side = (1.0 if st.motion == 3 else -1.0) * (1.0 if radius > 0 else -1.0)
+            mid = 0.5 * (start[[u, v]] + end[[u, v]])
+            center[[u, v]] = mid + side * h * left
+            return center
+        offsets = [
+            words.get(_ARC_OFFSETS[k], math.nan if st.arc_absolute else 0.0) * st.scale
+            for k in (u, v)
+        ]
+        if st.arc_absolute:
+            center[[u, v]] = offsets
+        else:
+            center[[u, v]] = start[[u, v]] + np.array(offsets)
+        if not any(_ARC_OFFSETS[k] in words for k in (u, v)):
+            if np.allclose(end[:3], start, atol=1e-12, equal_nan=True):
+                return np.full(3, np.nan)  # no displacement, no centre: the block does not move
+            raise self.error(
+                f"arc without centre: expected {_ARC_OFFSETS[u]}/{_ARC_OFFSETS[v]} or R "
+                f"in plane G{st.plane}",
+                line,
+            )
+        center[w] = start[w]
+        return center
+
+    def _cycle(self, target: np.ndarray, words: dict[str, float], line: int) -> None:
+        """One hole: rapid to X/Y, rapid to R, feed to Z, rapid back (G98 initial, G99 R)."""
+        st = self.st
+        if "R" in words:
+            r = words["R"] * st.scale
+            st.cycle_r = r if st.absolute else st.cycle_initial + r
+        if "Z" in words:
+            z = words["Z"] * st.scale
+            st.cycle_z = z if st.absolute else st.cycle_r + z
+        hole = target.copy()
+        hole[2] = st.pos[2]
+        self.emit(hole, 0, line, CYCLE)
+        for z, motion in ((st.cycle_r, 0), (st.cycle_z, 1)):
+            hole[2] = z
+            self.emit(hole, motion, line, CYCLE)
+        hole[2] = st.cycle_initial if st.retract_initial else st.cycle_r
+        self.emit(hole, 0, line, CYCLE)
+
+    def result(self) -> GcodeMoves:
+        r = self.rows
+        n = len(r["line"])
+
+        def arr(key, dtype, shape=()):
+            return np.asarray(r[key], dtype=dtype).reshape((n, *shape))
+
+        return GcodeMoves(
+            path=self.path,
+            dialect=self.dialect.name,
+            units=self.units_seen or self.st.units,
+            xyz=arr("xyz", float, (3,)),
+            abc=arr("abc", float, (3,)),
+            motion=arr("motion", int),
+            center=arr("center", float, (3,)),
+            plane=arr("plane", int),
+            feed=arr("feed", float),
+            feed_mode=arr("feed_mode", int),
+            tool=arr("tool", int),
+            spindle=arr("spindle", float),
+            coolant=arr("coolant", int),
+            line=arr("line", int),
+            kind=arr("kind", int),
+            comments=tuple(self.comments),
+            other=dict(self.other),
+        )
+
+
+def read_gcode_text(
+    text: str, dialect: str | Dialect, *, path: str = "<text>", units: str = "mm"
+) -> GcodeMoves:
+    """Motion rows of G-code ``text``; ``units`` is the control's default before G20/G21."""
+    dia = get_dialect(dialect) if isinstance(dialect, str) else dialect
+    prog = _Program(dia, path, units)
+    for number, raw in enumerate(text.splitlines(), start=1):
+        stripped = raw.strip()
+        if not stripped or stripped == "%":
+            continue
+        if any(ord(c) < 9 or (13 < ord(c) < 32) or ord(c) > 126 for c in stripped):
+            raise prog.error(
+                "expected printable ASCII G-code, found a binary or non-ASCII character", number
+            )
+        if not dia.program_number_letter and stripped[:1] in "oO":
+            raise prog.error(
+                "o-word subroutines and control flow are not supported: expected plain G-code",
+                number,
+            )
+        block = lex_block(stripped, dia, prog.params, path=path, line=number)
+        prog.block(block, number)
+    return prog.result()
+
+
+def read_gcode(path: str | Path, dialect: str | Dialect, *, units: str = "mm") -> GcodeMoves:
+    """Motion rows of the G-code file at ``path`` (see `read_gcode_text`)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="latin-1")
+    except OSError as err:
+        raise PathcheckError(
+            f"cannot read G-code: {err.strerror}", path=path, code="gcode"
+        ) from err
+    return read_gcode_text(text, dialect, path=str(path), units=units)

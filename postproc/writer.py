@@ -1,0 +1,181 @@
+"""G-code writer: machine rows (already in machine coordinates and B words) to program text in a
+dialect, with modal words suppressed, block numbers, header and footer; and the atomic file
+write (temporary file + os.replace) so a failed run never leaves half a program."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from checker.errors import PathcheckError
+from postproc.dialects import Dialect
+from postproc.machine import Machine
+
+MM_PER_INCH = 25.4
+
+
+@dataclass
+class Rows:
+    """Machine rows in program order. ``xyz (M,3)`` work frame mm (nan: not commanded), ``word
+    (M,)`` B words (deg), ``turn (M,)`` continuous table position (deg), ``motion (M,)`` 0 rapid
+    / 1 feed, ``fword (M,)`` F word in program units (nan: none), ``g43``/``force`` flags,
+    ``src (M,)`` source move, ``end (M,)`` row ends its source move. ``line (M,)`` is filled by
+    the writer: the program line (1-based) of the row's block, -1 when nothing changed."""
+
+    xyz: np.ndarray
+    word: np.ndarray
+    turn: np.ndarray
+    motion: np.ndarray
+    fword: np.ndarray
+    g43: np.ndarray
+    force: np.ndarray
+    src: np.ndarray
+    end: np.ndarray
+    tool: np.ndarray
+    line: np.ndarray | None = None
+
+
+def format_number(values: np.ndarray, decimals: int) -> list[str]:
+    """Numbers with a decimal point and at least one decimal (``10.0``, ``-0.5``): accepted by
+    Fanuc, LinuxCNC and the PyPI parsers. ``-0.0`` keeps its sign (signed rotary words)."""
+    out = []
+    for text in np.char.mod(f"%.{decimals}f", np.asarray(values, dtype=float)):
+        text = text.rstrip("0")
+        out.append(text + "0" if text.endswith(".") else text)
+    return out
+
+
+def _changed(texts: list[str], valid: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """Rows whose word differs from the last one written (modal suppression), or forced."""
+    arr = np.asarray(texts, dtype=object)
+    idx = np.where(valid, np.arange(len(arr)), -1)
+    last = np.maximum.accumulate(idx)
+    prev = np.concatenate([[-1], last[:-1]])
+    prev_text = np.where(prev >= 0, arr[np.maximum(prev, 0)], None)
+    return valid & ((arr != prev_text) | force)
+
+
+def comment(text: str) -> str:
+    """A comment block; parentheses inside the text become brackets."""
+    return "(" + text.replace("(", "[").replace(")", "]").strip() + ")"
+
+
+def format_program(
+    rows: Rows,
+    machine: Machine,
+    dialect: Dialect,
+    pre: dict[int, list[str]],
+    program_name: str,
+) -> str:
+    """Program text for ``rows``; ``pre[i]`` are blocks written before row ``i`` (comments start
+    with '('). Fills ``rows.line``."""
+    fmt = machine.format
+    scale = 1.0 / MM_PER_INCH if machine.units == "inch" else 1.0
+    code = dialect.format_code
+    m = len(rows.word)
+    force = rows.force.astype(bool)
+    words = {}
+    for j, letter in enumerate("XYZ"):
+        vals = np.round(rows.xyz[:, j] * scale, fmt.linear_decimals) + 0.0  # no "-0.0"
+        valid = np.isfinite(vals)
+        texts = format_number(np.where(valid, vals, 0.0), fmt.linear_decimals)
+        words[letter] = (texts, _changed(texts, valid, force))
+    btexts = format_number(rows.word, fmt.rotary_decimals)
+    # signed words: the sign is a direction, the position is the magnitude
+    positions = [t.lstrip("-") for t in btexts] if machine.rotary.wrap == "signed" else btexts
+    words["B"] = (btexts, _changed(positions, np.isfinite(rows.word), force))
+    inverse = machine.feeds.rotary_mode == "g93"
+    feed_ok = np.isfinite(rows.fword)
+    if inverse:
+        ftexts = [
+            _significant(v, fmt.inverse_time_digits) if ok else ""
+            for v, ok in zip(rows.fword, feed_ok, strict=True)
+        ]
+    else:
+        ftexts = format_number(np.where(feed_ok, rows.fword, 0.0), fmt.feed_decimals)
+    motion_texts = [code("G", int(v)) for v in rows.motion]
+    any_axis = np.zeros(m, bool)
+    for _, changed in words.values():
+        any_axis |= changed
+    gmotion = _changed(motion_texts, any_axis, force)
+    fchanged = feed_ok & any_axis & (rows.motion == 1)
+    if not inverse:
+        fchanged &= _changed(ftexts, feed_ok & any_axis & (rows.motion == 1), np.zeros(m, bool))
+
+    lines: list[str] = ["%"]
+    if dialect.program_number_letter:
+        lines.append(
+            f"{dialect.program_number_letter}{fmt.program_number:04d} {comment(program_name)}"
+        )
+    else:
+        lines.append(comment(program_name))
+    blocks: list[str] = list(machine.program.header)
+    blocks.append(code("G", 20 if machine.units == "inch" else 21))
+    blocks.append(code("G", 93 if inverse else 94))
+    number = fmt.block_start
+
+    def emit(text: str) -> None:
+        nonlocal number
+        if text.startswith("(") or not fmt.block_numbers:
+            lines.append(text)
+        else:
+            lines.append(f"N{number} {text}")
+            number += fmt.block_increment
+
+    for text in blocks:
+        emit(text)
+    row_line = np.full(m, -1, dtype=int)
+    for i in range(m):
+        for text in pre.get(i, ()):
+            emit(text)
+        if not any_axis[i]:
+            continue
+        parts = [motion_texts[i]] if gmotion[i] else []
+        if rows.g43[i]:
+            parts.append(code("G", 43))
+        parts += [f"{letter}{texts[i]}" for letter, (texts, changed) in words.items() if changed[i]]
+        if rows.g43[i]:
+            parts.append(f"H{int(rows.tool[i]):02d}")
+        if fchanged[i]:
+            parts.append(f"F{ftexts[i]}")
+        emit(" ".join(parts))
+        row_line[i] = len(lines)
+    for text in machine.program.footer:
+        emit(text)
+    lines.append("%")
+    rows.line = row_line
+    return "\n".join(lines) + "\n"
+
+
+def _significant(value: float, digits: int) -> str:
+    """A positive number with ``digits`` significant digits, in plain decimal notation."""
+    decimals = max(1, digits - 1 - int(np.floor(np.log10(value))))
+    return format_number(np.array([value]), decimals)[0]
+
+
+def write_program(text: str, path: str | Path) -> Path:
+    """Write ``text`` to ``path`` atomically: a temporary file in the same folder, then
+    ``os.replace``; on failure the old file (if any) is left untouched."""
+    path = Path(path)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+    except OSError as err:
+        raise PathcheckError(
+            f"cannot write G-code: {err.strerror}", path=path, code="output"
+        ) from err
+    try:
+        with os.fdopen(fd, "w", encoding="ascii", newline="\n") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException as err:
+        Path(tmp).unlink(missing_ok=True)
+        if isinstance(err, OSError):
+            raise PathcheckError(
+                f"cannot write G-code: {err.strerror}", path=path, code="output"
+            ) from err
+        raise
+    return path

@@ -1,0 +1,82 @@
+"""Example CAM post-processor hook: send a CL job to the pathcheck service (`pathcheck serve`)
+and write the corrected 4-axis G-code it returns.
+
+    python samples/post_hook.py JOB.apt [--part PART] [--machine NAME] [-o JOB.nc]
+                                [--address tcp://127.0.0.1:5555] [--timeout 120]
+
+The CL text is sent inline (the service may run on another machine); the part is sent as a path
+on the service's machine, or inline when it is a geomdl .json file. The G-code is written
+atomically (a temporary file renamed into place). Exit code: 0 clean, 1 findings (the G-code is
+still written, with a comment at each flagged point), 2 error (one line on stderr).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from checker.client import Client, raise_for_error
+from checker.errors import PathcheckError
+
+
+def part_field(part: Path) -> dict:
+    """`{"geomdl": ...}` for a geomdl JSON file (sent inline), else `{"path": ...}`."""
+    if part.suffix.lower() == ".json":
+        return {"geomdl": json.loads(part.read_text())}
+    return {"path": str(part.resolve())}
+
+
+def write_atomically(path: Path, text: str) -> None:
+    """Write `text` to a temporary file beside `path`, then rename it into place."""
+    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def post(job: Path, part: Path | None, machine: str | None, out: Path, address: str,
+         timeout_s: float) -> dict:
+    """Check and post `job` through the service; writes `out`; returns the results summary."""
+    request: dict = {"apt": job.read_text(), "post": True}
+    if part is not None:
+        request["part"] = part_field(part)
+    if machine:
+        request["machine"] = machine
+    with Client(address, timeout_s=timeout_s, retries=1) as client:
+        reply = raise_for_error(client.call("check", **request))
+    write_atomically(out, reply["gcode"])
+    return reply["results"]["summary"]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("job", type=Path)
+    parser.add_argument("--part", type=Path, default=None)
+    parser.add_argument("--machine", default=None)
+    parser.add_argument("-o", "--output", type=Path, default=None)
+    parser.add_argument("--address", default="tcp://127.0.0.1:5555")
+    parser.add_argument("--timeout", type=float, default=120.0)
+    args = parser.parse_args(argv)
+    out = args.output or args.job.with_suffix(".nc")
+    try:
+        summary = post(args.job, args.part, args.machine, out, args.address, args.timeout)
+    except (PathcheckError, OSError, ValueError) as err:
+        print(f"post_hook: {err}", file=sys.stderr)
+        return 2
+    counts = summary["counts"]
+    findings = counts["gouge"] + counts["interference"] + counts["holder"]
+    print(f"{out}: {summary['points']} points, {counts['gouge']} gouge, "
+          f"{counts['interference']} interference, {counts['holder']} holder")
+    return 1 if findings else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,123 @@
+"""An independent brute-force oracle for the allowable size: dense sampling of the part and, per
+(CC point, test point) pair, bisection on "does the cutter of size s, placed touching the CC
+point, contain the test point?". Written from the cutter's geometry alone (tip, axis, profile
+radius by height), without the closed forms or `checker.kernels`. 3-axis (axis +z), psi = 0."""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from checker.geometry.evaluate import evaluate
+from checker.part import Part
+
+
+@nb.njit(cache=True)
+def _inside(s, ball, r, theta, cc, n, p):
+    """True when p lies strictly inside the size-s cutter touching cc with normal n (tool axis
+    +z, normal not vertical or the axis through the fillet centre for a vertical normal)."""
+    nh = math.hypot(n[0], n[1])
+    ex, ey = (n[0] / nh, n[1] / nh) if nh > 1e-9 else (0.0, 0.0)
+    if ball:
+        cx, cy, cz = cc[0] + s * n[0], cc[1] + s * n[1], cc[2] + s * n[2]
+        y = p[2] - cz  # height above the sphere centre
+        rho = math.hypot(p[0] - cx, p[1] - cy)
+        if y <= -s * math.sin(theta):
+            if abs(y) >= s:
+                return False
+            return rho < math.sqrt(s * s - y * y) - 1e-12
+        return rho < s / math.cos(theta) + y * math.tan(theta) - 1e-12
+    ox, oy, oz = cc[0] + r * n[0], cc[1] + r * n[1], cc[2] + r * n[2]
+    ax, ay = ox + s * ex, oy + s * ey
+    y = p[2] - oz  # height above the corner centres
+    rho = math.hypot(p[0] - ax, p[1] - ay)
+    if y < -r:
+        return False
+    if y < 0.0:
+        return rho < s + math.sqrt(r * r - y * y) - 1e-12
+    return rho < s + r - 1e-12
+
+
+@nb.njit(cache=True, parallel=True)
+def _bisect(ball, r, theta, cc, n, pts, rows, idx, s_hi, out):
+    for k in nb.prange(rows.shape[0]):
+        c, nn, p = cc[rows[k]], n[rows[k]], pts[idx[k]]
+        d = p - c
+        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < 1e-6:
+            out[k] = np.inf
+            continue
+        if not _inside(s_hi, ball, r, theta, c, nn, p):
+            out[k] = np.inf
+            continue
+        lo, hi = 0.0, s_hi
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if _inside(mid, ball, r, theta, c, nn, p):
+                hi = mid
+            else:
+                lo = mid
+        out[k] = hi
+
+
+@nb.njit(cache=True, parallel=True)
+def _screen(ball, r, theta, cc, n, pts, s_test, best_idx):
+    """Per row, the first point inside the size-s_test cutter (-1 if none), any order."""
+    for i in nb.prange(cc.shape[0]):
+        best_idx[i] = -1
+        for j in range(pts.shape[0]):
+            d = pts[j] - cc[i]
+            if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < 1e-6:
+                continue
+            if _inside(s_test[i], ball, r, theta, cc[i], n[i], pts[j]):
+                best_idx[i] = j
+                break
+
+
+def dense_points(part: Part, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """n x n uniform (u, v) grid on every surface: points (K, 3), surface ids, uv (K, 2)."""
+    P, S, UV = [], [], []
+    for s in part.surfaces:
+        (u0, u1), (v0, v1) = s.domain
+        U, V = np.meshgrid(np.linspace(u0, u1, n), np.linspace(v0, v1, n), indexing="ij")
+        P.append(evaluate(s, U.ravel(), V.ravel()).points)
+        S.append(np.full(U.size, s.id))
+        UV.append(np.column_stack([U.ravel(), V.ravel()]))
+    return np.concatenate(P), np.concatenate(S), np.concatenate(UV)
+
+
+def oracle_sizes(part: Part, cutter, cc: np.ndarray, n: np.ndarray, dense: int,
+                 s_max: float = 1000.0) -> np.ndarray:
+    """Allowable size per CC row: bisection over every dense point, then a 41 x 41 local grid
+    (1/20 of a dense cell) around the best point per row, bisected again."""
+    ball = cutter.kind in ("ball", "tapered_ball")
+    r, th = float(cutter.r), float(cutter.theta)
+    pts, sid, uv = dense_points(part, dense)
+    m = len(cc)
+    rows = np.repeat(np.arange(m), len(pts))
+    idx = np.tile(np.arange(len(pts)), m)
+    val = np.empty(len(rows))
+    _bisect(ball, r, th, cc, n, pts, rows, idx, s_max, val)
+    val = val.reshape(m, len(pts))
+    k = np.argmin(val, axis=1)
+    best = val[np.arange(m), k]
+    # local densification around each row's best dense point
+    out = best.copy()
+    for i in np.flatnonzero(np.isfinite(best)):
+        s = part.surfaces[int(sid[k[i]])]
+        (u0, u1), (v0, v1) = s.domain
+        du, dv = (u1 - u0) / (dense - 1), (v1 - v0) / (dense - 1)
+        g = np.linspace(-1.0, 1.0, 41)
+        U, V = np.meshgrid(np.clip(uv[k[i], 0] + g * du, u0, u1),
+                           np.clip(uv[k[i], 1] + g * dv, v0, v1), indexing="ij")
+        if s.trim is not None:
+            keep = s.trim.contains(U.ravel(), V.ravel())
+        else:
+            keep = np.ones(U.size, bool)
+        lp = evaluate(s, U.ravel()[keep], V.ravel()[keep]).points
+        lv = np.empty(len(lp))
+        _bisect(ball, r, th, cc[i:i + 1], n[i:i + 1], lp, np.zeros(len(lp), np.int64),
+                np.arange(len(lp)), s_max, lv)
+        out[i] = min(out[i], lv.min())
+    return out

@@ -1,0 +1,110 @@
+"""Machine definitions (TOML, pydantic) and the part <-> machine kinematics."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from checker.errors import PathcheckError
+from postproc.kinematics import (
+    axis_from_rotation,
+    machine_to_part,
+    part_to_machine,
+    rotation_from_axis,
+    tip_path_length,
+)
+from postproc.machine import available_machines, load_machine
+
+
+def test_shipped_machines_load():
+    names = available_machines()
+    assert {"fanuc-hmc", "linuxcnc-hmc"} <= set(names)
+    fanuc = load_machine()
+    assert fanuc.name == "fanuc-hmc" and fanuc.dialect == "fanuc"
+    linux = load_machine("linuxcnc-hmc")
+    assert linux.dialect == "linuxcnc" and linux.feeds.rotary_mode == "g93"
+
+
+@pytest.mark.parametrize(
+    ("body", "field"),
+    [
+        ('[rotary]\nwrap = "spiral"\n', "rotary.wrap"),
+        ("[rotary]\nb_min = 10.0\nb_max = -10.0\n", "rotary"),
+        ("[travel]\nx = [5.0, -5.0]\n", "travel.x"),
+        ("[kinematics]\nb_direction = 2\n", "kinematics.b_direction"),
+        ("[format]\nlinear_decimals = 12\n", "format.linear_decimals"),
+        ("[feeds]\nmax_linear = -1\n", "feeds.max_linear"),
+        ("colour = 'red'\n", "colour"),
+    ],
+)
+def test_invalid_machine_file_names_the_field(tmp_path, body, field):
+    path = tmp_path / "bad.toml"
+    path.write_text(f'name = "bad"\n{body}')
+    with pytest.raises(PathcheckError) as err:
+        load_machine(path)
+    assert f"machine field '{field}" in str(err.value)
+    assert str(path) in str(err.value)
+
+
+def test_machine_file_errors(tmp_path):
+    with pytest.raises(PathcheckError, match="unknown machine 'nope'.*fanuc-hmc"):
+        load_machine("nope")
+    broken = tmp_path / "broken.toml"
+    broken.write_text("name = \n")
+    with pytest.raises(PathcheckError, match="not valid TOML"):
+        load_machine(broken)
+    unsafe = tmp_path / "unsafe.toml"
+    unsafe.write_text("[program]\nsafe_z = 900.0\n")
+    with pytest.raises(PathcheckError, match="safe_z"):
+        load_machine(unsafe)
+
+
+def _machine(center=(0.0, 0.0, 0.0), direction=1):
+    m = load_machine()
+    kin = m.kinematics.model_copy(update={"table_center": center, "b_direction": direction})
+    return m.model_copy(update={"kinematics": kin})
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_part_to_machine_matches_rotation_about_y(direction):
+    rng = np.random.default_rng(3)
+    center = np.array([12.0, -4.0, 30.0])
+    machine = _machine(tuple(center), direction)
+    p = rng.uniform(-100, 100, (50, 3))
+    words = rng.uniform(-400, 400, 50)
+    # DESIGN.md: a part point p sits at Ry(b) (p - c) + c, b = b_direction * word
+    expected = (
+        Rotation.from_euler("y", direction * words[:, None], degrees=True).apply(p - center)
+        + center
+    )
+    m = part_to_machine(p, words, machine)
+    assert np.allclose(m, expected, atol=1e-12)
+    tip, axis = machine_to_part(m, words, machine)
+    assert np.allclose(tip, p, atol=1e-12)
+    # the spindle (machine +Z) seen in the part frame
+    spindle = (
+        Rotation.from_euler("y", direction * words[:, None], degrees=True).inv().apply([0, 0, 1])
+    )
+    assert np.allclose(axis, spindle, atol=1e-12)
+
+
+def test_axis_convention():
+    b = np.array([0.0, 30.0, -90.0, 180.0])
+    axis = axis_from_rotation(np.radians(b))
+    assert np.allclose(axis[1], [-0.5, 0.0, np.sqrt(3) / 2])
+    assert np.allclose(rotation_from_axis(axis), [0.0, 30.0, -90.0, 180.0])
+    with pytest.raises(PathcheckError, match="not a 4-axis axis about Y.*j = 0.1"):
+        rotation_from_axis(np.array([[0.0, 0.1, 0.995]]), lines=np.array([7]))
+
+
+def test_tip_path_length_pure_rotation_is_an_arc():
+    machine = _machine()
+    xyz = np.array([[50.0, 0.0, 0.0]])
+    # the table turns 90 deg with the tool fixed at radius 50: the tip sweeps a quarter circle
+    length = tip_path_length(xyz, xyz, np.array([0.0]), np.array([90.0]), machine)
+    assert length[0] == pytest.approx(50 * np.pi / 2, rel=2e-3)
+    straight = tip_path_length(
+        xyz, xyz + [3.0, 4.0, 0.0], np.array([10.0]), np.array([10.0]), machine
+    )
+    assert straight[0] == pytest.approx(5.0, abs=1e-12)

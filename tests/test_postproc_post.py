@@ -1,0 +1,285 @@
+"""Posting: round trip post -> read back -> part frame, feeds (G93 and the G94 rotary rule),
+tool changes and flags, travel limits, atomic writes."""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from checker.errors import PathcheckError
+from postproc.machine import Machine, load_machine
+from postproc.post import PostMoves, moves_from_toolpath, post, post_program
+from postproc.reader import read_gcode_text
+from postproc.replay import part_motions
+from postproc.writer import write_program
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def blade_path(n: int = 240) -> PostMoves:
+    """A 4-axis zig-zag on a cylinder about Y (radius 60 mm), the axis radial (j = 0), B from
+    -40 to 400 degrees (crossing 360), two tools, a rapid re-positioning, flags."""
+    s = np.linspace(0.0, 1.0, n)
+    b = -40.0 + 440.0 * s
+    th = np.radians(b)
+    radius = 60.0 + 3.0 * np.sin(25 * s)
+    tip = np.c_[-radius * np.sin(th), 25.0 * np.sin(9 * s), radius * np.cos(th)]
+    rapid = np.zeros(n, bool)
+    rapid[[0, n // 2]] = True
+    tool = np.where(np.arange(n) < 2 * n // 3, 3, 7)
+    feed = np.where(np.arange(n) < n // 4, 600.0, 1200.0)
+    comments = [""] * n
+    comments[17] = "FLAG gouge 0.031 mm (hub)"
+    return PostMoves.build(
+        tip,
+        b,
+        rapid=rapid,
+        feed=feed,
+        spindle=np.where(tool == 3, 9000.0, -4000.0),
+        coolant=np.where(tool == 3, 8, 7),
+        tool=tool,
+        comment=comments,
+        line=np.arange(n) + 100,
+    )
+
+
+def variant(name: str, **update) -> Machine:
+    machine = load_machine(name)
+    for section, values in update.items():
+        machine = machine.model_copy(
+            update={section: getattr(machine, section).model_copy(update=values)}
+        )
+    return machine
+
+
+def round_trip(moves: PostMoves, machine: Machine):
+    posted = post(moves, machine, program_name="RT")
+    read = part_motions(read_gcode_text(posted.text, machine.dialect, units=machine.units), machine)
+    rows = posted.rows
+    ends = rows.end & (rows.line > 0)
+    at = {int(line): i for i, line in enumerate(read.line)}
+    idx = np.array([at[int(line)] for line in rows.line[ends]])
+    src = rows.src[ends]
+    tip_err = np.linalg.norm(read.tip[idx] - moves.tip[src], axis=1)
+    cos = np.clip((read.axis[idx] * moves.axis[src]).sum(axis=1), -1.0, 1.0)
+    return posted, read, idx, src, tip_err, np.degrees(np.arccos(cos))
+
+
+MACHINES = [
+    ("fanuc-hmc", {}),
+    ("linuxcnc-hmc", {}),
+    (
+        "fanuc-hmc",
+        {
+            "kinematics": {"table_center": (15.0, 0.0, -40.0), "b_direction": -1},
+            "rotary": {"wrap": "0_360"},
+            "feeds": {"rotary_mode": "g93"},
+        },
+    ),
+    (
+        "linuxcnc-hmc",
+        {
+            "kinematics": {"table_center": (-5.0, 2.0, 10.0)},
+            "rotary": {"wrap": "signed"},
+            "feeds": {"rotary_mode": "g94"},
+        },
+    ),
+    ("linuxcnc-hmc", {"rotary": {"wrap": "-180_180"}}),
+]
+
+
+@pytest.mark.parametrize(("name", "update"), MACHINES)
+def test_round_trip_synthetic(name, update):
+    moves = blade_path()
+    machine = variant(name, **update)
+    posted, read, idx, src, tip_err, axis_err = round_trip(moves, machine)
+    # every source move is written (none dropped) and comes back within 1e-4 mm / 1e-4 deg
+    assert np.array_equal(np.unique(src), np.arange(len(moves)))
+    assert tip_err.max() < 1e-4
+    assert axis_err.max() < 1e-4
+    # the feed read back is the programmed feed (tip speed relative to the part)
+    feed_rows = ~moves.rapid[src] & np.isfinite(read.feed[idx])
+    assert feed_rows.sum() > len(moves) // 2
+    assert np.allclose(read.feed[idx][feed_rows], moves.feed[src][feed_rows], rtol=2e-3)
+
+
+def test_round_trip_inch_program():
+    machine = load_machine("linuxcnc-hmc").model_copy(update={"units": "inch"})
+    posted, read, idx, src, tip_err, axis_err = round_trip(blade_path(), machine)
+    assert "G20" in posted.text
+    assert tip_err.max() < 1e-3  # 5 decimals of an inch
+    assert axis_err.max() < 1e-4
+
+
+def _sample_jobs() -> list[Path]:
+    return sorted((REPO / "samples").glob("*/*.apt"))
+
+
+@pytest.mark.parametrize("dialect_machine", ["fanuc-hmc", "linuxcnc-hmc"])
+def test_round_trip_sample_jobs(dialect_machine):
+    jobs = _sample_jobs()
+    if not jobs:
+        pytest.skip("no sample jobs in samples/ yet")
+    from checker.apt import read_cl
+
+    machine = load_machine(dialect_machine)
+    for job in jobs:
+        moves = moves_from_toolpath(read_cl(job))
+        _, _, _, src, tip_err, axis_err = round_trip(moves, machine)
+        assert np.array_equal(np.unique(src), np.arange(len(moves))), job
+        assert tip_err.max() < 1e-4, job
+        assert axis_err.max() < 1e-4, job
+
+
+def _blocks(text: str, rollover: bool) -> list[dict[str, float]]:
+    """Modal X Y Z B F and G of every motion block, read with plain regular expressions; B as
+    the continuous table position."""
+    state = {"X": np.nan, "Y": np.nan, "Z": np.nan, "B": 0.0, "F": np.nan, "G": np.nan}
+    out = []
+    for line in text.splitlines():
+        code = re.sub(r"\(.*?\)", "", line)
+        words = dict(re.findall(r"([A-Z])(-?[0-9.]+)", code))
+        if "B" in words and rollover:  # the table takes the shorter way
+            step = (float(words.pop("B")) - state["B"] + 180.0) % 360.0 - 180.0
+            state["B"] += step
+        state.update({k: float(v) for k, v in words.items() if k in state})
+        if any(k in words for k in "XYZB"):
+            out.append({**state, "F_here": "F" in words, "line": line})
+    return out
+
+
+def _tip_length(machine: Machine, a: dict, b: dict, steps: int = 400) -> float:
+    """Tip path length relative to the part by dense sampling (scipy rotations)."""
+    t = np.linspace(0.0, 1.0, steps + 1)[:, None]
+    xyz = np.array([a["X"], a["Y"], a["Z"]]) * (1 - t) + np.array([b["X"], b["Y"], b["Z"]]) * t
+    bw = a["B"] * (1 - t[:, 0]) + b["B"] * t[:, 0]
+    c = np.array(machine.kinematics.table_center)
+    tips = (
+        Rotation.from_euler("y", machine.kinematics.b_direction * bw[:, None], degrees=True)
+        .inv()
+        .apply(xyz - c)
+    )
+    return float(np.linalg.norm(np.diff(tips, axis=0), axis=1).sum())
+
+
+def _feed_blocks(machine: Machine, moves: PostMoves):
+    blocks = _blocks(post_program(moves, machine), machine.rotary.wrap == "shortest")
+    pairs = [
+        (a, b)
+        for a, b in zip(blocks, blocks[1:], strict=False)
+        if b["G"] == 1 and np.isfinite(a["Z"])
+    ]
+    assert len(pairs) > 20
+    return pairs
+
+
+def _uniform_path() -> PostMoves:
+    n = 60
+    b = np.linspace(-30.0, 30.0, n)
+    th = np.radians(b)
+    tip = np.c_[-70.0 * np.sin(th), np.linspace(-10.0, 10.0, n), 70.0 * np.cos(th)]
+    rapid = np.zeros(n, bool)
+    rapid[0] = True
+    return PostMoves.build(tip, b, rapid=rapid, feed=900.0, tool=1)
+
+
+def test_g93_feed_is_inverse_block_time():
+    machine = load_machine("linuxcnc-hmc")
+    assert machine.feeds.rotary_mode == "g93"
+    for a, b in _feed_blocks(machine, _uniform_path()):
+        assert b["F_here"], b["line"]  # G93: F on every feed block
+        minutes = _tip_length(machine, a, b) / 900.0
+        assert b["F"] == pytest.approx(1.0 / minutes, rel=2e-4), b["line"]
+
+
+def test_g94_rotary_rule_fanuc():
+    """Fanuc rule: the control runs sqrt(dX^2+dY^2+dZ^2+dB^2) (degrees as mm) at F; the post
+    scales F so that time equals the tip path length over the programmed feed."""
+    machine = load_machine("fanuc-hmc")
+    for a, b in _feed_blocks(machine, _uniform_path()):
+        d = np.sqrt(sum((b[k] - a[k]) ** 2 for k in "XYZB"))
+        control_minutes = d / b["F"]
+        assert control_minutes == pytest.approx(_tip_length(machine, a, b) / 900.0, rel=2e-3), b[
+            "line"
+        ]
+
+
+def test_g94_rotary_rule_linuxcnc_and_plain_moves():
+    machine = variant("linuxcnc-hmc", feeds={"rotary_mode": "g94"})
+    for a, b in _feed_blocks(machine, _uniform_path()):
+        d = np.sqrt(sum((b[k] - a[k]) ** 2 for k in "XYZ"))
+        assert d / b["F"] == pytest.approx(_tip_length(machine, a, b) / 900.0, rel=2e-3), b["line"]
+    # without B motion F is the programmed feed itself
+    n = 10
+    flat = PostMoves.build(
+        np.c_[np.arange(n) * 5.0, np.zeros(n), np.full(n, 20.0)], 15.0, feed=750.0, tool=1
+    )
+    text = post_program(flat, load_machine("fanuc-hmc"))
+    assert set(re.findall(r"F([0-9.]+)", text)) == {"750.0"}
+
+
+def test_rotary_speed_limit_stretches_block_time():
+    machine = variant("linuxcnc-hmc", rotary={"max_feed": 100.0})
+    n = 3
+    tip = np.zeros((n, 3))  # the tip on the B axis: only the table turns, 20 deg per block
+    moves = PostMoves.build(tip, [0.0, 20.0, 40.0], rapid=[True, False, False], feed=500.0, tool=1)
+    f = [float(v) for v in re.findall(r"B-?[0-9.]+ F([0-9.]+)", post_program(moves, machine))]
+    assert f == [pytest.approx(5.0), pytest.approx(5.0)]  # 20 deg at 100 deg/min = 0.2 min
+
+
+def test_program_structure_tool_changes_flags():
+    moves = blade_path()
+    text = post_program(moves, load_machine("fanuc-hmc"), program_name="BLADE")
+    lines = text.splitlines()
+    assert lines[0] == "%" and lines[-1] == "%" and lines[1] == "O1000 (BLADE)"
+    assert "(FLAG gouge 0.031 mm [hub])" in lines
+    assert [ln.split(" ", 1)[1] for ln in lines if "M06" in ln] == ["T03 M06", "T07 M06"]
+    assert any(ln.endswith("S9000 M03") for ln in lines) and any(
+        ln.endswith("S4000 M04") for ln in lines
+    )
+    assert any(ln.endswith("M08") for ln in lines) and any(ln.endswith("M07") for ln in lines)
+    assert sum("G43" in ln for ln in lines) == 2 and "H07" in text
+    numbers = [int(m) for m in re.findall(r"^N(\d+) ", text, flags=re.M)]
+    assert numbers == list(range(10, 10 * len(numbers) + 1, 10))
+    linux = post_program(moves, load_machine("linuxcnc-hmc"))
+    assert "T7 M6" in linux and not re.search(r"^N\d", linux, flags=re.M)
+
+
+def test_travel_limit_names_the_block():
+    moves = _uniform_path()
+    machine = variant("fanuc-hmc", travel={"z": (-300.0, 60.0)})  # the path runs at Z 70
+    with pytest.raises(PathcheckError) as err:
+        post_program(moves, machine)
+    msg = str(err.value)
+    assert re.search(r"block 'N\d+ G00 G43 .*Z70\.0", msg), msg
+    assert "moves Z to 70.0000 mm" in msg and "[-300, 60]" in msg and ":1:" not in msg
+
+
+def test_bad_moves_are_errors():
+    machine = load_machine()
+    with pytest.raises(PathcheckError, match="feed move without a feed rate"):
+        post_program(PostMoves.build(np.zeros((2, 3)), 0.0), machine)
+    good = _uniform_path()
+    bad = PostMoves(**{**good.__dict__, "axis": np.tile([0.0, 0.0, 1.0], (len(good), 1))})
+    with pytest.raises(PathcheckError, match="does not match B"):
+        post_program(bad, machine)
+
+
+def test_write_program_is_atomic(tmp_path, monkeypatch):
+    target = tmp_path / "job.nc"
+    write_program("OLD\n", target)
+    assert target.read_text() == "OLD\n"
+
+    def fail(src, dst):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(os, "replace", fail)
+    with pytest.raises(PathcheckError, match="No space left"):
+        write_program("NEW PROGRAM\n", target)
+    assert target.read_text() == "OLD\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["job.nc"]

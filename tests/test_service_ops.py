@@ -1,0 +1,199 @@
+"""The `allowable` and `check` ops against the library called directly (an independent path to
+the same numbers), analytic cases, the part cache, and one round trip over a real socket."""
+
+from __future__ import annotations
+
+import json
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from checker.config import default_config
+from checker.service.cache import PartCache
+from checker.service.ops import WorkerState
+from checker.service.protocol import AllowablePoint
+from checker.service.recorder import NullRecorder
+from checker.service.worker import handle
+
+REPO = Path(__file__).resolve().parents[1]
+MOULD = REPO / "samples" / "mould" / "mould.json"
+CUTTER = "CUTTER/12,3"
+
+
+def _engine():
+    return pytest.importorskip(
+        "checker.engine", reason="checker.engine (the engine issue) not present yet")
+
+
+def _call(state: WorkerState, **request) -> dict:
+    reply, meta = handle(json.dumps(request).encode(), state, NullRecorder())
+    assert meta["ok"] == reply["ok"] and meta["op"] == request["op"]
+    return reply
+
+
+@pytest.fixture(scope="module")
+def state() -> WorkerState:
+    return WorkerState(config=default_config(), cache=PartCache(1 << 30))
+
+
+@pytest.fixture(scope="module")
+def mould_rows() -> np.ndarray:
+    """4 CC rows [x, y, z, nx, ny, nz] inside the mould's first surface."""
+    _engine()
+    from checker.geometry import load_part
+    from checker.geometry.evaluate import evaluate
+
+    surface = load_part(MOULD).surfaces[0]
+    (u0, u1), (v0, v1) = surface.domain
+    t = np.array([0.3, 0.45, 0.6, 0.7])
+    ev = evaluate(surface, u0 + (u1 - u0) * t, v0 + (v1 - v0) * t[::-1])
+    return np.hstack([ev.points, ev.normals])
+
+
+def test_allowable_matches_the_library_and_caches_the_part(state, mould_rows):
+    engine = _engine()
+    from checker.cutter import parse_cutter
+    from checker.geometry import load_part
+    from checker.geometry.sampling import sample_part
+
+    request = {"op": "allowable", "id": 3, "part": {"path": str(MOULD)},
+               "cc": mould_rows.tolist(), "cutter": CUTTER}
+    first = _call(state, **request)
+    assert first["ok"], first
+    assert first["cached"] is False and first["timing"]["sample_s"] > 0
+    part = load_part(MOULD)
+    direct = engine.allowable(sample_part(part, geometry=default_config().geometry), part,
+                              parse_cutter(CUTTER), mould_rows[:, :3], mould_rows[:, 3:],
+                              (0.0, 0.0, 1.0))
+    points = [AllowablePoint.model_validate(p) for p in first["points"]]
+    assert [p.index for p in points] == [0, 1, 2, 3]
+    got = np.array([np.inf if p.allowable is None else p.allowable for p in points])
+    np.testing.assert_allclose(got, direct.size, rtol=1e-9, atol=1e-9)
+    assert [p.verdict for p in points] == [str(v) for v in direct.verdict]
+    np.testing.assert_allclose([p.cc for p in points], mould_rows[:, :3], atol=1e-12)
+    finite = np.isfinite(direct.size)
+    np.testing.assert_allclose(
+        [p.limiting_point for p, f in zip(points, finite, strict=True) if f],
+        direct.limiting_point[finite], atol=1e-9)
+
+    second = _call(state, **request)
+    assert second["cached"] is True and second["part_hash"] == first["part_hash"]
+    assert second["timing"]["load_s"] == 0 and second["timing"]["sample_s"] == 0
+    assert [p["allowable"] for p in second["points"]] == [p["allowable"] for p in first["points"]]
+    stats = _call(state, op="stats")["cache"]
+    assert stats["entries"] >= 1 and stats["hits"] >= 1 and stats["bytes"] > 1000
+
+
+def test_inline_geomdl_part_gives_the_same_answer(state, mould_rows):
+    rows = mould_rows[:2].tolist()
+    by_path = _call(state, op="allowable", part={"path": str(MOULD)}, cc=rows, cutter=CUTTER)
+    inline = _call(state, op="allowable", part={"geomdl": json.loads(MOULD.read_text())},
+                   cc=rows, cutter=CUTTER)
+    assert inline["ok"], inline
+    assert inline["part_hash"] != by_path["part_hash"]
+    np.testing.assert_allclose([p["allowable"] for p in inline["points"]],
+                               [p["allowable"] for p in by_path["points"]], rtol=1e-9)
+
+
+def _plane() -> dict:
+    """A flat bicubic patch z = 0 over [-50, 50]^2 as geomdl exchange JSON (normal +z)."""
+    xs = np.linspace(-50, 50, 4)
+    pts = [[float(x), float(y), 0.0] for x in xs for y in xs]
+    knots = [0, 0, 0, 0, 1, 1, 1, 1]
+    return {"shape": {"type": "surface", "count": 1, "data": [{
+        "type": "spline", "rational": False, "degree_u": 3, "degree_v": 3,
+        "knotvector_u": knots, "knotvector_v": knots, "size_u": 4, "size_v": 4,
+        "control_points": {"points": pts}}]}}
+
+
+def test_a_plane_never_limits_a_ball_or_a_bull_nose(state):
+    """Analytic: on a plane with the axis along the normal nothing limits the cutter, so the
+    allowable size is unbounded (null) and the verdict ok."""
+    _engine()
+    rows = [[x, y, 0.0, 0.0, 0.0, 1.0] for x, y in [(0, 0), (10, -5), (-20, 30)]]
+    for cutter in ("CUTTER/10", "CUTTER/12,3"):
+        reply = _call(state, op="allowable", part={"geomdl": _plane()}, cc=rows, cutter=cutter)
+        assert reply["ok"], reply
+        assert [p["allowable"] for p in reply["points"]] == [None, None, None]
+        assert {p["verdict"] for p in reply["points"]} == {"ok"}
+        assert all(p["limiting_point"] is None for p in reply["points"])
+
+
+def test_best_b_is_at_least_the_size_at_every_b_of_the_scan(state, mould_rows):
+    engine = _engine()
+    from checker.cutter import parse_cutter
+    from checker.four_axis.axes import axis_for_b
+
+    row = mould_rows[:1]
+    base = default_config()  # a coarse refinement keeps the test short; the scan is the same
+    coarse = base.model_copy(update={
+        "four_axis": base.four_axis.model_copy(update={"b_tolerance": 0.5})})
+    state = WorkerState(config=coarse, cache=state.cache)
+    reply = _call(state, op="allowable", part={"path": str(MOULD)}, cc=row.tolist(),
+                  cutter=CUTTER, b_range=[-4.0, 4.0])
+    assert reply["ok"], reply
+    point = reply["points"][0]
+    assert -4.0 <= point["b_best"] <= 4.0
+    entry = next(iter(state.cache.entries.values()))
+    cutter = parse_cutter(CUTTER)
+    grid = np.array([-4.0, -2.0, 0.0, 2.0, 4.0])
+    sizes = engine.allowable(entry.test_points, entry.part, cutter, np.repeat(row[:, :3], 5, 0),
+                             np.repeat(row[:, 3:], 5, 0), axis_for_b(grid)).size
+    assert point["allowable_at_best"] >= sizes.max() - 1e-6
+    assert point["allowable"] == pytest.approx(sizes[2], rel=1e-9)  # axis (0, 0, 1) is B = 0
+    need = cutter.size + default_config().check.tolerance
+    for lo, hi in point["b_feasible"]:
+        assert -4.0 <= lo <= hi <= 4.0
+    inside = [any(lo <= b <= hi for lo, hi in point["b_feasible"]) for b in grid]
+    assert inside == [bool(s >= need) for s in sizes]
+
+
+def test_library_errors_become_error_replies(state):
+    _engine()
+    rows = [[0.0, 0.0, 0.0, 0.0, 0.0, 1.0]]
+    bad_cutter = _call(state, op="allowable", part={"path": str(MOULD)}, cc=rows,
+                       cutter="CUTTER/-5")
+    assert bad_cutter["ok"] is False and bad_cutter["error"]["code"] != "internal"
+    bad_part = _call(state, op="allowable", part={"geomdl": {"shape": {"type": "curve"}}},
+                     cc=rows, cutter=CUTTER)
+    assert bad_part["ok"] is False and bad_part["error"]["code"] == "part"
+    outside = _call(state, op="allowable", part={"path": str(MOULD)}, cc=rows, cutter=CUTTER,
+                    b_range=[-500.0, 0.0])
+    assert outside["ok"] is False and "outside the machine's limits" in \
+        outside["error"]["message"]
+
+
+def test_check_returns_the_results_document_and_gcode(state):
+    pytest.importorskip("checker.job", reason="checker.job (check_job) not present yet")
+    from checker.results import ResultsDocument
+
+    job = REPO / "samples" / "mould" / "mould.apt"
+    reply = _call(state, op="check", apt=job.read_text(), part={"path": str(MOULD)})
+    assert reply["ok"], reply
+    doc = ResultsDocument.model_validate(reply["results"])
+    assert doc.summary.points == len(doc.points) > 0
+    truncated = "\n".join(job.read_text().splitlines()[:12]) + "\nGOTO/1.0,2.0,$\n"
+    bad = _call(state, op="check", apt=truncated, part={"path": str(MOULD)})
+    assert bad["ok"] is False and bad["error"].get("line") is not None
+
+
+def test_allowable_over_a_socket_hits_the_cache_the_second_time(mould_rows):
+    from checker.client import Client
+    from checker.service.broker import Broker
+
+    broker = Broker(default_config(), bind="tcp://127.0.0.1:*", workers=1)
+    thread = threading.Thread(target=broker.run, daemon=True)
+    thread.start()
+    try:
+        with Client(broker.wait_started(60), timeout_s=120) as client:
+            fields = {"part": {"path": str(MOULD)}, "cc": mould_rows[:1].tolist(),
+                      "cutter": CUTTER}
+            first, second = (client.call("allowable", **fields) for _ in range(2))
+    finally:
+        broker.stop()
+        thread.join(30)
+    assert first["ok"] and second["ok"]
+    assert (first["cached"], second["cached"]) == (False, True)
+    assert second["points"] == first["points"]

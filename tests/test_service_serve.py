@@ -1,0 +1,138 @@
+"""`pathcheck serve` as a real process on 127.0.0.1: `pathcheck call` against it, every request
+recorded in the results store, and SIGTERM draining the request in flight and exiting 0."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from checker.client import Client
+from checker.store import ResultsStore
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+class Server:
+    """A `pathcheck serve` subprocess; its stderr lines are collected by a thread."""
+
+    def __init__(self, tmp: Path) -> None:
+        config = tmp / "service.toml"
+        config.write_text("[service]\ndebug_ops = true\nrequest_timeout_s = 20.0\n")
+        self.store = tmp / "store.sqlite"
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "checker.cli", "serve", "--bind", "tcp://127.0.0.1:*",
+             "--workers", "2", "--config", str(config), "--store", str(self.store)],
+            cwd=REPO, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE, text=True,
+        )
+        self.lines: list[str] = []
+        self.listening = threading.Event()
+        threading.Thread(target=self._read, daemon=True).start()
+        if not self.listening.wait(60):
+            self.proc.kill()
+            pytest.fail("serve did not start:\n" + "".join(self.lines))
+        self.address = re.search(r"listening on (\S+)", "".join(self.lines)).group(1)
+
+    def _read(self) -> None:
+        for line in self.proc.stderr:
+            self.lines.append(line)
+            if "listening on" in line:
+                self.listening.set()
+
+    def call(self, *args: str) -> subprocess.CompletedProcess:
+        return subprocess.run(
+            [sys.executable, "-m", "checker.cli", "call", *args, "--address", self.address,
+             "--timeout", "20"],
+            cwd=REPO, capture_output=True, text=True, timeout=60,
+        )
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    srv = Server(tmp_path_factory.mktemp("serve"))
+    yield srv
+    if srv.proc.poll() is None:
+        srv.proc.kill()
+        srv.proc.wait(10)
+
+
+def test_call_ping_prints_the_reply(server):
+    done = server.call("ping", "id=7")
+    assert done.returncode == 0, done.stderr
+    reply = json.loads(done.stdout)
+    assert reply["ok"] is True and reply["pong"] is True and reply["id"] == 7
+
+
+def test_call_error_reply_is_one_line_and_exit_2(server):
+    done = server.call("allowable", "part.path=/no/such/part.json", "cutter=CUTTER/10",
+                       "cc=[[0,0,0,0,0,1]]")
+    assert done.returncode == 2
+    assert done.stdout == ""
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("pathcheck: /no/such/part.json: ")
+    assert "expected a part file, found nothing" in lines[0]
+
+
+def test_call_bad_field_syntax_is_a_usage_error(server):
+    done = server.call("ping", "novalue")
+    assert done.returncode == 2 and "expected FIELD=VALUE" in done.stderr
+
+
+def test_one_log_line_per_request_and_every_request_recorded(server):
+    before = sum("request client=" in line for line in server.lines)
+    t0 = time.time()
+    with Client(server.address, timeout_s=20) as c:
+        for _ in range(5):
+            assert c.call("ping")["ok"]
+        assert not c.request(b"{oops")["ok"]
+    deadline = time.monotonic() + 10
+    while sum("request client=" in line for line in server.lines) < before + 6:
+        assert time.monotonic() < deadline, "".join(server.lines[-10:])
+        time.sleep(0.05)
+    assert any("op=? ok=false code=json" in line for line in server.lines)
+    with ResultsStore(server.store) as store:
+        rows = store.requests(since=t0)
+    assert [r[1] for r in rows].count("ping") == 5
+    assert any(r[1] == "?" and r[2] == 0 and "not valid JSON" in r[4] for r in rows)
+
+
+def test_sigterm_drains_the_request_in_flight_and_exits_0(server):
+    with Client(server.address, timeout_s=20) as c:
+        pids = c.call("stats")["broker"]["pids"]
+    assert len(pids) == 2
+    with Client(server.address, timeout_s=20, kind="dealer") as slow, \
+            Client(server.address, timeout_s=20, kind="dealer", retries=0) as late:
+        sock = slow._socket()
+        sock.send_multipart([b"", json.dumps({"op": "sleep", "seconds": 1.5, "id": 1}).encode()])
+        time.sleep(0.5)
+        server.proc.send_signal(signal.SIGTERM)
+        time.sleep(0.2)
+        rejected = late.call("ping")
+        assert sock.poll(20_000), "the request in flight was not answered"
+        drained = json.loads(sock.recv_multipart()[-1])
+    assert drained["ok"] is True and drained["slept"] == 1.5
+    assert rejected["ok"] is False and rejected["error"]["code"] == "unavailable"
+    assert server.proc.wait(20) == 0
+    for pid in pids:
+        assert not Path(f"/proc/{pid}").exists(), f"worker {pid} outlived the server"
+    log = "".join(server.lines)
+    assert "draining: 1 request(s) in flight" in log and "stopped" in log
+    assert "Traceback" not in log
+
+
+def test_serve_bad_bind_is_a_clean_error():
+    done = subprocess.run(
+        [sys.executable, "-m", "checker.cli", "serve", "--bind", "nonsense://x", "--no-store"],
+        cwd=REPO, capture_output=True, text=True, timeout=60, env=dict(os.environ),
+    )
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines()[-1].startswith("pathcheck: cannot bind nonsense://x")
