@@ -3,6 +3,8 @@
 Pairs (test point, CC point) per second, for each cutter kind, through
 - `Cutter.imaginary_size` on K independent pairs (K,3 arrays; parallel kernel above 20,000 pairs),
 - `Cutter.min_imaginary_size` reducing each CC point's candidate test points (CSR) in one pass,
+  with candidates scattered over all test points ("random") and in runs of neighbouring test
+  points ("local", as from a spatial grid whose points are stored cell by cell),
 and the numba thread count used. Random CC points, normals and test points around them (mm);
 compile time excluded (one warm-up call), best of 3 runs.
 """
@@ -53,17 +55,21 @@ def main() -> None:
     ccs = rng.uniform(-50, 50, (N, 3))
     ns = _normals(rng, N)
     indptr = np.arange(N + 1, dtype=np.int64) * PER
-    indices = rng.integers(0, M, N * PER)
+    scattered = rng.integers(0, M, N * PER)
+    local = (np.repeat(rng.integers(0, M, N), PER) + np.tile(np.arange(PER), N)) % M
     print(
         f"numba threads: {numba.get_num_threads()}  pairs: {K:,} independent, "
         f"{N * PER:,} as {N:,} CC x {PER} candidates"
     )
-    print(f"{'cutter':<14}{'pairs/s (pairs)':>18}{'pairs/s (CSR min)':>20}")
+    print(f"{'cutter':<14}{'pairs':>12}{'CSR random':>14}{'CSR local':>14}   (pairs per second)")
     for kind, text in CUTTERS.items():
         c = parse_cutter(text)
         t_pairs = _best(lambda c=c: c.imaginary_size(p, cc, n))
-        t_min = _best(lambda c=c: c.min_imaginary_size(pts, ccs, ns, None, indptr, indices))
-        print(f"{kind:<14}{K / t_pairs / 1e6:>15.1f} M{N * PER / t_min / 1e6:>17.1f} M")
+        rates = [K / t_pairs]
+        for idx in (scattered, local):
+            t = _best(lambda c=c, idx=idx: c.min_imaginary_size(pts, ccs, ns, None, indptr, idx))
+            rates.append(N * PER / t)
+        print(f"{kind:<14}" + "".join(f"{x / 1e6:>12.1f} M" for x in rates))
 
 
 if __name__ == "__main__":

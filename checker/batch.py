@@ -86,14 +86,16 @@ def _local(paths: list[str], workers: int, job_function: str) -> Iterator[JobOut
             yield future.result()
 
 
-def _dask(paths: list[str], scheduler: object, job_function: str) -> Iterator[JobOutcome]:
+def _dask(
+    paths: list[str], scheduler: object, job_function: str, connect_timeout_s: float
+) -> Iterator[JobOutcome]:
     """Jobs on a Dask cluster: `scheduler` is an address ('tcp://host:8786') or a Client."""
     from distributed import Client
     from distributed import as_completed as dask_completed
 
     own = not isinstance(scheduler, Client)
     try:
-        client = Client(scheduler, timeout="10s") if own else scheduler
+        client = Client(scheduler, timeout=connect_timeout_s) if own else scheduler
     except (OSError, TimeoutError) as err:
         raise PathcheckError(
             f"cannot reach the Dask scheduler: {err}", path=str(scheduler), code="usage"
@@ -115,12 +117,14 @@ def run_batch(
     scheduler: object | None = None,
     job_function: str = DEFAULT_JOB_FUNCTION,
     on_result: Callable[[JobOutcome], None] | None = None,
+    connect_timeout_s: float = 10.0,
 ) -> list[JobOutcome]:
     """Check every job, record each outcome in `store` as it arrives (source 'batch'), call
-    `on_result` (progress), and return the outcomes in the order of `paths`."""
+    `on_result` (progress), and return the outcomes in the order of `paths`. With `scheduler`
+    (a Dask address or Client) the jobs run on that cluster, else in `workers` processes."""
     names = [str(p) for p in paths]
     if scheduler is not None:
-        stream = _dask(names, scheduler, job_function)
+        stream = _dask(names, scheduler, job_function, connect_timeout_s)
     else:
         stream = _local(names, workers, job_function)
     outcomes: dict[str, JobOutcome] = {}

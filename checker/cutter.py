@@ -29,7 +29,7 @@ _ANGLE_DIGITS = 12  # angles are kept as radians(round(degrees, 12)) so CUTTER/ 
 
 def _consistency_tol(d: float) -> float:
     """Slack (mm) for redundant values written with 4-6 decimals (NX writes 1e-4 inch)."""
-    return 2e-3 + 1e-4 * max(d, 1.0)
+    return 5e-3 + 1e-4 * max(d, 1.0)
 
 
 def diameter_from(R: float, r: float, psi: float, theta: float) -> float:

@@ -115,6 +115,39 @@ def _apt_tip_contact(qx, qy, qz, prm):
 
 
 @njit(cache=True)
+def _axis_dir(nx, ny, ex, ey, has_e):
+    """Unit horizontal e (fillet centre -> axis) from n, else from the caller's e; (0, 0, True)
+    when neither defines it (worst case over directions)."""
+    nh = math.sqrt(nx * nx + ny * ny)
+    if nh > EPS_H:
+        return nx / nh, ny / nh, False
+    eh = math.sqrt(ex * ex + ey * ey) if has_e else 0.0
+    if eh > EPS_H:
+        return ex / eh, ey / eh, False
+    return 0.0, 0.0, True
+
+
+@njit(cache=True)
+def _fillet_size(dx, dy, dz, ux, uy, worst, prm):
+    """R for fillet contact: (dx, dy, dz) = P - O with O = Pcc + r n, e = (ux, uy)."""
+    k = _k_band(dz, prm)
+    if k == -INF:
+        return INF
+    dd = dx * dx + dy * dy
+    if k >= 0.0 and dd <= k * k:
+        return 0.0
+    if worst:
+        dn = math.sqrt(dd)  # worst case over e: e along d, R = (|d| - k) / 2
+        if dn + k <= 0.0:
+            return INF
+        return max(0.5 * (dn - k), 0.0)
+    den = ux * dx + uy * dy + k
+    if den <= 0.0:
+        return INF
+    return max((dd - k * k) / (2.0 * den), 0.0)
+
+
+@njit(cache=True)
 def apt_size(qx, qy, qz, nx, ny, nz, ex, ey, has_e, prm):
     """R of the imaginary APT-family cutter through P = Pcc + q, touching Pcc with normal n."""
     if nz <= 0.0 or nz < prm[_SIN_T] - EPS_N:
@@ -124,32 +157,8 @@ def apt_size(qx, qy, qz, nx, ny, nz, ex, ey, has_e, prm):
     if prm[_FLAT] < 0.5 and nz > prm[_COS_P]:
         return _apt_tip_contact(qx, qy, qz, prm)
     r = prm[_R]
-    dx = qx - r * nx
-    dy = qy - r * ny
-    dz = qz - r * nz
-    k = _k_band(dz, prm)
-    if k == -INF:
-        return INF
-    dd = dx * dx + dy * dy
-    if k >= 0.0 and dd <= k * k:
-        return 0.0
-    nh = math.sqrt(nx * nx + ny * ny)
-    if nh > EPS_H:
-        ux = nx / nh
-        uy = ny / nh
-    else:
-        eh = math.sqrt(ex * ex + ey * ey) if has_e else 0.0
-        if eh <= EPS_H:
-            dn = math.sqrt(dd)  # worst case over e: e along d
-            if dn + k <= 0.0:
-                return INF
-            return max(0.5 * (dn - k), 0.0)
-        ux = ex / eh
-        uy = ey / eh
-    den = ux * dx + uy * dy + k
-    if den <= 0.0:
-        return INF
-    return max((dd - k * k) / (2.0 * den), 0.0)
+    ux, uy, worst = _axis_dir(nx, ny, ex, ey, has_e)
+    return _fillet_size(qx - r * nx, qy - r * ny, qz - r * nz, ux, uy, worst, prm)
 
 
 @njit(cache=True)
@@ -239,14 +248,43 @@ def pair_sizes(p, cc, n, e, has_e, family, prm):
 
 @njit(cache=True)
 def _min_row(p, cc, n, e, has_e, family, prm, indptr, indices, i):
+    """(min size, index into p) over CC point i's candidates; row constants computed once."""
+    lo = indptr[i]
+    hi = indptr[i + 1]
+    if hi == lo:
+        return INF, -1
+    nx, ny, nz = n[i, 0], n[i, 1], n[i, 2]
+    if nz <= 0.0 or nz < prm[_SIN_T] - EPS_N:
+        return 0.0, indices[lo]  # the CC point cannot be touched: every pair gives 0
     b = INF
     a = -1
-    for t in range(indptr[i], indptr[i + 1]):
+    if family == FAMILY_BALL or (prm[_FLAT] < 0.5 and nz > prm[_COS_P]):
+        for t in range(lo, hi):
+            j = indices[t]
+            s = _one(p, cc, n, e, has_e, family, prm, i, j)
+            if s < b:
+                b = s
+                a = j
+                if b == 0.0:
+                    break
+        return b, a
+    r, tol = prm[_R], prm[_TOL]
+    cx, cy, cz = cc[i, 0], cc[i, 1], cc[i, 2]
+    rx, ry, rz = r * nx, r * ny, r * nz
+    ex = e[i, 0] if has_e else 0.0
+    ey = e[i, 1] if has_e else 0.0
+    ux, uy, worst = _axis_dir(nx, ny, ex, ey, has_e)
+    for t in range(lo, hi):
         j = indices[t]
-        s = _one(p, cc, n, e, has_e, family, prm, i, j)
+        qx, qy, qz = p[j, 0] - cx, p[j, 1] - cy, p[j, 2] - cz
+        if qx * nx + qy * ny + qz * nz <= tol:
+            continue  # below the tangent plane: inf
+        s = _fillet_size(qx - rx, qy - ry, qz - rz, ux, uy, worst, prm)
         if s < b:
             b = s
             a = j
+            if b == 0.0:
+                break
     return b, a
 
 

@@ -196,23 +196,52 @@ class ResultsStore:
         return PathcheckError(msg, path=self.path, code="store")
 
     def _connect(self) -> sqlite3.Connection:
+        """Connect, check the file is a pathcheck store this version understands (read only),
+        and only then switch it to WAL: a file that fails the check is not written at all."""
         try:
             con = sqlite3.connect(
                 self.path, timeout=self.busy_timeout_s, isolation_level=None,
                 check_same_thread=False,
             )
-            con.execute(f"PRAGMA busy_timeout = {int(self.busy_timeout_s * 1000)}")
-            con.execute("PRAGMA foreign_keys = ON")
-            mode = con.execute("PRAGMA journal_mode = WAL").fetchone()[0]
         except sqlite3.Error as err:
             raise self._fail(err, "opening the store") from err
-        if mode.lower() != "wal":
+        try:
+            con.execute(f"PRAGMA busy_timeout = {int(self.busy_timeout_s * 1000)}")
+            self._check(con)
+            con.execute("PRAGMA foreign_keys = ON")
+            mode = con.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+            if mode.lower() != "wal":
+                raise PathcheckError(
+                    f"expected the store to switch to WAL journal mode, found '{mode}'",
+                    path=self.path, code="store",
+                )
+        except sqlite3.Error as err:
             con.close()
-            raise PathcheckError(
-                f"expected the store to switch to WAL journal mode, found '{mode}'",
-                path=self.path, code="store",
-            )
+            raise self._fail(err, "opening the store") from err
+        except PathcheckError:
+            con.close()
+            raise
         return con
+
+    def _check(self, con: sqlite3.Connection) -> int:
+        """The schema version of the file; PathcheckError for a newer one or a foreign file."""
+        version = con.execute("PRAGMA user_version").fetchone()[0]
+        if version > SCHEMA_VERSION:
+            raise PathcheckError(
+                f"store schema version {version} is newer than this pathcheck understands "
+                f"(expected at most {SCHEMA_VERSION}); upgrade pathcheck; the file was left "
+                "untouched", path=self.path, code="store",
+            )
+        if version == 0:
+            tables = con.execute(
+                "SELECT count(*) FROM sqlite_master WHERE name NOT LIKE 'sqlite_%'"
+            ).fetchone()[0]
+            if tables:
+                raise PathcheckError(
+                    f"expected a pathcheck results store, found an SQLite file with {tables} "
+                    "other tables; the file was left untouched", path=self.path, code="store",
+                )
+        return version
 
     @contextmanager
     def _write(self, doing: str) -> Iterator[sqlite3.Connection]:
@@ -231,29 +260,11 @@ class ResultsStore:
             raise
 
     def _migrate(self) -> None:
-        try:
-            version = self._con.execute("PRAGMA user_version").fetchone()[0]
-        except sqlite3.Error as err:
-            raise self._fail(err, "reading the schema version") from err
-        if version > SCHEMA_VERSION:
-            raise PathcheckError(
-                f"store schema version {version} is newer than this pathcheck understands "
-                f"(expected at most {SCHEMA_VERSION}); upgrade pathcheck", path=self.path,
-                code="store",
-            )
-        if version == SCHEMA_VERSION:
+        """Apply the migrations above the file's version, in one transaction."""
+        if self.schema_version == SCHEMA_VERSION:
             return
         with self._write("migrating the schema") as con:
-            version = con.execute("PRAGMA user_version").fetchone()[0]  # another writer won?
-            if version == 0:
-                tables = con.execute(
-                    "SELECT count(*) FROM sqlite_master WHERE name NOT LIKE 'sqlite_%'"
-                ).fetchone()[0]
-                if tables:
-                    raise PathcheckError(
-                        f"expected a pathcheck results store, found an SQLite file with {tables} "
-                        "other tables; the file was left untouched", path=self.path, code="store",
-                    )
+            version = self._check(con)  # again, inside the lock: another writer may have won
             for step in range(version, SCHEMA_VERSION):
                 for statement in MIGRATIONS[step].split(";"):
                     if statement.strip():
@@ -262,7 +273,10 @@ class ResultsStore:
 
     @property
     def schema_version(self) -> int:
-        return self._con.execute("PRAGMA user_version").fetchone()[0]
+        try:
+            return self._con.execute("PRAGMA user_version").fetchone()[0]
+        except sqlite3.Error as err:
+            raise self._fail(err, "reading the schema version") from err
 
     def close(self) -> None:
         self._con.close()

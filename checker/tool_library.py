@@ -130,28 +130,37 @@ class ToolLibrary:
                 f"no tool named {name!r} in the tool library", path=self.path, code="tools"
             ) from None
 
-    def family(self, kind_family: str, r: float | None = None) -> list[Cutter]:
-        """Cutters of kind `kind_family` (and corner radius r, mm, for the R families, or taper
-        angle equal for balls), ascending by size."""
+    def family(
+        self, kind_family: str, r: float | None = None, *, theta: float | None = None
+    ) -> list[Cutter]:
+        """Cutters of kind `kind_family`, ascending by size; `r` (mm) keeps the R families'
+        cutters with that corner radius, `theta` (rad) those with that taper angle."""
         out = [t for t in self.tools if t.kind == kind_family]
         if r is not None and kind_family not in BALL_FAMILY:
             out = [t for t in out if abs(t.r - r) <= 1e-9 * max(1.0, r)]
+        if theta is not None:
+            out = [t for t in out if abs(t.theta - theta) <= 1e-9]
         return sorted(out, key=lambda t: t.size)
 
     def largest_not_exceeding(
-        self, kind_family: str, size: float, r: float | None = None
+        self, kind_family: str, size: float, r: float | None = None, *, theta: float | None = None
     ) -> Cutter | None:
-        """The largest cutter of the family whose size (R, or r for balls; mm) is <= `size`;
-        None when every one is larger. `r` restricts bull-nose/APT cutters to that corner."""
-        idx = self.pick_many(kind_family, np.array([size], dtype=float), r)[0]
-        return None if idx < 0 else self.family(kind_family, r)[idx]
+        """The largest cutter of `family(kind_family, r, theta=theta)` whose size (R, or r for
+        balls; mm) is <= `size`; None when every one is larger."""
+        idx = self.pick_many(kind_family, np.array([size], dtype=float), r, theta=theta)[0]
+        return None if idx < 0 else self.family(kind_family, r, theta=theta)[idx]
 
     def pick_many(
-        self, kind_family: str, sizes: np.ndarray, r: float | None = None
+        self,
+        kind_family: str,
+        sizes: np.ndarray,
+        r: float | None = None,
+        *,
+        theta: float | None = None,
     ) -> np.ndarray:
-        """(N,) index into `family(kind_family, r)` of the largest cutter not exceeding each
-        allowable size (mm), -1 where none fits (NaN sizes: -1)."""
-        fam = self.family(kind_family, r)
+        """(N,) index into `family(kind_family, r, theta=theta)` of the largest cutter not
+        exceeding each allowable size (mm), -1 where none fits (NaN sizes: -1)."""
+        fam = self.family(kind_family, r, theta=theta)
         s = np.array([t.size for t in fam], dtype=float)
         sizes = np.asarray(sizes, dtype=float)
         idx = np.searchsorted(s, sizes * (1 + 1e-12) + 1e-12, side="right") - 1

@@ -8,7 +8,6 @@ part frame (after `CSYS/`/`MSYS/`); `Record.args` keep the numbers exactly as wr
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -245,11 +244,6 @@ class ToolPath:
     frames: list[Frame] = field(default_factory=list)
     unknown: dict[str, int] = field(default_factory=dict)
     ignored: dict[str, int] = field(default_factory=dict)
-
-    @property
-    def name(self) -> str:
-        """The file name without folders."""
-        return Path(self.path).name
 
     def motion_arrays(self, arc_chord_tol: float | None = None) -> MotionArrays:
         """The motions; with ``arc_chord_tol`` (mm) every arc is expanded into points placed

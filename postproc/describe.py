@@ -18,8 +18,9 @@ def _range(values: np.ndarray) -> list[float] | None:
 def describe_program(moves: GcodeMoves, motions: PartMotions, machine: Machine) -> dict:
     """JSON-ready summary: ``program``, ``dialect``, ``units``, ``machine``, ``blocks {motion,
     rapid, feed, arc, cycle, home, machine_frame}``, ``points {total, known}`` (arcs in chords),
-    ``tools``, ``b_deg [min, max]`` (part rotation), ``bbox_mm`` (part frame, known points),
-    ``feed_mm_min [min, max]`` (tip speed relative to the part), ``other {CODE: count}``."""
+    ``tools`` (loaded by M6), ``b_deg [min, max]`` (part rotation), ``bbox_mm`` (part frame,
+    known points), ``feed_mm_min [min, max]`` (tip speed relative to the part), ``other {CODE:
+    count}``."""
     known = motions.known
     tips = motions.tip[known]
     return {
@@ -37,7 +38,7 @@ def describe_program(moves: GcodeMoves, motions: PartMotions, machine: Machine) 
             "machine_frame": int((moves.kind == MACHINE_FRAME).sum()),
         },
         "points": {"total": len(motions), "known": int(known.sum())},
-        "tools": sorted({int(t) for t in np.unique(moves.tool)}),
+        "tools": sorted({int(t) for t in np.unique(moves.tool) if t > 0}),
         "b_deg": _range(motions.b_deg[known]),
         "bbox_mm": None if not len(tips) else [_range(tips[:, k]) for k in range(3)],
         "feed_mm_min": _range(motions.feed),

@@ -13,6 +13,9 @@ from checker.errors import PathcheckError
 from postproc.dialects import Dialect
 
 _NUMBER = re.compile(r"[0-9]*\.?[0-9]*")
+#: plain blocks (letters and numbers only): one regular expression instead of the cursor
+_PLAIN = re.compile(r"(?:[A-Z][-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))*")
+_PLAIN_WORD = re.compile(r"([A-Z])([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))")
 _FUNCTIONS = {
     "ABS": abs,
     "SQRT": math.sqrt,
@@ -39,6 +42,8 @@ class Block:
 def split_comments(raw: str, *, path: str | None, line: int) -> tuple[str, list[str]]:
     """Code text without comments, and the comments: ``( ... )`` anywhere, ``;`` to the end of
     the line (LinuxCNC comment, Fanuc end of block)."""
+    if "(" not in raw and ";" not in raw:
+        return raw, []
     comments: list[str] = []
     code: list[str] = []
     pos = 0
@@ -88,8 +93,11 @@ class _Cursor:
         text = match.group(0) if match else ""
         if not any(c.isdigit() for c in text):
             raise self.fail("a number")
+        value = float(text)
+        if not math.isfinite(value):
+            raise self.fail("a number of reasonable size")
         self.pos += len(text)
-        return float(text)
+        return value
 
     def param_name(self) -> str:
         self.pos += 1  # '#'
@@ -155,6 +163,9 @@ def lex_block(raw: str, dialect: Dialect, params: dict[str, float], *, path=None
     if text.startswith("/"):
         block.deleted = True
         text = text[1:]
+    if len(text) < 200 and _PLAIN.fullmatch(text):  # long digit runs go the checked way
+        block.words = [(letter, float(value)) for letter, value in _PLAIN_WORD.findall(text)]
+        return block
     cur = _Cursor(text, params, dialect, path, line)
     while cur.pos < len(text):
         ch = cur.peek()

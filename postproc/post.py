@@ -33,7 +33,9 @@ class PostMoves:
     ``b_direction``), ``rapid (N,)`` bool, ``feed (N,)`` mm/min (nan for rapids), ``spindle
     (N,)`` rpm in effect (+ CW/M3, - CCW/M4, 0 stopped, nan unknown), ``coolant (N,)`` in effect
     (0 off, 7 mist, 8 flood, -1 unknown), ``tool (N,)`` in effect (0 unknown), ``comment`` one
-    text per move ('' none; flagged points), ``line (N,)`` source line of each move."""
+    text per move ('' none; flagged points), ``line (N,)`` source line of each move, ``source``
+    the CL file (named in errors), ``units`` the job's units ('mm' or 'inch'): the program is
+    written in them (None: the machine's)."""
 
     tip: np.ndarray
     axis: np.ndarray
@@ -45,6 +47,8 @@ class PostMoves:
     tool: np.ndarray
     comment: tuple[str, ...]
     line: np.ndarray
+    source: str | None = None
+    units: str | None = None
 
     @classmethod
     def build(
@@ -59,6 +63,8 @@ class PostMoves:
         tool: np.ndarray | int | None = None,
         comment: list[str] | tuple[str, ...] | None = None,
         line: np.ndarray | None = None,
+        source: str | None = None,
+        units: str | None = None,
     ) -> PostMoves:
         """Moves from tips ``(N,3)`` and B ``(N,)`` degrees, the axis following from B; scalars
         broadcast, missing fields take their 'unknown' value."""
@@ -82,6 +88,8 @@ class PostMoves:
             tool=full(tool, 0, int),
             comment=tuple(comment) if comment is not None else ("",) * n,
             line=full(line, 0, int) if line is not None else np.arange(1, n + 1),
+            source=source,
+            units=units,
         )
 
     def __len__(self) -> int:
@@ -99,12 +107,13 @@ def moves_from_toolpath(
     comments: list[str] | None = None,
 ) -> PostMoves:
     """PostMoves from a `checker.toolpath.ToolPath`: the rows of
-    ``toolpath.motion_arrays(arc_chord_tol)`` with their rapid flag, feed, spindle, line and the
-    tool number of their operation. With ``b_deg (N,)`` (the chosen B, degrees) the axis becomes
-    ``(-sin b, 0, cos b)``, else B follows from the CL axis; with ``cc (N,3)``, ``normals
-    (N,3)`` (part frame, out of the material) and ``cutter`` the tip is recomputed from the
-    contact by ``cutter.tip_from_contact(cc, n, axis)`` at the new axis. ``comments`` (one per
-    row, '' none) are written before the blocks (flags)."""
+    ``toolpath.motion_arrays(arc_chord_tol)`` with their rapid flag, feed, spindle, coolant
+    (where the arrays carry it), line and the tool number of their operation. With ``b_deg
+    (N,)`` (the chosen B, degrees) the axis becomes ``(-sin b, 0, cos b)``, else B follows from
+    the CL axis; with ``cc (N,3)``, ``normals (N,3)`` (part frame, out of the material) and
+    ``cutter`` the tip is recomputed from the contact by ``cutter.tip_from_contact(cc, n,
+    axis)`` at the new axis. ``comments`` (one per row, '' none) are written before the blocks
+    (flags)."""
     arrays = toolpath.motion_arrays(arc_chord_tol)
     lines = np.asarray(arrays.line)
     if b_deg is None:
@@ -124,9 +133,12 @@ def moves_from_toolpath(
         rapid=arrays.rapid,
         feed=arrays.feed,
         spindle=arrays.spindle,
+        coolant=getattr(arrays, "coolant", None),  # where the CL reader records COOLNT
         tool=numbers[np.asarray(arrays.op, dtype=int)],
         comment=comments,
         line=lines,
+        source=str(toolpath.path),
+        units=toolpath.units,
     )
 
 
@@ -155,7 +167,12 @@ def _validate(moves: PostMoves, machine: Machine) -> None:
     finite = np.isfinite(moves.tip).all(axis=1) & np.isfinite(moves.b_deg)
     if not finite.all():
         k = int(np.flatnonzero(~finite)[0])
-        raise PathcheckError("move has a non-finite tip or B", line=int(moves.line[k]), code="post")
+        raise PathcheckError(
+            "move has a non-finite tip or B",
+            path=moves.source,
+            line=int(moves.line[k]),
+            code="post",
+        )
     mismatch = (
         np.linalg.norm(moves.axis - axis_from_rotation(np.radians(moves.b_deg)), axis=1) > 1e-6
     )
@@ -164,6 +181,7 @@ def _validate(moves: PostMoves, machine: Machine) -> None:
         raise PathcheckError(
             f"tool axis {tuple(np.round(moves.axis[k], 6))} does not match "
             f"B = {moves.b_deg[k]:.4f} deg: expected (-sin B, 0, cos B)",
+            path=moves.source,
             line=int(moves.line[k]),
             code="post",
         )
@@ -172,6 +190,7 @@ def _validate(moves: PostMoves, machine: Machine) -> None:
         k = int(np.flatnonzero(no_feed)[0])
         raise PathcheckError(
             "feed move without a feed rate: expected a FEDRAT > 0 before it",
+            path=moves.source,
             line=int(moves.line[k]),
             code="post",
         )
@@ -228,7 +247,7 @@ def _assemble(moves: PostMoves, machine: Machine) -> dict[str, np.ndarray]:
         branch = np.zeros(p["src"].size, dtype=int)
         turn = p["wc"]
     else:
-        branch = range_branches(p["wc"], *span, lines=moves.line[p["src"]])
+        branch = range_branches(p["wc"], *span, lines=moves.line[p["src"]], path=moves.source)
         word = p["wc"] + 360.0 * branch
         turn = word
     m = p["src"].size
@@ -249,7 +268,8 @@ def _assemble(moves: PostMoves, machine: Machine) -> dict[str, np.ndarray]:
     skip = np.zeros(m, bool)  # a move that starts with an approach keeps only its end row
     for a, b in zip(first, last_piece, strict=True):
         skip[a:b] = True
-    jumps = set(np.flatnonzero(np.diff(branch) != 0) + 1) - set(approach)
+    jumps = {int(i) for i in np.flatnonzero(np.diff(branch) != 0) + 1 if not skip[i]}
+    jumps -= set(approach)
     clearance = machine.program.reentry_clearance
     safe = machine.program.safe_z
     chunks: list[dict[str, np.ndarray]] = []
@@ -262,6 +282,8 @@ def _assemble(moves: PostMoves, machine: Machine) -> dict[str, np.ndarray]:
         here = {key: val[i : i + 1] for key, val in rows.items()}
         if i in approach:
             tool = int(moves.tool[k]) > 0
+            if not tool:  # no tool change retracted the spindle: go to the safe plane first
+                chunks.append(_row([np.nan, np.nan, safe], np.nan, turn[i], 0, k, force=True))
             chunks.append(_row([x, y, np.nan], word[i], turn[i], 0, k, force=True))
             if rows["motion"][i] == 0:
                 here = {**here, "g43": np.array([tool]), "force": np.array([True])}
@@ -305,6 +327,7 @@ def _crossing(
             f"B must pass {bound:g} deg during a cut, and the B word range "
             f"[{lo:g}, {hi:g}] is less than a full turn: no retract-rotate-re-enter can "
             "continue the cut",
+            path=moves.source,
             line=int(moves.line[k]),
             code="travel",
         )
@@ -408,14 +431,18 @@ def _check_travel(rows: Rows, text: str, machine: Machine, moves: PostMoves) -> 
     raise PathcheckError(
         f"travel limit: block '{block}' (program line {program_line}) moves {'XYZ'[axis]} to "
         f"{rows.xyz[i, axis]:.4f} mm, expected within [{lo:g}, {hi:g}] of machine '{machine.name}'",
+        path=moves.source,
         line=int(moves.line[rows.src[i]]),
         code="travel",
     )
 
 
 def post(moves: PostMoves, machine: Machine, *, program_name: str = "PATHCHECK") -> PostedProgram:
-    """Post ``moves`` for ``machine``: the program text and the row table (see PostedProgram)."""
+    """Post ``moves`` for ``machine`` in the job's units: the program text and the row table
+    (see PostedProgram)."""
     _validate(moves, machine)
+    if moves.units is not None and moves.units != machine.units:
+        machine = machine.model_copy(update={"units": moves.units})
     assembled = _assemble(moves, machine)
     rows = Rows(
         xyz=assembled["xyz"],

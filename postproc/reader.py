@@ -3,14 +3,15 @@ with modal state (motion, plane, distance, feed mode, units, tool, spindle, cool
 
 Interpreted: G0-G3 (arcs by I/J/K or R, planes G17-G19), canned cycles G73/G76/G81-G89 (each hole
 as rapid down to R, feed to Z, rapid back to R or the initial level), G20/G21 (converted to mm),
-G90/G91, G93/G94/G95, G28/G30 (the named axes go home: unknown in the work frame), G53 (machine-frame move: the named
-linear axes become unknown), G92 and G10 L20 (set the position), T/M6, S/M3/M4/M5, M7/M8/M9,
-A/B/C words. Other codes of the dialect table are accepted and counted. Unknown positions are NaN.
+G90/G91, G93/G94/G95, G28/G30 and G53 (the named linear axes end unknown in the work frame),
+G92 and G10 L20 (set the position), T/M6, S/M3/M4/M5, M7/M8/M9, A/B/C words, full circles by
+I/J/K alone. Other codes of the dialect table are accepted and counted. Unknown positions are NaN.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,6 +23,8 @@ from postproc.dialects import CANNED_CYCLES, Dialect, get_dialect
 from postproc.gcode_lex import Block, lex_block
 
 MM_PER_INCH = 25.4
+_NO_CENTER = (math.nan, math.nan, math.nan)
+_NOT_TEXT = re.compile(r"[^\t\n\r\x0b\x0c\x20-\x7e]")
 #: row kinds
 PROGRAMMED, CYCLE, HOME, MACHINE_FRAME = 0, 1, 2, 3
 _AXES = "XYZABC"
@@ -124,7 +127,7 @@ class _Program:
         r["xyz"].append(pos[:3].copy())
         r["abc"].append(pos[3:].copy())
         r["motion"].append(motion)
-        r["center"].append(np.full(3, np.nan) if center is None else center)
+        r["center"].append(_NO_CENTER if center is None else center)
         r["plane"].append(st.plane)
         r["feed"].append(st.feed)
         r["feed_mode"].append(st.feed_mode)
@@ -144,6 +147,11 @@ class _Program:
         words: dict[str, float] = {}
         tools: list[float] = []
         for letter, value in block.words:
+            if letter in "GMT" and not math.isfinite(value):
+                raise self.error(
+                    f"{letter} word has no known value (an unset parameter?): expected a number",
+                    line,
+                )
             if letter == "G":
                 code = f"{value:g}"
                 group = self.dialect.group_of(code, path=self.path, line=line)
@@ -262,7 +270,7 @@ class _Program:
                 )
             return
         if non_modal in ("28", "30"):
-            homed = [k for k, a in enumerate("XYZ") if a in words]
+            homed = [k for k, a in enumerate("XYZ") if a in words] or [0, 1, 2]  # none: all
             target[homed] = np.nan  # at the reference point: unknown in the work frame
             self.emit(target, 0, line, HOME)
             return
@@ -377,14 +385,16 @@ def read_gcode_text(
     """Motion rows of G-code ``text``; ``units`` is the control's default before G20/G21."""
     dia = get_dialect(dialect) if isinstance(dialect, str) else dialect
     prog = _Program(dia, path, units)
+    bad = _NOT_TEXT.search(text)
+    if bad:
+        number = text.count("\n", 0, bad.start()) + 1
+        raise prog.error(
+            f"expected printable ASCII G-code, found character {ord(bad.group(0)):#04x}", number
+        )
     for number, raw in enumerate(text.splitlines(), start=1):
         stripped = raw.strip()
         if not stripped or stripped == "%":
             continue
-        if any(ord(c) < 9 or (13 < ord(c) < 32) or ord(c) > 126 for c in stripped):
-            raise prog.error(
-                "expected printable ASCII G-code, found a binary or non-ASCII character", number
-            )
         if not dia.program_number_letter and stripped[:1] in "oO":
             raise prog.error(
                 "o-word subroutines and control flow are not supported: expected plain G-code",

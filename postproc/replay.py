@@ -67,8 +67,8 @@ def _chords(moves: GcodeMoves, turn: np.ndarray, tolerance: float):
     n = len(moves)
     start = np.vstack([moves.xyz[:1], moves.xyz[:-1]]) if n else moves.xyz
     arc = np.isin(moves.motion, (2, 3)) & np.isfinite(moves.center).all(axis=1)
-    planes = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}
-    uvw = np.array([planes[int(p)] for p in moves.plane]).reshape(n, 3)
+    planes = np.array([(0, 1, 2), (2, 0, 1), (1, 2, 0)])  # G17, G18, G19: (u, v, normal)
+    uvw = planes[moves.plane - 17].reshape(n, 3)
     rows = np.arange(n)
     su, sv = (
         start[rows, uvw[:, 0]] - moves.center[rows, uvw[:, 0]],

@@ -55,11 +55,12 @@ def unroll_rollover(words: np.ndarray, mode: str, start: float = 0.0) -> np.ndar
 
 
 def range_branches(
-    w: np.ndarray, lo: float, hi: float, lines: np.ndarray | None = None
+    w: np.ndarray, lo: float, hi: float, lines: np.ndarray | None = None, path: str | None = None
 ) -> np.ndarray:
     """Branch ``n (N,)`` so that ``w + 360 n`` lies in ``[lo, hi]``: each run keeps one branch as
     long as it can, a new run starts where the path leaves the range. ``w (N,)`` continuous words
-    in degrees; a point that fits no branch is a travel-limit error naming its source line."""
+    in degrees; a point that fits no branch is a travel-limit error naming its source ``path``
+    and line."""
     w = np.asarray(w, dtype=float)
     n_lo = np.ceil((lo - w) / 360.0 - 1e-12)
     n_hi = np.floor((hi - w) / 360.0 + 1e-12)
@@ -69,6 +70,7 @@ def range_branches(
         raise PathcheckError(
             f"B = {w[k]:.4f} deg cannot be reached: expected a B word in [{lo:g}, {hi:g}] "
             f"(modulo 360), found none",
+            path=path,
             line=None if lines is None else int(lines[k]),
             code="travel",
         )

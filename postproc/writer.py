@@ -5,6 +5,7 @@ write (temporary file + os.replace) so a failed run never leaves half a program.
 from __future__ import annotations
 
 import os
+import re
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,6 +17,9 @@ from postproc.dialects import Dialect
 from postproc.machine import Machine
 
 MM_PER_INCH = 25.4
+_TRAILING_ZEROS = re.compile(r"0+$", re.M)
+_DOT_END = re.compile(r"\.$", re.M)
+_NO_DOT = re.compile(r"$", re.M)
 
 
 @dataclass
@@ -42,11 +46,15 @@ class Rows:
 def format_number(values: np.ndarray, decimals: int) -> list[str]:
     """Numbers with a decimal point and at least one decimal (``10.0``, ``-0.5``): accepted by
     Fanuc, LinuxCNC and the PyPI parsers. ``-0.0`` keeps its sign (signed rotary words)."""
-    out = []
-    for text in np.char.mod(f"%.{decimals}f", np.asarray(values, dtype=float)):
-        text = text.rstrip("0")
-        out.append(text + "0" if text.endswith(".") else text)
-    return out
+    flat = np.asarray(values, dtype=float).ravel().tolist()
+    if not flat:
+        return []
+    text = ("\n".join([f"%.{decimals}f"] * len(flat))) % tuple(flat)
+    if decimals:
+        text = _DOT_END.sub(".0", _TRAILING_ZEROS.sub("", text))
+    else:
+        text = _NO_DOT.sub(".0", text)
+    return text.split("\n")
 
 
 def _changed(texts: list[str], valid: np.ndarray, force: np.ndarray) -> np.ndarray:
@@ -60,8 +68,10 @@ def _changed(texts: list[str], valid: np.ndarray, force: np.ndarray) -> np.ndarr
 
 
 def comment(text: str) -> str:
-    """A comment block; parentheses inside the text become brackets."""
-    return "(" + text.replace("(", "[").replace(")", "]").strip() + ")"
+    """A comment block on one line: parentheses inside become brackets, anything but printable
+    ASCII becomes '?' (controls take no other characters in comments)."""
+    clean = "".join(c if " " <= c <= "~" else "?" for c in " ".join(text.split()))
+    return "(" + clean.replace("(", "[").replace(")", "]") + ")"
 
 
 def format_program(
@@ -84,17 +94,16 @@ def format_program(
         valid = np.isfinite(vals)
         texts = format_number(np.where(valid, vals, 0.0), fmt.linear_decimals)
         words[letter] = (texts, _changed(texts, valid, force))
-    btexts = format_number(rows.word, fmt.rotary_decimals)
+    signed = machine.rotary.wrap == "signed"
+    bvals = rows.word if signed else np.round(rows.word, fmt.rotary_decimals) + 0.0
+    btexts = format_number(bvals, fmt.rotary_decimals)
     # signed words: the sign is a direction, the position is the magnitude
-    positions = [t.lstrip("-") for t in btexts] if machine.rotary.wrap == "signed" else btexts
+    positions = [t.lstrip("-") for t in btexts] if signed else btexts
     words["B"] = (btexts, _changed(positions, np.isfinite(rows.word), force))
     inverse = machine.feeds.rotary_mode == "g93"
     feed_ok = np.isfinite(rows.fword)
     if inverse:
-        ftexts = [
-            _significant(v, fmt.inverse_time_digits) if ok else ""
-            for v, ok in zip(rows.fword, feed_ok, strict=True)
-        ]
+        ftexts = _significant(np.where(feed_ok, rows.fword, 1.0), fmt.inverse_time_digits)
     else:
         ftexts = format_number(np.where(feed_ok, rows.fword, 0.0), fmt.feed_decimals)
     motion_texts = [code("G", int(v)) for v in rows.motion]
@@ -151,10 +160,15 @@ def format_program(
     return "\n".join(lines) + "\n"
 
 
-def _significant(value: float, digits: int) -> str:
-    """A positive number with ``digits`` significant digits, in plain decimal notation."""
-    decimals = max(1, digits - 1 - int(np.floor(np.log10(value))))
-    return format_number(np.array([value]), decimals)[0]
+def _significant(values: np.ndarray, digits: int) -> list[str]:
+    """Positive numbers with ``digits`` significant digits (at least one decimal), in plain
+    decimal notation."""
+    decimals = np.maximum(1, digits - 1 - np.floor(np.log10(values)).astype(int))
+    out = np.empty(len(values), dtype=object)
+    for d in np.unique(decimals):
+        pick = decimals == d
+        out[pick] = format_number(values[pick], int(d))
+    return out.tolist()
 
 
 def write_program(text: str, path: str | Path) -> Path:

@@ -36,7 +36,7 @@ R_TIP = 116.0                  # mm, blade tip radius (36 mm above the hub)
 HUB_Y = 32.0                   # mm, hub spans y in [-HUB_Y, HUB_Y]
 BLADE_PHI = (-PITCH, 0.0, PITCH)
 COMP_CUTTER = (6.0, 3.0)       # CUTTER/6,3: ball end-mill D6
-COMP_TILT = np.radians(10.0)   # CAM rule: axis tilted from radial towards the surface normal
+COMP_TILT = np.radians(20.0)   # CAM rule: axis tilted from radial towards the surface normal
 COMP_GRID = 41                 # thesis chapter 5: 41 x 41 CC points per surface
 COMP_V0 = 0.18                 # lowest CC row: about 4.8 mm above the hub
 CLEAR_RADIUS = 160.0           # mm, rapid moves between passes stay outside this radius
@@ -138,21 +138,24 @@ def compressor_surfaces() -> list[NURBS.Surface]:
 
 # ---- mould geometry -------------------------------------------------------------------------
 def _cavity_height(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Design height (mm) of the cavity floor: a bowl 28 mm deep, a ridge across it at x = 0
-    (the crease between body and nozzle, made C0 by a triple knot) and a boss 9 mm high."""
+    """Design height (mm) of the cavity floor: a bowl about 28 mm deep, lopsided in y, a ridge
+    across it at x = 0 (the crease between body and nozzle, made C0 by the poles at the patch
+    edge) and a boss 9 mm high; zero on the rim."""
     X, Y = x / CAV_X, y / CAV_Y
     bowl = -28.0 * (1.0 - X**2)
     ridge = 7.0 * (np.exp(-np.abs(X) / 0.35) - np.exp(-1.0 / 0.35))
     boss = 9.0 * np.exp(-((x - 30.0) ** 2 + (y + 10.0) ** 2) / (2 * 9.0**2)) * (1.0 - X**2)
-    return (bowl + ridge) * (1.0 - Y**2) + boss * (1.0 - Y**2)
+    across = (1.0 - Y**2) * (1.0 + 0.4 * Y)     # deeper and steeper towards +y
+    return (bowl + ridge + boss) * across
 
 
 def mould_surfaces() -> list[NURBS.Surface]:
     """Four bicubic cavity patches and four flat parting-plane patches (u along +x, v along +y,
-    normals +z side up). The cavity is one B-spline split at its multiple knots: the ridge at
-    x = 0 is a C0 crease (triple knot), the join at y = 0 is C1 (double knot); the cavity meets
-    the parting plane at the rim in a C0 edge. Poles sit at the Greville abscissae, so x and y
-    are linear in u and v on every patch."""
+    normals +z side up). Each cavity patch has 6 x 5 poles at the Greville abscissae of its knot
+    vectors (so x and y are linear in u and v) with heights from `_cavity_height`; neighbours
+    share their boundary poles. Across x = 0 the pole columns beside the edge slope opposite
+    ways: a C0 crease (the ridge). Across y = 0 the pole rows beside the join mirror each other
+    about it: C1. The cavity meets the parting plane at the rim in a convex C0 edge."""
     p = 3
     knots_half_u = _clamped(p, (1 / 3, 2 / 3))     # each half in x: simple interior knots (C2)
     knots_half_v = _clamped(p, (0.5,))
@@ -394,7 +397,7 @@ def main() -> None:
         for ps in res["passes"]:
             c = clearance(pts, core, ps.tips, ps.axes, 60.0)
             print(f"{name}: {len(ps.tips)} CL points, GOTO {res['goto']}, clearance min "
-                  f"{c.min():.4f} mm, max {c.max():.4f} mm")
+                  f"{c.min():.6f} mm, max {c.max():.6f} mm")
 
 
 if __name__ == "__main__":

@@ -30,9 +30,11 @@ def _inside(s, ball, r, theta, cc, n, p):
             return rho < math.sqrt(s * s - y * y) - 1e-12
         return rho < s / math.cos(theta) + y * math.tan(theta) - 1e-12
     ox, oy, oz = cc[0] + r * n[0], cc[1] + r * n[1], cc[2] + r * n[2]
-    ax, ay = ox + s * ex, oy + s * ey
     y = p[2] - oz  # height above the corner centres
-    rho = math.hypot(p[0] - ax, p[1] - ay)
+    if nh > 1e-9:
+        rho = math.hypot(p[0] - ox - s * ex, p[1] - oy - s * ey)
+    else:  # vertical normal: e is free, some direction e puts the axis nearest to p
+        rho = abs(math.hypot(p[0] - ox, p[1] - oy) - s)
     if y < -r:
         return False
     if y < 0.0:
@@ -40,39 +42,37 @@ def _inside(s, ball, r, theta, cc, n, p):
     return rho < s + r - 1e-12
 
 
-@nb.njit(cache=True, parallel=True)
-def _bisect(ball, r, theta, cc, n, pts, rows, idx, s_hi, out):
-    for k in nb.prange(rows.shape[0]):
-        c, nn, p = cc[rows[k]], n[rows[k]], pts[idx[k]]
-        d = p - c
-        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < 1e-6:
-            out[k] = np.inf
-            continue
-        if not _inside(s_hi, ball, r, theta, c, nn, p):
-            out[k] = np.inf
-            continue
-        lo, hi = 0.0, s_hi
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            if _inside(mid, ball, r, theta, c, nn, p):
-                hi = mid
-            else:
-                lo = mid
-        out[k] = hi
+@nb.njit(cache=True)
+def _size(ball, r, theta, c, nn, p, s_hi):
+    """Smallest s with p inside the size-s cutter (bisection), inf if not inside at s_hi."""
+    if not _inside(s_hi, ball, r, theta, c, nn, p):
+        return np.inf
+    lo, hi = 0.0, s_hi
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if _inside(mid, ball, r, theta, c, nn, p):
+            hi = mid
+        else:
+            lo = mid
+    return hi
 
 
 @nb.njit(cache=True, parallel=True)
-def _screen(ball, r, theta, cc, n, pts, s_test, best_idx):
-    """Per row, the first point inside the size-s_test cutter (-1 if none), any order."""
+def _row_min(ball, r, theta, cc, n, pts, s_max, best, arg):
+    """Per row the minimum size over all points: a point outside the cutter of the best size
+    so far cannot lower it (the cutters are nested in s), else it is bisected."""
     for i in nb.prange(cc.shape[0]):
-        best_idx[i] = -1
+        b, a = s_max, -1
         for j in range(pts.shape[0]):
             d = pts[j] - cc[i]
             if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < 1e-6:
                 continue
-            if _inside(s_test[i], ball, r, theta, cc[i], n[i], pts[j]):
-                best_idx[i] = j
-                break
+            if _inside(b, ball, r, theta, cc[i], n[i], pts[j]):
+                s = _size(ball, r, theta, cc[i], n[i], pts[j], b)
+                if s < b:
+                    b, a = s, j
+        best[i] = b if a >= 0 else np.inf
+        arg[i] = a
 
 
 def dense_points(part: Part, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -81,9 +81,13 @@ def dense_points(part: Part, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
     for s in part.surfaces:
         (u0, u1), (v0, v1) = s.domain
         U, V = np.meshgrid(np.linspace(u0, u1, n), np.linspace(v0, v1, n), indexing="ij")
-        P.append(evaluate(s, U.ravel(), V.ravel()).points)
-        S.append(np.full(U.size, s.id))
-        UV.append(np.column_stack([U.ravel(), V.ravel()]))
+        u, v = U.ravel(), V.ravel()
+        if s.trim is not None:
+            keep = np.asarray(s.trim.contains(u, v), dtype=bool)
+            u, v = u[keep], v[keep]
+        P.append(evaluate(s, u, v).points)
+        S.append(np.full(u.size, s.id))
+        UV.append(np.column_stack([u, v]))
     return np.concatenate(P), np.concatenate(S), np.concatenate(UV)
 
 
@@ -95,13 +99,8 @@ def oracle_sizes(part: Part, cutter, cc: np.ndarray, n: np.ndarray, dense: int,
     r, th = float(cutter.r), float(cutter.theta)
     pts, sid, uv = dense_points(part, dense)
     m = len(cc)
-    rows = np.repeat(np.arange(m), len(pts))
-    idx = np.tile(np.arange(len(pts)), m)
-    val = np.empty(len(rows))
-    _bisect(ball, r, th, cc, n, pts, rows, idx, s_max, val)
-    val = val.reshape(m, len(pts))
-    k = np.argmin(val, axis=1)
-    best = val[np.arange(m), k]
+    best, k = np.empty(m), np.empty(m, dtype=np.int64)
+    _row_min(ball, r, th, cc, n, pts, s_max, best, k)
     # local densification around each row's best dense point
     out = best.copy()
     for i in np.flatnonzero(np.isfinite(best)):
@@ -116,8 +115,7 @@ def oracle_sizes(part: Part, cutter, cc: np.ndarray, n: np.ndarray, dense: int,
         else:
             keep = np.ones(U.size, bool)
         lp = evaluate(s, U.ravel()[keep], V.ravel()[keep]).points
-        lv = np.empty(len(lp))
-        _bisect(ball, r, th, cc[i:i + 1], n[i:i + 1], lp, np.zeros(len(lp), np.int64),
-                np.arange(len(lp)), s_max, lv)
-        out[i] = min(out[i], lv.min())
+        lb, la = np.empty(1), np.empty(1, dtype=np.int64)
+        _row_min(ball, r, th, cc[i:i + 1], n[i:i + 1], lp, s_max, lb, la)
+        out[i] = min(out[i], lb[0])
     return out

@@ -81,3 +81,10 @@ def test_arc_sampling_refuses_absurd_point_counts_and_bad_tolerances():
         tp.motion_arrays(arc_chord_tol=1e-6)
     with pytest.raises(PathcheckError, match="chord tolerance must be > 0"):
         tp.motion_arrays(arc_chord_tol=0.0)
+
+
+def test_long_digit_strings_are_refused_by_magnitude():
+    with pytest.raises(PathcheckError, match=r"<string>:2: expected coordinates of at most 1e\+15"):
+        read_cl_text("CUTTER/6\nGOTO/" + "9" * 400 + ",0,0\n")
+    with pytest.raises(PathcheckError, match=r":2: expected a unit tool axis"):
+        read_cl_text("CUTTER/6\nGOTO/0,0,0,0,0," + "9" * 400 + "\n")

@@ -57,10 +57,10 @@ TOKENS = [
 def check(text: str) -> None:
     try:
         tp = read_cl_text(text)
+        m = tp.motion_arrays(arc_chord_tol=0.05)
     except PathcheckError as err:
         assert str(err) and "\n" not in str(err)
         return
-    m = tp.motion_arrays(arc_chord_tol=0.05)
     assert np.isfinite(m.tip).all() and np.isfinite(m.axis).all()
     np.testing.assert_allclose(np.linalg.norm(m.axis, axis=1), 1.0, atol=1e-9)
 

@@ -38,6 +38,8 @@ def test_basic_apt_motions_feed_rapid_and_lines():
     assert m.spindle.tolist() == [3000] * 3
     assert m.line.tolist() == [6, 8, 9]
     assert m.op.tolist() == [0, 0, 0]
+    last = m.motion(2)
+    assert (last.tip.tolist(), last.rapid, last.feed, last.line) == ([10.5, -2, 5], False, 500, 9)
     assert tp.records[0].text == "DEMO, PART 1"  # free text keeps its commas
     assert tp.operations[0].cutter.d == 10 and tp.operations[0].cutter.kind == "flat"
     assert tp.unknown == {}
@@ -221,3 +223,35 @@ def test_read_cl_reads_a_file(tmp_path):
     f.write_bytes(b"CUTTER/6\r\nGOTO/1,2,3\r\n")
     tp = read_cl(f)
     assert tp.path == str(f) and tp.motion_arrays().tip.tolist() == [[1, 2, 3]]
+
+
+def test_creo_style_spaces_around_the_slash():
+    tp = read_cl_text(
+        apt(
+            "$$-> MFGNO / DEMO",
+            "PARTNO / DEMO",
+            "UNITS / MM",
+            "MACHIN / UNCX01, 1",
+            "CUTTER / 10.000000",
+            "LOADTL / 7",
+            "SPINDL / RPM, 1200.000000, CLW",
+            "FEDRAT / 250.000000, MMPM",
+            "GOTO / 1.0000000000, 2.0000000000, 3.0000000000",
+            "ORIGIN / 1, 2, 3",
+        )
+    )
+    m = tp.motion_arrays()
+    assert m.tip.tolist() == [[1, 2, 3]] and m.feed.tolist() == [250] and m.spindle[0] == 1200
+    assert tp.operations[0].tool_number == 7
+    assert tp.unknown == {"ORIGIN": 1}  # a statement that would move the part is never hidden
+
+
+def test_a_feed_between_rapid_and_goto_cancels_the_rapid():
+    m = read_cl_text(apt("CUTTER/6", "RAPID", "FEDRAT/100", "GOTO/1,2,3", "RAPID", "GOTO/0,0,9"))\
+        .motion_arrays()
+    assert m.rapid.tolist() == [False, True] and m.feed[0] == 100 and np.isnan(m.feed[1])
+
+
+def test_dos_end_of_file_mark_and_crlf():
+    tp = read_cl_text("CUTTER/6\r\nGOTO/1,2,3\r\nFINI\r\n\x1a")
+    assert tp.motion_arrays().tip.tolist() == [[1, 2, 3]] and tp.records[-1].word == "FINI"

@@ -119,3 +119,15 @@ def test_console_script_in_a_subprocess(job, tmp_path):
     assert res.returncode == 2 and res.stdout == ""
     assert res.stderr == f"pathcheck: {bad}:2: GOTO/: expected 3 or 6 values (x,y,z[,i,j,k]), " \
         "found 2\n"
+
+
+def test_part_files_are_handed_to_the_geometry_info(tmp_path, capsys):
+    stl = tmp_path / "tri.stl"
+    stl.write_text(
+        "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 2 0 0\nvertex 0 3 0\n"
+        "endloop\nendfacet\nendsolid t\n"
+    )
+    code, out, err = run(["info", str(stl), "--json"], capsys)
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["kind"] == "mesh" and d["bbox"] == {"min": [0, 0, 0], "max": [2, 3, 0]}

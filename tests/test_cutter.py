@@ -8,6 +8,8 @@ import re
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from checker.cutter import Cutter, cutter_from_apt, cutter_from_tldata, parse_cutter
 from checker.errors import PathcheckError
@@ -287,3 +289,29 @@ def test_signed_distance_against_dense_polyline(text):
     want = np.where(inside, -dist, dist)
     np.testing.assert_allclose(got, want, atol=2e-3)
     assert inside.sum() > 10
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.one_of(
+        st.text(max_size=60),
+        st.lists(
+            st.one_of(
+                st.floats(allow_nan=True, allow_infinity=True).map(repr),
+                st.sampled_from(["", "x", "1e400", "-0", "5", "0.0"]),
+            ),
+            max_size=11,
+        ).map(lambda v: "CUTTER/" + ",".join(v)),
+        st.lists(st.floats(-100, 100).map(repr), max_size=11).map(
+            lambda v: "TLDATA/MILL," + ",".join(v)
+        ),
+    )
+)
+def test_random_statements_raise_only_pathcheck_errors(text):
+    try:
+        c = parse_cutter(text)
+    except PathcheckError as err:
+        assert err.code == "cutter" and "\n" not in str(err)
+        return
+    assert c.kind in ("flat", "ball", "bullnose", "apt", "tapered_ball")
+    assert c.d > 0 and c.r >= 0 and c.R >= 0 and math.isfinite(c.size)

@@ -127,3 +127,23 @@ def test_missing_file_is_a_part_error(tmp_path):
     with pytest.raises(PathcheckError, match="cannot read part file") as err:
         load_part(tmp_path / "nowhere.step")
     assert err.value.code == "part"
+
+
+def test_describe_geomdl_part(container):
+    from checker.geometry.info import describe_part, format_part_info
+
+    path, surfs = container
+    d = describe_part(path)
+    assert [(s["degree_u"], s["poles_u"], s["poles_v"], s["rational"]) for s in d["surfaces"]] == [
+        (5, 6, 6, True), (2, 5, 7, False),
+    ]  # fmt: skip
+    # the bbox is that of the evaluated surfaces: inside the control-point hull, touching corners
+    pts = np.concatenate(
+        [np.array(g.evaluate_list([[0, 0], [1, 1], [0, 1], [1, 0]])) for g in surfs]
+    )
+    hull = np.concatenate([np.array(g.ctrlpts) for g in surfs])
+    lo, hi = np.array(d["bbox"]["min"]), np.array(d["bbox"]["max"])
+    assert np.all(lo <= pts.min(axis=0) + 1e-9) and np.all(hi >= pts.max(axis=0) - 1e-9)
+    assert np.all(lo >= hull.min(axis=0) - 1e-9) and np.all(hi <= hull.max(axis=0) + 1e-9)
+    text = format_part_info(d)
+    assert "2 surfaces (1 rational, 0 trimmed)" in text and "5x5" in text

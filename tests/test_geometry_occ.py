@@ -198,3 +198,20 @@ def test_describe_turbine(turbine):
     assert np.allclose(d["bbox"]["min"][0], -32.0, atol=1e-6)
     text = format_part_info(d)
     assert "53 faces" in text and "face_52" in text
+
+
+def test_step_without_faces_is_a_part_error(tmp_path):
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
+    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+
+    from checker.errors import PathcheckError
+
+    writer = STEPControl_Writer()
+    writer.Transfer(
+        BRepBuilderAPI_MakeEdge(gp_Pnt(0, 0, 0), gp_Pnt(10, 0, 0)).Edge(), STEPControl_AsIs
+    )
+    path = tmp_path / "wire.stp"
+    writer.Write(str(path))
+    with pytest.raises(PathcheckError, match="no surface found") as err:
+        load_part(path)
+    assert err.value.code == "part" and "wire.stp" in str(err.value)

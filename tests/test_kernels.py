@@ -291,23 +291,104 @@ def test_random_inputs_never_nan(v, name, tol):
     assert not np.isnan(out).any() and out[0] >= 0.0
 
 
-def test_min_imaginary_size_matches_pairs():
-    c = _cutter("bullnose")
+@pytest.mark.parametrize("name", ["flat", "bullnose", "apt", "ball", "tapered_ball"])
+@pytest.mark.parametrize("with_e", [False, True])
+def test_min_imaginary_size_matches_pairs(name, with_e):
+    """The CSR reduction equals the min over the pair kernel (bit for bit, first argmin), for
+    fillet and tip contact, vertical normals with and without e, and untouchable CC points."""
+    c = _cutter(name)
     rng = np.random.default_rng(4)
-    pts = rng.uniform(-10, 10, (300, 3))
-    cc = rng.uniform(-2, 2, (40, 3))
-    n = random_normals(rng, 40, 0.3, 1.0)
-    counts = rng.integers(0, 30, 40)
+    m = 60
+    pts = rng.uniform(-10, 10, (400, 3))
+    cc = rng.uniform(-2, 2, (m, 3))
+    n = random_normals(rng, m, 0.3, 1.0)
+    n[:6] = [0.0, 0.0, 1.0]  # vertical normals
+    n[6:9] = [[0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, 0.6, -0.8]]  # cannot be touched
+    ang = rng.uniform(0, 2 * math.pi, m)
+    e = np.column_stack([np.cos(ang), np.sin(ang), np.zeros(m)]) if with_e else None
+    counts = rng.integers(0, 40, m)
+    counts[:9] = [0, 1, 25, 10, 10, 10, 5, 5, 5]
     indptr = np.concatenate([[0], np.cumsum(counts)])
-    indices = rng.integers(0, 300, indptr[-1])
-    best, arg = c.min_imaginary_size(pts, cc, n, None, indptr, indices)
-    for i in range(40):
+    indices = rng.integers(0, 400, indptr[-1])
+    best, arg = c.min_imaginary_size(pts, cc, n, e, indptr, indices)
+    rows = np.repeat(np.arange(m), counts)
+    s_all = c.imaginary_size(pts[indices], cc[rows], n[rows], None if e is None else e[rows])
+    for i in range(m):
         cand = indices[indptr[i] : indptr[i + 1]]
-        if len(cand) == 0:
+        s = s_all[indptr[i] : indptr[i + 1]]
+        if len(cand) == 0 or not np.isfinite(s.min()):
             assert np.isinf(best[i]) and arg[i] == -1
             continue
-        s = c.imaginary_size(
-            pts[cand], np.repeat(cc[i : i + 1], len(cand), 0), np.repeat(n[i : i + 1], len(cand), 0)
-        )
         assert best[i] == s.min()
-        assert arg[i] == (cand[np.argmin(s)] if np.isfinite(s.min()) else -1)
+        assert arg[i] == cand[np.argmin(s)]
+    assert np.isfinite(best).sum() > 20 and (best == 0).sum() >= 3
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.floats(0.0, 4.0),
+    st.floats(0.0, 30.0),
+    st.floats(0.0, 20.0),
+    st.sampled_from([0.0, 0.05]),
+    st.booleans(),
+    st.integers(0, 2**31),
+)
+def test_random_cutters_match_root_find(r, psi_deg, th_deg, tol, ball, seed):
+    """Any corner radius, bottom and taper angle (and the ball family with any taper)."""
+    if ball:
+        c = Cutter("tapered_ball" if th_deg else "ball", 1.0, 1.0, 0.0, 0.0, math.radians(th_deg))
+    else:
+        psi = math.radians(psi_deg)
+        th = math.radians(th_deg)
+        c = Cutter("apt", 10.0, r, 3.0, psi, th, 50.0)
+        if r < tol:
+            tol = 0.0  # the oracle shrinks a corner about its centre: needs r >= tol
+    rng = np.random.default_rng(seed)
+    m = 25
+    lo = math.sin(c.theta) + 1e-3
+    n = random_normals(rng, m, lo, 1.0)
+    p = mixed_points(rng, m, np.zeros(3), (10.0, 3.0))
+    _check_against_oracle(c, p, n, tol=tol)
+
+
+def test_zero_denominators():
+    """e.d + k = 0 exactly (P on the limiting surface of the R -> inf cutter): inf, not NaN;
+    a tapered-ball wall parallel to the taper (n_z = sin(theta), e1 = 0): the linear root."""
+    bull = parse_cutter("CUTTER/12,2")
+    up = np.array([[0.0, 0.0, 1.0]])
+    e = np.array([[1.0, 0.0, 0.0]])
+    p = np.array([[-2.0, 1.0, 2.0], [-3.0, 0.0, 2.0], [-1.0, 0.0, 2.0]])
+    out = bull.imaginary_size(p, np.zeros((3, 3)), np.repeat(up, 3, 0), np.repeat(e, 3, 0))
+    assert np.isinf(out[0]) and np.isinf(out[1]) and out[2] == 0.0
+    tb = _cutter("tapered_ball")
+    s, co = math.sin(tb.theta), math.cos(tb.theta)
+    rng = np.random.default_rng(12)
+    m = 200
+    ang = rng.uniform(0, 2 * math.pi, m)
+    n = np.column_stack([co * np.cos(ang), co * np.sin(ang), np.full(m, s)])
+    p = mixed_points(rng, m, np.zeros(3), (10.0, 3.0))
+    _, want = _check_against_oracle(tb, p, n)
+    assert (np.isfinite(want) & (want > 0)).sum() > 20
+
+
+def test_parallel_kernels_equal_serial():
+    """Above PARALLEL_MIN pairs the threaded kernels run; they give the serial answers."""
+    from checker import kernels
+
+    c = _cutter("apt")
+    rng = np.random.default_rng(13)
+    k = kernels.PARALLEL_MIN + 5000
+    p = rng.uniform(-10, 10, (k, 3))
+    cc = rng.uniform(-1, 1, (k, 3))
+    n = random_normals(rng, k, 0.1, 1.0)
+    prm = c.kernel_params()
+    e = np.zeros((1, 3))
+    got = c.imaginary_size(p, cc, n)
+    np.testing.assert_array_equal(got, kernels._pair_sizes_ser(p, cc, n, e, False, 0, prm))
+    indptr = np.linspace(0, k, 501).astype(np.int64)
+    idx = rng.integers(0, k, k)
+    best, arg = c.min_imaginary_size(p, cc[:500], n[:500], None, indptr, idx)
+    b2, a2 = kernels._min_sizes_ser(p, cc[:500], n[:500], e, False, 0, prm, indptr, idx)
+    np.testing.assert_array_equal(best, b2)
+    np.testing.assert_array_equal(arg, a2)
+    assert np.isfinite(best).sum() > 100

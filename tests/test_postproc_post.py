@@ -3,6 +3,7 @@ tool changes and flags, travel limits, atomic writes."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 from pathlib import Path
@@ -16,7 +17,7 @@ from postproc.machine import Machine, load_machine
 from postproc.post import PostMoves, moves_from_toolpath, post, post_program
 from postproc.reader import read_gcode_text
 from postproc.replay import part_motions
-from postproc.writer import write_program
+from postproc.writer import comment, write_program
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -35,6 +36,7 @@ def blade_path(n: int = 240) -> PostMoves:
     feed = np.where(np.arange(n) < n // 4, 600.0, 1200.0)
     comments = [""] * n
     comments[17] = "FLAG gouge 0.031 mm (hub)"
+    comments[n // 2] = "FLAG interference\nblade+1 \u00e9"  # a new line and non-ASCII text
     return PostMoves.build(
         tip,
         b,
@@ -109,9 +111,11 @@ def test_round_trip_synthetic(name, update):
 
 
 def test_round_trip_inch_program():
-    machine = load_machine("linuxcnc-hmc").model_copy(update={"units": "inch"})
-    posted, read, idx, src, tip_err, axis_err = round_trip(blade_path(), machine)
-    assert "G20" in posted.text
+    # the job is in inches: the program is written in inches (G20) on a mm machine definition
+    moves = dataclasses.replace(blade_path(), units="inch")
+    posted, read, idx, src, tip_err, axis_err = round_trip(moves, load_machine("linuxcnc-hmc"))
+    assert "G20" in posted.text and "G21" not in posted.text
+    assert "Z9.84252" in posted.text  # safe_z 250 mm
     assert tip_err.max() < 1e-3  # 5 decimals of an inch
     assert axis_err.max() < 1e-4
 
@@ -134,6 +138,37 @@ def test_round_trip_sample_jobs(dialect_machine):
         assert np.array_equal(np.unique(src), np.arange(len(moves))), job
         assert tip_err.max() < 1e-4, job
         assert axis_err.max() < 1e-4, job
+
+
+def test_moves_from_toolpath_recomputes_the_tip_at_the_chosen_b():
+    from checker.apt import read_cl_text
+    from checker.cutter import parse_cutter
+
+    text = (
+        "PARTNO/T\nUNITS/MM\nMULTAX\nCUTTER/6,3\nLOADTL/4\nSPINDL/9000,RPM,CLW\nRAPID\n"
+        "GOTO/0,0,100,0,0,1\nFEDRAT/500,MMPM\nGOTO/0,0,60,0,0,1\nGOTO/10,0,60,-0.6,0,0.8\n"
+        "GOTO/20,5,58,-0.6,0,0.8\nEND\n"
+    )
+    tp = read_cl_text(text)
+    original = moves_from_toolpath(tp)
+    assert original.b_deg == pytest.approx([0, 0, 36.8698976, 36.8698976])
+    assert original.tool.tolist() == [4, 4, 4, 4] and original.spindle[0] == 9000.0
+    assert original.rapid.tolist() == [True, False, False, False] and original.feed[1] == 500.0
+    # a ball D6: contact points and normals, then the B chosen by the checker (+10 degrees)
+    r = 3.0
+    normals = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [-0.28, 0.0, 0.96], [-0.6, 0.0, 0.8]])
+    centre = original.tip + r * original.axis
+    cc = centre - r * normals
+    b_new = original.b_deg + 10.0
+    moves = moves_from_toolpath(
+        tp, b_deg=b_new, cc=cc, normals=normals, cutter=parse_cutter("CUTTER/6,3")
+    )
+    axis = np.c_[-np.sin(np.radians(b_new)), np.zeros(4), np.cos(np.radians(b_new))]
+    assert np.allclose(moves.axis, axis, atol=1e-12)
+    # the ball centre stays on the contact's offset point; the tip moves with the axis
+    assert np.allclose(moves.tip, cc + r * normals - r * axis, atol=1e-9)
+    assert np.allclose(moves.tip + r * moves.axis, centre, atol=1e-9)
+    assert moves.source == tp.path and moves.line.tolist() == original.line.tolist()
 
 
 def _blocks(text: str, rollover: bool) -> list[dict[str, float]]:
@@ -237,7 +272,14 @@ def test_program_structure_tool_changes_flags():
     text = post_program(moves, load_machine("fanuc-hmc"), program_name="BLADE")
     lines = text.splitlines()
     assert lines[0] == "%" and lines[-1] == "%" and lines[1] == "O1000 (BLADE)"
-    assert "(FLAG gouge 0.031 mm [hub])" in lines
+    assert "(FLAG gouge 0.031 mm [hub])" in lines and "(FLAG interference blade+1 ?)" in lines
+    posted = post(moves, load_machine("fanuc-hmc"))
+    for k, flag in enumerate(moves.comment):
+        if flag:  # the flag sits right before the blocks of its move, after the previous move
+            at = lines.index(comment(flag)) + 1
+            own = posted.rows.line[(posted.rows.src == k) & (posted.rows.line > 0)]
+            before = posted.rows.line[(posted.rows.src == k - 1) & (posted.rows.line > 0)]
+            assert before.max() < at < own.min()
     assert [ln.split(" ", 1)[1] for ln in lines if "M06" in ln] == ["T03 M06", "T07 M06"]
     assert any(ln.endswith("S9000 M03") for ln in lines) and any(
         ln.endswith("S4000 M04") for ln in lines

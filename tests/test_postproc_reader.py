@@ -3,11 +3,15 @@
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import re
 import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from checker.errors import PathcheckError
 from postproc.machine import load_machine
@@ -94,6 +98,8 @@ def test_home_machine_frame_and_parameters():
         ("fanuc", "G0 X1\nG1 X\x01\n", r":2: expected printable ASCII"),
         ("fanuc", "G0 X0 Y0\nG2 X5 Y0\n", r"arc without centre: expected I/J or R"),
         ("fanuc", "G0 X0 Y0\nG2 X50 Y0 R10\n", r"arc radius R10 cannot join"),
+        ("linuxcnc", "M#<nothing>\n", r"M word has no known value"),
+        ("fanuc", "G0 X" + "9" * 400 + "\n", r"expected a number of reasonable size"),
     ],
 )
 def test_bad_programs_name_file_line_and_expectation(dialect, text, message):
@@ -128,17 +134,17 @@ NX_HORIZONTAL_B = [
 
 
 def test_real_linuxcnc_5axis_programs(realdata):
-    counts = {}
-    for name in LINUXCNC_FILES:
-        moves = read_gcode(realdata / "linuxcnc-5axis-gcode" / name, "linuxcnc")
-        counts[name] = len(moves)
-    assert counts["impeller-7bl-xyzac.ngc"] > 4400
-    impeller = read_gcode(realdata / "linuxcnc-5axis-gcode" / "impeller-7bl-xyzac.ngc", "linuxcnc")
+    read = {
+        name: read_gcode(realdata / "linuxcnc-5axis-gcode" / name, "linuxcnc")
+        for name in LINUXCNC_FILES
+    }
+    impeller = read["impeller-7bl-xyzac.ngc"]
+    assert len(impeller) > 4400
     # its footer: Amin -74.49 Amax 0.00, Cmin -399.81 Cmax 0.00, all in G93
     assert np.nanmin(impeller.abc[:, 0]) == pytest.approx(-74.49, abs=0.01)
     assert np.nanmin(impeller.abc[:, 2]) == pytest.approx(-399.81, abs=0.01)
     assert set(impeller.feed_mode[impeller.motion == 1].tolist()) == {93}
-    boat = read_gcode(realdata / "linuxcnc-5axis-gcode" / "boat-xyzbc.ngc", "linuxcnc")
+    boat = read["boat-xyzbc.ngc"]
     assert {93, 94} <= set(boat.feed_mode.tolist()) and np.isfinite(boat.abc[:, 1]).any()
 
 
@@ -162,6 +168,7 @@ def test_real_nx_horizontal_b_programs(realdata):
     assert sh8000.tool.max() == 5
 
 
+@functools.lru_cache(maxsize=2)
 def _posted(name: str) -> str:
     n = 80
     b = np.linspace(-20.0, 380.0, n)
@@ -232,3 +239,42 @@ def test_programs_accepted_by_gcodeparser(name):
         if "B" in p.params:
             assert p.params["B"] == pytest.approx(ours.abc[i, 1], abs=1e-9)
     assert sum(p.command == ("T", 2) or p.command == ("T", 5) for p in parsed) == 2
+
+
+_ALPHABET = "GMXYZABCIJKRFSTNOPQHLD0123456789.-+ #<>[]=*/();%:\n_abcxyz\t\x00\xe9"
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.text(alphabet=_ALPHABET, max_size=200),
+    st.sampled_from(["fanuc", "linuxcnc"]),
+)
+def test_random_text_raises_only_our_error(text, dialect):
+    try:
+        moves = read_gcode_text(text, dialect, path="fuzz.nc")
+    except PathcheckError as err:
+        assert str(err).startswith("fuzz.nc:")
+        return
+    part_motions_or_error(moves)
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.data())
+def test_mutated_programs_raise_only_our_error(data):
+    lines = _posted("fanuc-hmc").splitlines()
+    k = data.draw(st.integers(0, len(lines) - 1))
+    pos = data.draw(st.integers(0, len(lines[k])))
+    junk = data.draw(st.text(alphabet=_ALPHABET, min_size=1, max_size=6))
+    lines[k] = lines[k][:pos] + junk + lines[k][pos + data.draw(st.integers(0, 3)) :]
+    try:
+        moves = read_gcode_text("\n".join(lines), "fanuc", path="m.nc")
+    except PathcheckError as err:
+        assert str(err).startswith("m.nc:")
+        return
+    part_motions_or_error(moves)
+
+
+def part_motions_or_error(moves) -> None:
+    """Reading back into the part frame either works or is our error, never a crash."""
+    with contextlib.suppress(PathcheckError):
+        part_motions(moves, load_machine())

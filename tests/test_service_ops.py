@@ -197,3 +197,36 @@ def test_allowable_over_a_socket_hits_the_cache_the_second_time(mould_rows):
     assert first["ok"] and second["ok"]
     assert (first["cached"], second["cached"]) == (False, True)
     assert second["points"] == first["points"]
+
+
+def test_post_hook_writes_the_gcode_the_service_returns(tmp_path):
+    pytest.importorskip("checker.job", reason="checker.job (check_job) not present yet")
+    import importlib.util
+
+    from checker.client import Client
+    from checker.service.broker import Broker
+
+    spec = importlib.util.spec_from_file_location("post_hook", REPO / "samples" / "post_hook.py")
+    hook = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hook)
+    broker = Broker(default_config(), bind="tcp://127.0.0.1:*", workers=1)
+    thread = threading.Thread(target=broker.run, daemon=True)
+    thread.start()
+    job = REPO / "samples" / "mould" / "mould.apt"
+    out = tmp_path / "mould.nc"
+    try:
+        address = broker.wait_started(60)
+        code = hook.main([str(job), "--part", str(MOULD), "-o", str(out), "--address", address])
+        with Client(address, timeout_s=300) as client:
+            reply = client.call("check", apt=job.read_text(), part={"path": str(MOULD)},
+                                post=True)
+        missing = hook.main([str(tmp_path / "none.apt"), "--address", address])
+    finally:
+        broker.stop()
+        thread.join(30)
+    assert reply["ok"], reply
+    counts = reply["results"]["summary"]["counts"]
+    assert code == (1 if counts["gouge"] + counts["interference"] + counts["holder"] else 0)
+    assert out.read_text() == reply["gcode"] and "G1" in reply["gcode"].replace("G01", "G1")
+    assert missing == 2 and not (tmp_path / "none.nc").exists()
+    assert list(tmp_path.glob("*.tmp")) == []

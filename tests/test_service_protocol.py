@@ -7,6 +7,8 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from checker.errors import PathcheckError
 from checker.service import protocol as p
@@ -164,3 +166,35 @@ def test_store_recorder_never_raises():
             raise RuntimeError("disk full")
 
     StoreRecorder(Broken()).record("ping", {"ok": True}, 0.0)
+
+
+json_values = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=20),
+    lambda inner: st.lists(inner, max_size=6) | st.dictionaries(st.text(max_size=8), inner,
+                                                                 max_size=6),
+    max_leaves=8,
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(raw=st.binary(max_size=300))
+def test_random_bytes_raise_only_pathcheck_errors(raw):
+    try:
+        parse(raw)
+    except PathcheckError as err:
+        assert err.code in {"json", "request", "op", "version", "limit"}
+
+
+@settings(max_examples=100, deadline=None)
+@given(op=st.sampled_from([*p.OPS, "sleep", "other"]),
+       fields=st.dictionaries(st.sampled_from(["id", "v", "part", "cc", "cutter", "axis",
+                                               "b_range", "apt", "apt_path", "post", "x"]),
+                              json_values, max_size=4))
+def test_random_requests_parse_or_raise_a_pathcheck_error(op, fields):
+    raw = json.dumps({"op": op, **fields}).encode()
+    try:
+        request = parse(raw)
+    except PathcheckError as err:
+        assert str(err) and err.code in {"json", "request", "op", "version", "limit"}
+    else:
+        assert request.op == op

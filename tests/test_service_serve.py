@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from checker.client import Client
+from checker.errors import PathcheckError
 from checker.store import ResultsStore
 
 REPO = Path(__file__).resolve().parents[1]
@@ -32,7 +33,7 @@ class Server:
             [sys.executable, "-m", "checker.cli", "serve", "--bind", "tcp://127.0.0.1:*",
              "--workers", "2", "--config", str(config), "--store", str(self.store)],
             cwd=REPO, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-            stderr=subprocess.PIPE, text=True,
+            stderr=subprocess.PIPE, text=True, start_new_session=True,
         )
         self.lines: list[str] = []
         self.listening = threading.Event()
@@ -105,7 +106,39 @@ def test_one_log_line_per_request_and_every_request_recorded(server):
     assert any(r[1] == "?" and r[2] == 0 and "not valid JSON" in r[4] for r in rows)
 
 
+def test_call_reads_the_request_from_stdin_and_writes_out(server, tmp_path):
+    from click.testing import CliRunner
+
+    from checker.commands.call import call
+
+    out = tmp_path / "reply.json"
+    result = CliRunner().invoke(
+        call, ["stats", "--address", server.address, "--request", "-", "--out", str(out),
+               "--dealer", "--timeout", "20", "--retries", "0"], input='{"id": "from-stdin"}')
+    assert result.exit_code == 0, result.output
+    reply = json.loads(out.read_text())
+    assert reply["id"] == "from-stdin" and reply["broker"]["workers"] == 2
+
+
+def test_call_cc_csv_and_nested_fields(tmp_path):
+    from checker.commands.call import _field, _read_cc, _set
+
+    csv = tmp_path / "cc.csv"
+    csv.write_text("x,y,z,nx,ny,nz\n1,2,3,0,0,1\n4.5,5,6,0,1,0\n")
+    assert _read_cc(csv) == [[1, 2, 3, 0, 0, 1], [4.5, 5, 6, 0, 1, 0]]
+    csv.write_text("x,y,z\n1,2,3\n")
+    with pytest.raises(PathcheckError, match="expected 6 columns x,y,z,nx,ny,nz, found 3"):
+        _read_cc(csv)
+    message: dict = {}
+    for item in ("part.path=a.json", "cc=[[0,0,0,0,0,1]]", "cutter=CUTTER/10,2", "post=true"):
+        _set(message, *_field(item))
+    assert message == {"part": {"path": "a.json"}, "cc": [[0, 0, 0, 0, 0, 1]],
+                       "cutter": "CUTTER/10,2", "post": True}
+
+
 def test_sigterm_drains_the_request_in_flight_and_exits_0(server):
+    """SIGTERM to the whole process group (as systemd and shells send it): the broker drains,
+    the busy worker finishes its request first, the service exits 0 with no worker left."""
     with Client(server.address, timeout_s=20) as c:
         pids = c.call("stats")["broker"]["pids"]
     assert len(pids) == 2
@@ -114,7 +147,7 @@ def test_sigterm_drains_the_request_in_flight_and_exits_0(server):
         sock = slow._socket()
         sock.send_multipart([b"", json.dumps({"op": "sleep", "seconds": 1.5, "id": 1}).encode()])
         time.sleep(0.5)
-        server.proc.send_signal(signal.SIGTERM)
+        os.killpg(server.proc.pid, signal.SIGTERM)
         time.sleep(0.2)
         rejected = late.call("ping")
         assert sock.poll(20_000), "the request in flight was not answered"

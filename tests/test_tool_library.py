@@ -59,6 +59,9 @@ def test_largest_not_exceeding_matches_brute_force(lib):
     assert lib.largest_not_exceeding("ball", 0.1) is None
     assert lib.largest_not_exceeding("bullnose", 4.0, r=2.0).name == "BULL-D12-R2"
     assert lib.pick_many("ball", np.array([np.nan]))[0] == -1
+    t3 = lib.largest_not_exceeding("tapered_ball", 2.0, theta=math.radians(3))
+    assert t3.name == "TBALL-R1.5-T3"
+    assert lib.largest_not_exceeding("tapered_ball", 2.0, theta=math.radians(5)) is None
 
 
 def _write(tmp_path, body: str):

@@ -9,6 +9,7 @@ from collections import Counter
 import numpy as np
 
 from checker.apt import frames as fr
+from checker.apt.lexer import MAX_ABS
 from checker.errors import PathcheckError
 from checker.toolpath import (
     Arc,
@@ -32,10 +33,13 @@ LENGTH_UNITS = {
 }
 FEED_UNITS = {"IPM": "inch", "IPR": "inch", "MMPM": "mm", "MMPR": "mm"}
 # known statements that carry nothing the checker uses: kept in `records`, counted in `ignored`
+# (statements that move or turn the part, such as ORIGIN or ROTABL, stay `unknown` on purpose)
 IGNORED = frozenset(
     {
         "$$", "PAINT", "COOLNT", "CUTCOM", "PPRINT", "INSERT", "PARTNO", "END", "FINI",
-        "END-OF-PATH", "SELECT", "TITLE", "REMARK", "UNITS", "UNIT",
+        "END-OF-PATH", "SELECT", "TITLE", "REMARK", "UNITS", "UNIT", "INTOL", "OUTTOL", "TOLER",
+        "MACHIN", "CLRSRF", "CLEARP", "DELAY", "OPSTOP", "STOP", "SEQNO", "OPSKIP", "AUXFUN",
+        "PREFUN", "DISPLY",
     }
 )
 AXIS_NORM_TOL = 1e-2  # |(i,j,k)| must be 1 to this; CAM systems print 4-7 decimals
@@ -183,7 +187,8 @@ class _Reader:
             self.dirty = True
         self.axis = self.default_axis
 
-    def set_tool(self, **kw) -> None:
+    def set_tool(self, **kw: object) -> None:
+        """Set tool_name / tool_number / cutter here and on the current operation."""
         for key, value in kw.items():
             setattr(self, key, value)
             setattr(self.ops[-1], key, value)
@@ -204,7 +209,7 @@ class _Reader:
             raise _err(
                 rec,
                 "feed move before any CUTTER/ or TLDATA/ statement: expected the cutter to be "
-                "defined first (GOTO before any CUTTER/...)",
+                "defined first, found none",
                 path=self.path,
                 code="cutter",
             )
@@ -261,7 +266,7 @@ class _Reader:
             self.rapid_next = True
         elif word == "FEDRAT":
             self.fedrat(rec)
-        elif word in ("GOTO",):
+        elif word == "GOTO":
             self.goto(rec)
         elif word == "FROM":
             v = _numbers(rec, (3, 6), "x,y,z[,i,j,k]", path=path)
@@ -296,6 +301,8 @@ class _Reader:
             self.world = bool(rec.args) and rec.args[0] == "WORLD"
         elif word == "TLAXIS":
             v = _numbers(rec, (3,), "i,j,k", path=path)
+            if not any(v):
+                raise _err(rec, "expected a non-zero tool axis i,j,k, found 0,0,0", path=path)
             self.default_axis = self.axis = v
         elif word == "MULTAX":
             if rec.args and rec.args[0] == "OFF":
@@ -318,6 +325,7 @@ class _Reader:
         if f < 0:
             raise _err(rec, f"expected a feed >= 0, found {f:g}", path=self.path)
         unit = words[0] if words else ("IPM" if self.units == "inch" else "MMPM")
+        self.rapid_next = False  # an explicit feed before the move cancels a pending RAPID
         scale = MM_PER_INCH if unit.startswith("I") else 1.0
         if unit.endswith("PR"):
             self.feed_per_rev, self.feed_now = f * scale, math.nan
@@ -387,9 +395,10 @@ class _Reader:
 
     def tool_path(self, rec: Record) -> None:
         """NX ``TOOL PATH/op_name,TOOL,tool_name``."""
-        if not rec.args or not isinstance(rec.args[0], str):
+        if not rec.args:
             raise _err(rec, "expected an operation name, found nothing", path=self.path)
-        self.ops[-1].name = rec.args[0]
+        first = rec.args[0]
+        self.ops[-1].name = first if isinstance(first, str) else f"{first:g}"
         self.named[-1] = True
         tool = rec.args[2] if len(rec.args) > 2 and rec.args[1] == "TOOL" else None
         self.set_tool(tool_name=str(tool) if tool is not None else None)
@@ -423,8 +432,18 @@ class _Reader:
         n = len(self.line)
         tip = np.asarray(self.pos, dtype=float).reshape(n, 3) * self.scale
         axis = np.asarray(self.ax, dtype=float).reshape(n, 3)
+        huge = np.flatnonzero(~(np.abs(tip) <= MAX_ABS * self.scale).all(axis=1))
+        if len(huge):
+            k = huge[0]
+            raise PathcheckError(
+                f"expected coordinates of at most {MAX_ABS:g}, found "
+                f"{tuple(float(v) for v in self.pos[k])}",
+                path=self.path,
+                line=self.line[k],
+                code="parse",
+            )
         norm = np.linalg.norm(axis, axis=1)
-        bad = np.flatnonzero(np.abs(norm - 1.0) > AXIS_NORM_TOL)
+        bad = np.flatnonzero(~(np.abs(norm - 1.0) <= AXIS_NORM_TOL))
         if len(bad):
             k = bad[0]
             raise PathcheckError(

@@ -1,5 +1,6 @@
 """CL text -> `Record`s: `$` continuation, `$$` comments, free-text statements, column-72 card
-images, numbers checked (finite, not absurd). No meaning is given to any word here."""
+images, numbers checked (finite, at most MAX_ABS; for plain GOTOs the interpreter checks the
+magnitude in bulk). No meaning is given to any word here."""
 
 from __future__ import annotations
 
@@ -14,9 +15,11 @@ FREE_TEXT = frozenset({"PARTNO", "PPRINT", "INSERT", "TITLE", "REMARK"})
 # a number as APT writes it: 5.  .5  -0.173648  1.0E+02  1.0D+02
 _NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?"
 _NUM_RE = re.compile(_NUM)
-# plain decimals of at most 15 integer digits (so |v| < MAX_ABS), no blanks: the fast path
+# plain decimals of at most 15 integer digits (so |v| < MAX_ABS), no blanks
 _FAST = r"[+-]?(?:\d{1,15}(?:\.\d*)?|\.\d+)"
 _FAST_NUMS = re.compile(rf"{_FAST}(?:,{_FAST})*")
+# the GOTO fast path: only these characters, then float(); the interpreter checks magnitudes
+_PLAIN = re.compile(r"[0-9.,+-]*")
 _STATEMENT = re.compile(r"([A-Za-z][A-Za-z0-9_\-]*(?: [A-Za-z][A-Za-z0-9_\-]*)*)\s*(/?)(.*)", re.S)
 _WORD_TOKEN = re.compile(r"[\x21-\x7e](?:[\x20-\x7e]*[\x21-\x7e])?")
 _HAS_LETTER = re.compile(r"[A-Za-z]")
@@ -104,12 +107,16 @@ def lex(
     pending_line = 0
     comment: str | None = None
     seen_statement = False
-    fast = _FAST_NUMS.fullmatch
+    plain = _PLAIN.fullmatch
     for no, raw in enumerate(lines, start=1):
         s = (raw[:72] if column72 else raw).rstrip()
-        if not pending and s.startswith("GOTO/") and fast(s, 5):
-            # the common case, kept lean
-            append(Record("GOTO", tuple(map(float, s[5:].split(","))), no))
+        if not pending and s.startswith("GOTO/") and plain(s, 5):
+            # the common case, kept lean; malformed numbers get parse_args's message
+            try:
+                vals = tuple(map(float, s[5:].split(",")))
+            except ValueError:
+                vals = parse_args(s[5:], "GOTO", path=path, line=no)
+            append(Record("GOTO", vals, no))
             seen_statement = True
             continue
         stripped = s.strip()

@@ -11,8 +11,8 @@ from checker.apt.lexer import is_card_image, lex
 from checker.errors import PathcheckError
 from checker.toolpath import ToolPath
 
-# control characters that never occur in text (tab, LF, FF, CR and the DOS EOF mark do)
-_BINARY = re.compile(r"[\x00-\x08\x0b\x0e-\x19\x1b-\x1f\x7f]")
+# control characters that never occur in text (tab, LF, FF and CR do)
+_BINARY = re.compile(r"[\x00-\x08\x0b\x0e-\x1f\x7f]")
 
 
 def _decode(data: bytes) -> str:
@@ -49,6 +49,7 @@ def read_cl_text(
             path=path,
             code="parse",
         )
+    text = text.rstrip("\x1a")  # a DOS end-of-file mark
     _refuse_binary(text, path=path)
     dialect = detect_dialect(text, path=path)
     lines = text.split("\n")

@@ -4,6 +4,7 @@ shortest exact decimal form, lines over 72 characters continued with ``$``."""
 from __future__ import annotations
 
 import io
+import re
 from pathlib import Path
 from typing import TextIO
 
@@ -14,6 +15,7 @@ from checker.errors import PathcheckError
 from checker.toolpath import Record, ToolPath, Value
 
 MAX_LINE = 72
+_POINT_ZERO = re.compile(r"\.0(?=,|$)")  # repr's "5.0" is written "5"
 
 
 def format_value(v: Value) -> str:
@@ -36,6 +38,12 @@ def format_record(rec: Record) -> list[str]:
     tail = f" $${rec.comment}" if rec.comment is not None else ""
     if not rec.args:
         return [head + tail]
+    if str not in map(type, rec.args):  # all numbers: join their reprs at C speed
+        joined = ",".join(map(repr, rec.args))
+        if "e" not in joined and "n" not in joined:  # no exponent, nan or inf
+            joined = _POINT_ZERO.sub("", joined)
+            if len(head) + len(joined) <= MAX_LINE:
+                return [head + joined + tail]
     parts = [format_value(a) for a in rec.args]
     lines: list[str] = []
     cur = head + parts[0]

@@ -19,7 +19,10 @@ import click
               help="run the jobs on this Dask distributed scheduler (tcp://host:8786)")
 @click.option("--store", "store_path", default=None, metavar="FILE",
               help="results store [default: PATHCHECK_STORE or config store.path]")
-def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str | None) -> None:
+@click.option("--job-function", default="checker.job:check_job", hidden=True,
+              help="module:function that checks one job (tests and benchmarks)")
+def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str | None,
+          job_function: str) -> None:
     """Check every CL file of a directory (recursively) or of a glob pattern.
 
     \b
@@ -53,7 +56,7 @@ def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str
                                        highlight=False)
 
         run_batch(paths, store=store, workers=workers or os.cpu_count() or 1,
-                  scheduler=scheduler, on_result=advance)
+                  scheduler=scheduler, job_function=job_function, on_result=advance)
         where = store.path
     click.echo(
         f"{len(paths)} jobs: {counts['ok']} clean, {counts['findings']} with findings, "

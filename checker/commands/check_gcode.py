@@ -31,7 +31,7 @@ import click
     help="write the summary as JSON to this file",
 )
 def check_gcode(program: Path, machine_name, dialect, units, part, cutter_text, json_out) -> None:
-    """Read PROG (G-code) for a machine and report its moves in the part frame.
+    """Read PROGRAM (G-code) for a machine and report its moves in the part frame.
 
     \b
     pathcheck check-gcode prog.nc --machine fanuc-hmc

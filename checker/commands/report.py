@@ -26,6 +26,6 @@ def report(since: str, out: Path, store_path: str | None) -> None:
     since_s = parse_since(since)
     with ResultsStore(store_path) as store:
         files = build_report(store, out, since_s=since_s)
-    what = f"{files.jobs} jobs" if files.jobs else "no jobs"
+    what = {0: "no jobs", 1: "1 job"}.get(files.jobs, f"{files.jobs} jobs")
     click.echo(f"{what}, {files.pictures} pictures: {files.html} ({files.json.name}, "
                f"{files.csv.name} beside it)")

@@ -38,7 +38,8 @@ def build_grid(xyz: np.ndarray, per_cell: float = 6.0) -> CellGrid:
 
 
 @nb.njit(cache=True, parallel=True)
-def _collect(xyz, lo0, lo1, cell, nx, ny, start, order, cx, cy, rad, zlo, zhi, indptr, out, fill):
+def _collect(xyz, lo0, lo1, cell, nx, ny, start, order, cx, cy, rad, zlo, zhi, sph, zeq, plane,
+             indptr, out, fill):
     for i in nb.prange(cx.shape[0]):
         r = rad[i]
         i0 = int(min(max(np.floor((cx[i] - r - lo0) / cell), 0.0), nx - 1.0))
@@ -56,6 +57,15 @@ def _collect(xyz, lo0, lo1, cell, nx, ny, start, order, cx, cy, rad, zlo, zhi, i
                     z = xyz[p, 2]
                     if z < zlo[i] or z > zhi[i]:
                         continue
+                    if (plane[i, 0] * xyz[p, 0] + plane[i, 1] * xyz[p, 1] + plane[i, 2] * z
+                            < plane[i, 3]):
+                        continue  # below the tangent plane: no cutter of the family reaches it
+                    if z < zeq[i]:  # below the equator: inside the sphere or nothing
+                        sx = xyz[p, 0] - sph[i, 0]
+                        sy = xyz[p, 1] - sph[i, 1]
+                        sz = z - sph[i, 2]
+                        if sx * sx + sy * sy + sz * sz > sph[i, 3] * sph[i, 3]:
+                            continue
                     dx = xyz[p, 0] - cx[i]
                     dy = xyz[p, 1] - cy[i]
                     if dx * dx + dy * dy <= r2:
@@ -67,14 +77,18 @@ def _collect(xyz, lo0, lo1, cell, nx, ny, start, order, cx, cy, rad, zlo, zhi, i
 
 
 def disc_candidates(grid: CellGrid, centre: np.ndarray, radius: np.ndarray, zlo: np.ndarray,
-                    zhi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                    zhi: np.ndarray, sphere: np.ndarray, zeq: np.ndarray,
+                    plane: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """CSR (indptr (N+1,), indices (K,)) of the test points within `radius` (N,) mm of `centre`
-    (N, 2) horizontally and with zlo <= z <= zhi (tool frame)."""
+    (N, 2) horizontally and with zlo <= z <= zhi (tool frame); points below `zeq (N,)` must also
+    lie in the ball `sphere (N, 4)` (centre x, y, z, radius); every point must satisfy
+    `plane[:, :3] . p >= plane[:, 3]` (the tangent plane lowered by the slack)."""
     n = len(radius)
     rad = np.where(np.isfinite(radius), radius, 1e300)
     args = (grid.xyz, float(grid.origin[0]), float(grid.origin[1]), grid.cell, grid.nx, grid.ny,
             grid.start, grid.order, np.ascontiguousarray(centre[:, 0]),
-            np.ascontiguousarray(centre[:, 1]), rad, zlo, zhi)
+            np.ascontiguousarray(centre[:, 1]), rad, zlo, zhi, np.ascontiguousarray(sphere),
+            np.ascontiguousarray(zeq), np.ascontiguousarray(plane))
     counts = np.zeros(n, dtype=np.int64)
     _collect(*args, np.zeros(n + 1, dtype=np.int64), counts, False)
     indptr = np.zeros(n + 1, dtype=np.int64)

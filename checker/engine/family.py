@@ -37,6 +37,9 @@ class FamilyBounds:
     t: np.ndarray
     length: float
     z_top: np.ndarray
+    cc: np.ndarray | None = None
+    n: np.ndarray | None = None
+    sin_theta: float = 0.0
 
     def centre(self, s: np.ndarray) -> np.ndarray:
         """(N, 2) disc centres for sizes s (N,)."""
@@ -49,6 +52,27 @@ class FamilyBounds:
     def z_low(self, s: np.ndarray) -> np.ndarray:
         """(N,) lowest height a cutter of size <= s reaches (its tip)."""
         return self.z0 - self.t * s
+
+    def lower_ball(self, s: np.ndarray, slack: float) -> tuple[np.ndarray, np.ndarray]:
+        """Ball family: below the sphere/taper boundary `zeq (N,)` the cutter of size s is its
+        sphere (centre cc + s n, radius s): `sphere (N, 4)` grown by `slack`. Other families:
+        zeq = -inf (no extra condition)."""
+        n = len(s)
+        sphere = np.zeros((n, 4))
+        zeq = np.full(n, -np.inf)
+        if self.cc is not None:
+            sf = np.where(np.isfinite(s), s, 0.0)
+            sphere[:, :3] = self.cc + sf[:, None] * self.n
+            sphere[:, 3] = sf + slack
+            zeq = np.where(np.isfinite(s), sphere[:, 2] - sf * self.sin_theta - slack, -np.inf)
+        return sphere, zeq
+
+    def take(self, rows: np.ndarray) -> FamilyBounds:
+        """The bounds of a subset of rows."""
+        pick = (lambda a: None if a is None else a[rows])  # noqa: E731
+        return FamilyBounds(self.c0[rows], self.w[rows], self.a[rows], self.kappa[rows],
+                            self.z0[rows], self.t[rows], self.length, self.z_top[rows],
+                            pick(self.cc), pick(self.n), self.sin_theta)
 
 
 def is_ball_family(cutter) -> bool:
@@ -75,6 +99,7 @@ def family_bounds(cutter, cc: np.ndarray, n: np.ndarray, e: np.ndarray, degenera
         c0, w, a = cc[:, :2].copy(), n[:, :2].copy(), np.full(len(cc), 1.0 / np.cos(th))
         z_top = np.minimum(z0 + length, part_top)
         kappa = np.maximum(z_top - cc[:, 2], 0.0) * tpos
+        return FamilyBounds(c0, w, a, kappa, z0, t, length, z_top, cc, n, max(np.sin(th), 0.0))
     else:
         psi = float(cutter.psi)
         O = cc + r * n

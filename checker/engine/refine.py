@@ -10,10 +10,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from checker.cutter import BALL_FAMILY
 from checker.engine.sizes import RowFrame, pair_sizes
 from checker.geometry.evaluate import evaluate_mixed
 from checker.part import Part
 
+_ABOVE = 1e-9  # mm above the bottom plane: on it the kernels already count a point as uncut
+_FLOOR_STEPS = 3
 _OFFS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.float64)
 
 
@@ -28,21 +31,52 @@ class Refined:
 
 
 class _Objective:
-    """Imaginary size of surface points (surface id, u, v) for given rows; trims honoured."""
+    """Imaginary size of surface points (surface id, u, v) for given rows; trims honoured.
+
+    Flat-bottomed cutters (R family, psi = 0) cut nothing below their bottom plane, so the
+    size jumps to inf there and the minimum often lies on the contour line of the part at that
+    height. Points below it are moved onto the contour (Newton steps on the height in (u, v)),
+    which turns that jump into a smooth boundary the local steps can follow."""
 
     def __init__(self, part: Part, cutter, frame: RowFrame, Q: np.ndarray) -> None:
         self.part, self.cutter, self.frame, self.Q = part, cutter, frame, Q
         self.trimmed = [s.id for s in part.surfaces if s.trim is not None]
+        self.dom = np.array([s.domain for s in part.surfaces], dtype=np.float64)
+        flat = cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0
+        self.floor = frame.fam.z0 + _ABOVE if flat else None
 
     def __call__(self, rows, sid, u, v):
+        """(f (K,), points (K, 3) part frame, uv (K, 2) of the points)."""
+        u, v = u.copy(), v.copy()
         ev = evaluate_mixed(self.part, sid, u, v)
+        if self.floor is not None:
+            self._onto_floor(rows, sid, u, v, ev)
         f = pair_sizes(self.cutter, self.frame, rows, ev.points @ self.Q.T)
         for s in self.trimmed:
             sel = np.flatnonzero(sid == s)
             if sel.size:
                 out = ~np.asarray(self.part.surfaces[s].trim.contains(u[sel], v[sel]), dtype=bool)
                 f[sel[out]] = np.inf
-        return f, ev.points
+        return f, ev.points, np.column_stack([u, v])
+
+    def _onto_floor(self, rows, sid, u, v, ev) -> None:
+        """Move points below their row's bottom plane onto it (in place: u, v, ev)."""
+        qz = self.Q[2]
+        for _ in range(_FLOOR_STEPS):
+            z = ev.points @ qz
+            low = np.flatnonzero(z < self.floor[rows])
+            if low.size == 0:
+                return
+            gu, gv = ev.du[low] @ qz, ev.dv[low] @ qz
+            g2 = gu * gu + gv * gv
+            ok = g2 > 1e-24
+            low, gu, gv, g2 = low[ok], gu[ok], gv[ok], g2[ok]
+            t = (self.floor[rows[low]] - z[low]) / g2
+            d = self.dom[sid[low]]
+            u[low] = np.clip(u[low] + t * gu, d[:, 0, 0], d[:, 0, 1])
+            v[low] = np.clip(v[low] + t * gv, d[:, 1, 0], d[:, 1, 1])
+            sub = evaluate_mixed(self.part, sid[low], u[low], v[low])
+            ev.points[low], ev.du[low], ev.dv[low] = sub.points, sub.du, sub.dv
 
 
 def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray, sid: np.ndarray,
@@ -55,7 +89,7 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
     width = hi - lo
     hmin = 1e-10 * np.maximum(width, 1e-300)
     cur = np.clip(uv, lo, hi)
-    f, pts = obj(rows, sid, cur[:, 0], cur[:, 1])
+    f, pts, cur = obj(rows, sid, cur[:, 0], cur[:, 1])
     best_f, best_uv, best_p = f.copy(), cur.copy(), pts.copy()
     h = np.clip(step, hmin, 0.25 * width)
     evals = np.ones(len(rows), dtype=np.int64)
@@ -63,7 +97,7 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
     for _ in range(iterations):
         c = np.clip(best_uv, lo + h, hi - h)
         UV = (c[:, None, :] + _OFFS[None] * h[:, None, :]).reshape(-1, 2)
-        F, P = obj(rows[s9], sid[s9], UV[:, 0], UV[:, 1])
+        F, P, UV = obj(rows[s9], sid[s9], UV[:, 0], UV[:, 1])
         F = F.reshape(-1, 9)
         P = P.reshape(-1, 9, 3)
         UV = UV.reshape(-1, 9, 2)
@@ -72,7 +106,7 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
         _keep_best(best_f, best_uv, best_p, F[ar, k], UV[ar, k], P[ar, k])
         g, Hm = _quadratic(F, h)
         new = np.clip(_newton(c, g, Hm, h, UV[ar, k], np.isfinite(F).all(axis=1)), lo, hi)
-        fn, pn = obj(rows, sid, new[:, 0], new[:, 1])
+        fn, pn, new = obj(rows, sid, new[:, 0], new[:, 1])
         newton_won = fn < best_f
         _keep_best(best_f, best_uv, best_p, fn, new, pn)
         evals += 10

@@ -10,7 +10,7 @@ import numba as nb
 import numpy as np
 
 from checker.engine.candidates import CellGrid, disc_candidates
-from checker.engine.sizes import RowFrame, pair_sizes
+from checker.engine.sizes import RowFrame, csr_sizes
 
 _GROW = 4.0
 _CHUNK_ROWS = 1024
@@ -95,18 +95,19 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
     s_try = np.minimum(s_start, s_cap)
     active = np.arange(n)
     fam = frame.fam
+    plane = np.column_stack([frame.n, np.einsum("ij,ij->i", frame.n, frame.cc) - slack])
     while active.size:
         still = []
         for c0 in range(0, active.size, _CHUNK_ROWS):
             rows = active[c0:c0 + _CHUNK_ROWS]
             s = s_try[rows]
-            sub = fam.__class__(fam.c0[rows], fam.w[rows], fam.a[rows], fam.kappa[rows], fam.z0[rows],
-                                fam.t[rows], fam.length, fam.z_top[rows])
+            sub = fam.take(rows)
+            sphere, zeq = sub.lower_ball(s, slack)
             indptr, idx = disc_candidates(grid, sub.centre(s), sub.radius(s) + slack,
-                                          sub.z_low(s) - slack, sub.z_top + slack)
+                                          sub.z_low(s) - slack, sub.z_top + slack, sphere, zeq,
+                                          plane[rows])
             counts = np.diff(indptr)
-            rep = np.repeat(rows, counts)
-            vals = pair_sizes(cutter, frame, rep, grid.xyz[idx])
+            vals = csr_sizes(cutter, frame, rows, grid.xyz, indptr, idx)
             evals[rows] += counts
             b = np.full(len(rows), np.inf)
             a = np.full(len(rows), -1, dtype=np.int64)

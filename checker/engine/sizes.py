@@ -6,8 +6,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
+from checker import kernels
+
+from checker.cutter import BALL_FAMILY
 from checker.engine.family import FamilyBounds
 
 _EPS_H = 1e-9
@@ -53,3 +57,37 @@ def pair_sizes(cutter, frame: RowFrame, rows: np.ndarray, p: np.ndarray) -> np.n
     tip = fam.z0[rows] - fam.t[rows] * np.where(np.isfinite(size), size, 0.0)
     too_high = p[:, 2] - tip > fam.length
     return np.where(near | too_high, np.inf, size)
+
+
+@nb.njit(cache=True, parallel=True)
+def _csr(p, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out):
+    for i in nb.prange(indptr.shape[0] - 1):
+        for k in range(indptr[i], indptr[i + 1]):
+            j = indices[k]
+            qx = p[j, 0] - cc[i, 0]
+            qy = p[j, 1] - cc[i, 1]
+            qz = p[j, 2] - cc[i, 2]
+            if qx * qx + qy * qy + qz * qz < excl2:
+                out[k] = np.inf
+                continue
+            if ball:
+                s = kernels.ball_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], prm)
+            else:
+                s = kernels.apt_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], e[i, 0], e[i, 1],
+                                     True, prm)
+            if s < np.inf and p[j, 2] - (z0[i] - t[i] * s) > length:
+                s = np.inf
+            out[k] = s
+
+
+def csr_sizes(cutter, frame: RowFrame, rows: np.ndarray, p: np.ndarray, indptr: np.ndarray,
+              indices: np.ndarray) -> np.ndarray:
+    """Sizes (K,) for rows `rows (N,)` of `frame` against their candidate points
+    `p[indices[indptr[i]:indptr[i + 1]]]` (tool frame, mm); the rules of `pair_sizes`."""
+    out = np.empty(len(indices))
+    fam = frame.fam
+    _csr(p, np.ascontiguousarray(frame.cc[rows]), np.ascontiguousarray(frame.n[rows]),
+         np.ascontiguousarray(frame.e[rows]), cutter.kind in BALL_FAMILY, cutter.kernel_params(),
+         np.ascontiguousarray(fam.z0[rows]), np.ascontiguousarray(fam.t[rows]), float(fam.length),
+         frame.exclusion ** 2, indptr, indices, out)
+    return out

@@ -150,40 +150,67 @@ def cl_to_cc(part: Part, test_points: TestPoints, cutter, tips: np.ndarray, axes
              contact: np.ndarray | None = None) -> Contacts:
     """Contact points of `cutter` (a `Cutter`: r, R, psi, theta) at CL positions `tips (N,3)`,
     unit `axes (N,3)` on `part`, sampled as `test_points`. `contact (N,3)`: CC points the CL file
-    gives (rows of nan where it gives none) used as starting points."""
+    gives (rows of nan where it gives none) used as starting points.
+
+    Each position is refined from its best starting test point and, where the candidates
+    include another surface, from the best one on that surface too (a contact near a surface
+    edge may belong to the neighbour); the nearer result wins. A refined point that leaves a
+    surface's trim falls back to its starting test point."""
     tips = np.ascontiguousarray(tips, dtype=np.float64).reshape(-1, 3)
     axes = np.ascontiguousarray(axes, dtype=np.float64).reshape(-1, 3)
     axes = axes / np.linalg.norm(axes, axis=1)[:, None]
     core = Core.of(cutter)
-    start = _start(test_points, core, tips, axes, contact)
+    first, second = _start(test_points, core, tips, axes, contact)
     if part.mesh is not None or len(part.surfaces) == 0:
-        pts = test_points.points[start]
+        pts = test_points.points[first]
         gap = signed_distance(core, pts, tips, axes)
-        sid = test_points.surface[start].astype(np.int64)
-        return Contacts(pts, test_points.normals[start], sid, test_points.uv[start], gap)
+        sid = test_points.surface[first].astype(np.int64)
+        return Contacts(pts, test_points.normals[first], sid, test_points.uv[first], gap)
+    rows = np.r_[np.arange(len(tips)), np.flatnonzero(second >= 0)]
+    start = np.r_[first, second[second >= 0]]
     sid = test_points.surface[start].astype(np.int64)
-    uv = _refine(part, core, tips, axes, sid, test_points.uv[start].copy())
+    uv = _refine(part, core, tips[rows], axes[rows], sid, test_points.uv[start].copy())
+    uv = _keep_trimmed(part, sid, uv, test_points.uv[start])
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
-    gap = signed_distance(core, ev.points, tips, axes)
-    return Contacts(ev.points, ev.normals, sid, uv, gap)
+    gap = signed_distance(core, ev.points, tips[rows], axes[rows])
+    # per CL position the refined candidate of least gap (the first where equal)
+    order = np.lexsort((np.arange(len(rows)), gap, rows))
+    pick = order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
+    return Contacts(ev.points[pick], ev.normals[pick], sid[pick], uv[pick], gap[pick])
 
 
-def _start(tp: TestPoints, core: Core, tips, axes, contact) -> np.ndarray:
-    """Index of the starting test point per CL position: the nearest to the given CC point,
-    else the one of least signed distance among the k nearest to the fillet-centre level."""
-    k = min(_CANDIDATES, len(tp.points))
-    ref = tips + core.h_o * axes
-    _, idx = tp.tree.query(ref, k=k)
-    idx = idx.reshape(len(tips), k)
-    n = len(tips)
-    sd = signed_distance(core, tp.points[idx.ravel()], np.repeat(tips, k, 0), np.repeat(axes, k, 0))
-    best = idx[np.arange(n), np.argmin(sd.reshape(n, k), axis=1)]
+def _start(tp: TestPoints, core: Core, tips, axes, contact) -> tuple[np.ndarray, np.ndarray]:
+    """Starting test points per CL position: the nearest to the given CC point, else the one of
+    least signed distance among the k nearest to the fillet-centre level; and the best of those
+    k on another surface (-1 where there is none)."""
+    n, k = len(tips), min(_CANDIDATES, len(tp.points))
+    _, idx = tp.tree.query(tips + core.h_o * axes, k=k)
+    idx = idx.reshape(n, k)
+    sd = signed_distance(core, tp.points[idx.ravel()], np.repeat(tips, k, 0),
+                         np.repeat(axes, k, 0)).reshape(n, k)
+    best = idx[np.arange(n), np.argmin(sd, axis=1)]
     if contact is not None:
         contact = np.asarray(contact, dtype=np.float64).reshape(-1, 3)
         given = np.isfinite(contact).all(axis=1)
         if given.any():
             best[given] = tp.tree.query(contact[given])[1]
-    return best
+    other = tp.surface[idx] != tp.surface[best][:, None]
+    sd_other = np.where(other, sd, np.inf)
+    j = np.argmin(sd_other, axis=1)
+    second = np.where(np.isfinite(sd_other[np.arange(n), j]), idx[np.arange(n), j], -1)
+    return best, second
+
+
+def _keep_trimmed(part: Part, sid: np.ndarray, uv: np.ndarray, uv_start: np.ndarray) -> np.ndarray:
+    """Refined parameters, or the starting ones where the refined point is trimmed away."""
+    out = uv.copy()
+    for s in part.surfaces:
+        if s.trim is None:
+            continue
+        rows = np.flatnonzero(sid == s.id)
+        lost = rows[~s.trim.contains(uv[rows, 0], uv[rows, 1])]
+        out[lost] = uv_start[lost]
+    return out
 
 
 def _objective(part, core, tips, axes, sid, uv, order):

@@ -10,6 +10,7 @@ chunks; no Python runs per point. (u, v) outside the domain are clipped onto it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -17,6 +18,7 @@ import numpy as np
 from checker.part import Part, Surface
 
 _CHUNK = 512
+_NO_IDS = np.zeros(0, dtype=np.int64)
 _PARALLEL_MIN = 50_000  # fewer points: one thread (thread start-up costs more than it saves)
 _MAXDEG = 32
 
@@ -85,20 +87,30 @@ def _basis_ders(knots, p, span, x, nd, ders, ndu, a, left, right):
 
 
 @nb.njit(cache=True)
-def _eval_range(ku, kv, p, q, Hw, u, v, order, out, normals, flip, i0, i1):
-    """out[i, m] for m = S, Su, Sv (, Suu, Suv, Svv) and unit normals[i] for i in [i0, i1)."""
-    nu, nv = Hw.shape[0], Hw.shape[1]
-    sign = -1.0 if flip else 1.0
+def _eval_range(G, sid, u, v, order, out, normals, i0, i1):
+    """out[i, m] for m = S, Su, Sv (, Suu, Suv, Svv) and unit normals[i] for i in [i0, i1),
+    point i on packed surface sid[i] (surface 0 when sid is empty); see `_Packed`."""
+    knots_u, ou, knots_v, ov, Hw, op, nus, nvs, degu, degv, signs = G
     # scratch shared by the points of this range
-    Nu = np.empty((3, p + 1))
-    Nv = np.empty((3, q + 1))
+    Nu = np.empty((3, _MAXDEG + 1))
+    Nv = np.empty((3, _MAXDEG + 1))
     ndu = np.empty((_MAXDEG + 1, _MAXDEG + 1))
     a = np.empty((2, _MAXDEG + 1))
     left = np.empty(_MAXDEG + 1)
     right = np.empty(_MAXDEG + 1)
     A = np.empty((6, 4))
     T = np.empty((3, 4))
+    last = 0
+    ku = knots_u[ou[0] : ou[1]]
+    kv = knots_v[ov[0] : ov[1]]
+    p, q, nu, nv, base = degu[0], degv[0], nus[0], nvs[0], op[0]
     for i in range(i0, i1):
+        s = sid[i] if sid.shape[0] > 0 else 0
+        if s != last:
+            last = s
+            ku = knots_u[ou[s] : ou[s + 1]]
+            kv = knots_v[ov[s] : ov[s + 1]]
+            p, q, nu, nv, base = degu[s], degv[s], nus[s], nvs[s], op[s]
         x = min(max(u[i], ku[p]), ku[nu])
         y = min(max(v[i], kv[q]), kv[nv])
         su = _find_span(ku, p, nu, x)
@@ -108,13 +120,12 @@ def _eval_range(ku, kv, p, q, Hw, u, v, order, out, normals, flip, i0, i1):
         A[:, :] = 0.0
         for ii in range(p + 1):
             T[:, :] = 0.0
-            row = su - p + ii
+            row = base + (su - p + ii) * nv + sv - q
             for jj in range(q + 1):
-                col = sv - q + jj
                 for l in range(order + 1):
                     b = Nv[l, jj]
                     for m in range(4):
-                        T[l, m] += b * Hw[row, col, m]
+                        T[l, m] += b * Hw[row + jj, m]
             for m in range(4):
                 A[0, m] += Nu[0, ii] * T[0, m]
                 A[1, m] += Nu[1, ii] * T[0, m]
@@ -143,20 +154,18 @@ def _eval_range(ku, kv, p, q, Hw, u, v, order, out, normals, flip, i0, i1):
         for m in range(3):
             scale += out[i, 1, m] * out[i, 1, m] + out[i, 2, m] * out[i, 2, m]
         # |Su x Sv| negligible against |Su|^2 + |Sv|^2: a pole, left as 0 for the caller
-        nn = sign / nn if nn > 1e-12 * scale else 0.0
+        nn = signs[s] / nn if nn > 1e-12 * scale else 0.0
         normals[i, 0] = nx * nn
         normals[i, 1] = ny * nn
         normals[i, 2] = nz * nn
 
 
 @nb.njit(cache=True, parallel=True)
-def _eval_parallel(ku, kv, p, q, Hw, u, v, order, out, normals, flip):
+def _eval_parallel(G, sid, u, v, order, out, normals):
     """_eval_range over all points in parallel chunks."""
     n = u.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
-        _eval_range(
-            ku, kv, p, q, Hw, u, v, order, out, normals, flip, c * _CHUNK, min(n, (c + 1) * _CHUNK)
-        )
+        _eval_range(G, sid, u, v, order, out, normals, c * _CHUNK, min(n, (c + 1) * _CHUNK))
 
 
 @dataclass
@@ -185,42 +194,74 @@ class Curvatures:
     d2: np.ndarray
 
 
-def _raw_eval(surface: Surface, u: np.ndarray, v: np.ndarray, order: int):
+class _Packed(NamedTuple):
+    """Surfaces packed into flat arrays for the kernel: knots of surface s are
+    knots_u[ou[s]:ou[s+1]], its weighted poles Hw[op[s] + i * nvs[s] + j] (x w, y w, z w, w)."""
+
+    knots_u: np.ndarray
+    ou: np.ndarray
+    knots_v: np.ndarray
+    ov: np.ndarray
+    Hw: np.ndarray
+    op: np.ndarray
+    nus: np.ndarray
+    nvs: np.ndarray
+    degu: np.ndarray
+    degv: np.ndarray
+    signs: np.ndarray
+
+
+def _pack(surfaces: list[Surface]) -> _Packed:
+    for s in surfaces:
+        if max(s.degree_u, s.degree_v) > _MAXDEG:
+            raise ValueError(f"surface {s.id}: degree above {_MAXDEG} is not supported")
+
+    def offsets(sizes) -> np.ndarray:
+        return np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+
+    ints = lambda xs: np.array(xs, dtype=np.int64)  # noqa: E731
+    return _Packed(
+        np.concatenate([s.knots_u for s in surfaces]),
+        offsets([s.knots_u.size for s in surfaces]),
+        np.concatenate([s.knots_v for s in surfaces]),
+        offsets([s.knots_v.size for s in surfaces]),
+        np.ascontiguousarray(np.concatenate([s.homogeneous.reshape(-1, 4) for s in surfaces])),
+        offsets([s.ctrlpts.shape[0] * s.ctrlpts.shape[1] for s in surfaces]),
+        ints([s.ctrlpts.shape[0] for s in surfaces]),
+        ints([s.ctrlpts.shape[1] for s in surfaces]),
+        ints([s.degree_u for s in surfaces]),
+        ints([s.degree_v for s in surfaces]),
+        np.zeros(len(surfaces)),
+    )
+
+
+def _packed(owner: Surface | Part, surfaces: list[Surface]) -> _Packed:
+    """The packed geometry of `surfaces`, cached on `owner` (surfaces are treated as immutable
+    once evaluated); the normal signs follow the surfaces' current `flip`."""
+    key = tuple(id(s) for s in surfaces)
+    hit = owner.__dict__.get("_packed")
+    if hit is None or hit[0] != key:
+        hit = (key, _pack(surfaces))
+        owner.__dict__["_packed"] = hit
+    packed = hit[1]
+    return packed._replace(signs=np.array([-1.0 if s.flip else 1.0 for s in surfaces]))
+
+
+def _run(G: _Packed, sid: np.ndarray, u: np.ndarray, v: np.ndarray, order: int):
     if order not in (1, 2):
         raise ValueError(f"order must be 1 or 2, got {order}")
-    if max(surface.degree_u, surface.degree_v) > _MAXDEG:
-        raise ValueError(f"degree above {_MAXDEG} is not supported")
-    Hw = _homogeneous(surface)
     n = u.shape[0]
     out = np.empty((n, 3 * order, 3))
     normals = np.empty((n, 3))
-    kernel_args = (
-        surface.knots_u,
-        surface.knots_v,
-        surface.degree_u,
-        surface.degree_v,
-        Hw,
-        u,
-        v,
-        order,
-        out,
-        normals,
-        bool(surface.flip),
-    )
     if n >= _PARALLEL_MIN:
-        _eval_parallel(*kernel_args)
+        _eval_parallel(G, sid, u, v, order, out, normals)
     else:
-        _eval_range(*kernel_args, 0, n)
+        _eval_range(G, sid, u, v, order, out, normals, 0, n)
     return out, normals
 
 
-def _homogeneous(surface: Surface) -> np.ndarray:
-    """The surface's weighted poles, computed once per Surface object."""
-    Hw = surface.__dict__.get("_hw")
-    if Hw is None:
-        Hw = surface.homogeneous
-        surface.__dict__["_hw"] = Hw
-    return Hw
+def _raw_eval(surface: Surface, u: np.ndarray, v: np.ndarray, order: int):
+    return _run(_packed(surface, [surface]), _NO_IDS, u, v, order)
 
 
 def _params(u, v) -> tuple[np.ndarray, np.ndarray]:
@@ -263,23 +304,22 @@ def evaluate(surface: Surface, u, v, order: int = 1) -> SurfaceEval:
 
 def evaluate_mixed(part: Part, surface_ids, u, v, order: int = 1) -> SurfaceEval:
     """Evaluate K points that lie on different surfaces of `part` (`surface_ids (K,)` int,
-    `u`, `v` (K,)); grouped by surface, one kernel call per distinct surface."""
+    `u`, `v` (K,)) in one kernel call over the part's packed surfaces."""
     u, v = _params(u, v)
-    ids = np.asarray(surface_ids, dtype=np.int64).ravel()
+    ids = np.ascontiguousarray(surface_ids, dtype=np.int64).ravel()
     if ids.shape != u.shape:
         raise ValueError(f"surface_ids has {ids.size} entries for {u.size} parameters")
-    k = u.size
-    fields = ["points", "du", "dv", "normals"] + (["duu", "duv", "dvv"] if order == 2 else [])
-    res = {f: np.empty((k, 3)) for f in fields}
-    order_idx = np.argsort(ids, kind="stable")
-    uniq, starts = np.unique(ids[order_idx], return_index=True)
-    bounds = np.append(starts, k)
-    for sid, a, b in zip(uniq, bounds[:-1], bounds[1:], strict=True):
-        sel = order_idx[a:b]
-        ev = evaluate(part.surfaces[int(sid)], u[sel], v[sel], order)
-        for f in fields:
-            res[f][sel] = getattr(ev, f)
-    return SurfaceEval(**res)
+    if ids.size and (ids.min() < 0 or ids.max() >= len(part.surfaces)):
+        raise ValueError(f"surface ids must lie in [0, {len(part.surfaces)})")
+    out, normals = _run(_packed(part, part.surfaces), ids, u, v, order)
+    bad = np.flatnonzero(np.abs(normals).sum(axis=1) == 0.0)
+    for sid in np.unique(ids[bad]):  # poles only: a handful of points, if any
+        sel = bad[ids[bad] == sid]
+        normals[sel] = evaluate(part.surfaces[int(sid)], u[sel], v[sel]).normals
+    ev = SurfaceEval(out[:, 0], out[:, 1], out[:, 2], normals)
+    if order == 2:
+        ev.duu, ev.duv, ev.dvv = out[:, 3], out[:, 4], out[:, 5]
+    return ev
 
 
 def curvatures_of(ev: SurfaceEval) -> Curvatures:

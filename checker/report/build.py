@@ -23,8 +23,8 @@ PARALLEL_FROM = 8  # jobs; fewer are drawn in this process (starting workers cos
 CSV_COLUMNS = (
     "id", "recorded_at", "job_path", "status", "error", "points", "ok", "gouge", "interference",
     "holder", "inaccessible", "worst_margin", "worst_depth", "largest_safe_cutter",
-    "largest_safe_standard", "regions", "previous_gouges", "elapsed_s", "cutter", "part",
-    "part_hash", "machine", "axis_class",
+    "largest_safe_standard", "regions", "previous_status", "previous_gouges", "elapsed_s",
+    "cutter", "cutter_kind", "part", "part_hash", "machine", "axis_class",
 )
 
 
@@ -52,6 +52,8 @@ def _draw(task: tuple) -> tuple[int, list[str], dict, list]:
     job_id, kind, cutter, cutter_size = task
     store, painter, diameters = _STATE
     arrays = store.arrays(job_id)
+    if arrays is None:  # recorded before the store kept per-point arrays
+        return job_id, [], None, []
     standard = standard_cutters(kind, cutter, cutter_size, diameters)
     regions = per_region(standard, arrays["allowable"][arrays["kind"]],
                          arrays["surface"][arrays["kind"]])
@@ -82,8 +84,10 @@ def job_summary(row: JobRow, previous: JobRow | None) -> dict:
         "inaccessible": row.n_inaccessible, "worst_margin": row.worst_margin,
         "worst_depth": row.worst_depth, "largest_safe_cutter": row.largest_safe_cutter,
         "largest_safe_standard": row.largest_safe_standard, "regions": [],
+        "previous_status": None if previous is None else previous.status,
         "previous_gouges": None if previous is None else previous.n_gouge,
-        "elapsed_s": row.elapsed_s, "cutter": row.cutter, "part": row.part,
+        "elapsed_s": row.elapsed_s, "cutter": row.cutter, "cutter_kind": row.cutter_kind,
+        "part": row.part,
         "part_hash": row.part_hash, "machine": row.machine, "axis_class": row.axis_class,
     }
 

@@ -63,10 +63,11 @@ def _job_table(jobs: list[dict]) -> str:
 
 
 def _delta(job: dict) -> str:
-    prev = job["previous_gouges"]
-    if prev is None:
+    if job["previous_status"] is None:
         return "first run"
-    d = job["gouge"] - prev
+    if job["previous_gouges"] is None:
+        return "previous run failed"
+    d = job["gouge"] - job["previous_gouges"]
     return "same gouges" if d == 0 else f"{d:+d} gouges"
 
 
@@ -143,6 +144,6 @@ def render_page(
     parts.append(_trend_table(trend_rows))
     if jobs:
         parts += ["<h2>Jobs</h2>", _job_table(jobs), "<h2>Pictures per job</h2>"]
-        parts += [_job_section(j) for j in jobs if j["status"] != "failed"]
+        parts += [_job_section(j) for j in jobs if j["pictures"]]
     parts.append("</body></html>")
     return "\n".join(parts)

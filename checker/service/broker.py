@@ -19,8 +19,11 @@ import itertools
 import json
 import logging
 import os
+import secrets
+import shutil
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections import deque
@@ -91,6 +94,7 @@ class Broker:
         self._idle: deque[_Worker] = deque()
         self._ids = itertools.count(1)
         self._start_failures = 0
+        self._backend_dir = ""
         self.counters = _Counters()
 
     # --- steering (thread- and signal-safe) ------------------------------------------------
@@ -162,7 +166,9 @@ class Broker:
             self._shutdown()
 
     def _bind_backend(self) -> str:
-        self.backend.bind("tcp://127.0.0.1:*")
+        """An ipc endpoint in a fresh directory only this user can enter (workers only)."""
+        self._backend_dir = tempfile.mkdtemp(prefix="pathcheck-service-")
+        self.backend.bind(f"ipc://{self._backend_dir}/backend")
         return self.backend.getsockopt_string(zmq.LAST_ENDPOINT)
 
     def _loop(self) -> None:
@@ -170,6 +176,7 @@ class Broker:
             if self._stop_requested and not self._draining:
                 self._begin_drain()
             if self._draining and not any(w.job for w in self._workers.values()):
+                self._from_clients()  # answer what is still queued: `unavailable`
                 return
             poller = zmq.Poller()
             poller.register(self.backend, zmq.POLLIN)
@@ -295,7 +302,7 @@ class Broker:
                 self.counters.replaced += 1
 
     def _spawn(self) -> None:
-        identity = f"w{next(self._ids)}".encode()
+        identity = f"w{next(self._ids)}-{secrets.token_hex(8)}".encode()
         cmd = [sys.executable, "-m", "checker.service.worker", self.backend_addr,
                identity.decode(), "--config-json", self.config.model_dump_json()]
         if self.store:
@@ -351,6 +358,8 @@ class Broker:
             if sock is not None:
                 sock.close()
         self.ctx.term()
+        if self._backend_dir:
+            shutil.rmtree(self._backend_dir, ignore_errors=True)
         log.info("stopped")
 
 

@@ -86,7 +86,7 @@ def json_key(data: Any, salt: str = "") -> str:
     return hashlib.sha256((salt + text).encode()).hexdigest()
 
 
-def deep_nbytes(obj: Any, depth: int = 4, _seen: set[int] | None = None) -> int:
+def deep_nbytes(obj: Any, depth: int = 6, _seen: set[int] | None = None) -> int:
     """Approximate memory held by numpy arrays reachable from `obj` (attributes, sequences,
     dicts; a scipy cKDTree counts its data and index arrays), bytes."""
     seen = _seen if _seen is not None else set()

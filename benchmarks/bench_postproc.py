@@ -1,0 +1,67 @@
+"""Post-processor speed. Run: `python -m benchmarks.bench_postproc`.
+
+- posting a synthetic 4-axis path (100,000 moves, B crossing 360 several times) for the Fanuc
+  (G94 rotary rule, rollover B) and LinuxCNC (G93, limited B) machines;
+- reading the program back and into the part frame;
+- reading the real 7-blade impeller program (294 KB, G93 A/C) when ../shared is present.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from postproc.machine import load_machine
+from postproc.post import PostMoves, post_program
+from postproc.reader import read_gcode, read_gcode_text
+from postproc.replay import part_motions
+
+REALDATA = Path(__file__).resolve().parents[1].parent / "shared" / "realdata"
+N = 100_000
+
+
+def synthetic(n: int = N) -> PostMoves:
+    """A zig-zag on a radius-60 cylinder about Y, B from -30 to 1,050 degrees, one tool."""
+    s = np.linspace(0.0, 1.0, n)
+    b = -30.0 + 1080.0 * s
+    th = np.radians(b)
+    tip = np.c_[-60.0 * np.sin(th), 30.0 * np.sin(40 * s), 60.0 * np.cos(th)]
+    rapid = np.zeros(n, bool)
+    rapid[0] = True
+    return PostMoves.build(tip, b, rapid=rapid, feed=1500.0, spindle=9000.0, coolant=8, tool=1)
+
+
+def timed(fn):
+    t = time.perf_counter()
+    out = fn()
+    return out, time.perf_counter() - t
+
+
+def main() -> None:
+    moves = synthetic()
+    print(f"{'step':<46}{'seconds':>9}{'per s':>14}")
+    for name in ("fanuc-hmc", "linuxcnc-hmc"):
+        machine = load_machine(name)
+        text, t_post = timed(lambda m=machine: post_program(moves, m))
+        read, t_read = timed(lambda m=machine, s=text: read_gcode_text(s, m.dialect))
+        part, t_part = timed(lambda m=machine, r=read: part_motions(r, m))
+        blocks = len(text.splitlines())
+        print(f"{'post ' + f'{N:,} moves, ' + name:<46}{t_post:>9.2f}{N / t_post:>12,.0f} mv")
+        print(
+            f"{'read back ' + f'{blocks:,} blocks':<46}{t_read:>9.2f}{blocks / t_read:>12,.0f} bl"
+        )
+        print(
+            f"{'to part frame ' + f'{len(part):,} points':<46}{t_part:>9.2f}{len(part) / t_part:>12,.0f} pt"
+        )
+    impeller = REALDATA / "linuxcnc-5axis-gcode" / "impeller-7bl-xyzac.ngc"
+    if impeller.is_file():
+        moves_read, t = timed(lambda: read_gcode(impeller, "linuxcnc"))
+        print(f"{'read impeller-7bl-xyzac.ngc (' + f'{len(moves_read):,} moves)':<46}{t:>9.2f}")
+    else:
+        print("../shared/realdata absent: impeller read skipped")
+
+
+if __name__ == "__main__":
+    main()

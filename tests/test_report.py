@@ -1,0 +1,202 @@
+"""The nightly report: page, pictures, JSON/CSV summary, trends, standard-cutter maps and the
+`pathcheck report` command, over stores filled with synthetic 41 x 41 mould jobs."""
+
+from __future__ import annotations
+
+import base64
+import csv
+import io
+import json
+import re
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from checker.cli import main
+from checker.errors import PathcheckError
+from checker.report import build_report, parse_since
+from checker.report.build import PARALLEL_FROM
+from checker.report.pictures import PANEL_PX, JobPainter, b_range, paint_map
+from checker.report.standard import per_region, standard_cutters
+from checker.report.synthetic import synthetic_document
+from checker.report.trends import DAY_S, compare, nights
+from checker.store import ResultsStore, point_arrays
+
+NOW = 1_790_000_000.0  # a fixed report time, UTC epoch s
+PNG_SRC = re.compile(r'<img class="pic" alt="[^"]*" src="data:image/png;base64,([^"]+)"')
+
+
+def _pngs(html: str) -> list[np.ndarray]:
+    return [np.asarray(Image.open(io.BytesIO(base64.b64decode(b)))) for b in PNG_SRC.findall(html)]
+
+
+@pytest.fixture(scope="module")
+def night(tmp_path_factory):
+    """A store with tonight 3 jobs (two 4-axis, one 3-axis) and a failed one; last night job 0
+    (same result) and job 1 (failed); and the report built over it."""
+    root = tmp_path_factory.mktemp("night")
+    docs = [synthetic_document(k, n=41, four_axis=k != 2) for k in range(3)]
+    with ResultsStore(root / "s.sqlite") as store:
+        store.record_job(docs[0], elapsed_s=1.0, recorded_at=NOW - DAY_S - 600)  # last night
+        for k, doc in enumerate(docs):
+            store.record_job(doc, elapsed_s=2.0 + k, recorded_at=NOW - 3600 + k)
+        store.record_job(None, error="jobs/bad.apt:3: expected GOTO/x,y,z, found GOTO/1,2",
+                         job_path="jobs/bad.apt", elapsed_s=0.1, recorded_at=NOW - 60)
+        store.record_job(None, error="part missing", job_path=docs[1].job.path, elapsed_s=0.1,
+                         recorded_at=NOW - DAY_S - 300)  # last night, job 1 failed
+        files = build_report(store, root / "out" / "report.html", now=NOW)
+    return docs, files
+
+
+def test_page_has_rows_pictures_and_no_network(night):
+    docs, files = night
+    html = files.html.read_text()
+    assert files.jobs == 4 and files.pictures == 3 * 4 + 1
+    assert len(re.findall(r'<tr class="job ', html)) == 4
+    assert len(re.findall(r'<tr class="job failed"', html)) == 1
+    assert "expected GOTO/x,y,z, found GOTO/1,2" in html
+    images = _pngs(html)
+    assert len(images) == 13
+    for img in images[1:]:  # job pictures: fixed size, and more than one colour
+        assert img.shape[:2] == (PANEL_PX[1], PANEL_PX[0])
+        assert img.reshape(-1, img.shape[2]).std(axis=0).max() > 10
+    assert not re.search(r"(src|href)=\"(https?:)?//", html) and "<script" not in html
+    # the gouge count in the table row is the document's
+    row = re.search(r'id="row-2".*?</tr>', html, re.S).group(0)
+    cells = re.findall(r'<td class="n">([^<]*)</td>', row)
+    assert int(cells[2]) == docs[0].summary.counts.gouge  # id, points, gouges, ...
+    assert "same gouges" in row  # job 0 again: compared with last night's run
+    assert "previous run failed" in re.search(r'id="row-3".*?</tr>', html, re.S).group(0)
+    assert "first run" in re.search(r'id="row-4".*?</tr>', html, re.S).group(0)
+
+
+def test_findings_picture_marks_the_gouges(night):
+    docs, files = night
+    img = _pngs(files.html.read_text())[3].astype(int)  # job 1: maps, then findings
+    red = (img[:, :, 0] > 200) & (img[:, :, 1] < 60) & (img[:, :, 2] < 60)
+    orange = (img[:, :, 0] > 240) & (np.abs(img[:, :, 1] - 127) < 20) & (img[:, :, 2] < 40)
+    assert red.sum() > 20 * docs[0].summary.counts.gouge // 4  # gouge squares are drawn
+    assert orange[:, : img.shape[1] * 3 // 4].sum() > 500  # the interfering wall column
+
+
+def test_json_and_csv_summaries(night):
+    docs, files = night
+    data = json.loads(files.json.read_text())
+    assert data["totals"] == {"ok": 0, "findings": 3, "failed": 1}
+    assert [j["gouge"] for j in data["jobs"][:3]] == [d.summary.counts.gouge for d in docs]
+    assert data["jobs"][3]["status"] == "failed" and data["jobs"][3]["error"]
+    assert data["nights"][-1]["jobs"] == 4 and data["nights"][-2]["jobs"] == 2
+    assert data["nights"][-2]["failed"] == 1 and data["jobs"][1]["previous_status"] == "failed"
+    rows = list(csv.DictReader(files.csv.open()))
+    assert len(rows) == 4 and rows[0]["job_path"] == docs[0].job.path
+    assert float(rows[1]["worst_depth"]) == pytest.approx(docs[1].summary.worst_depth)
+    assert rows[0]["regions"].startswith("S0:")
+
+
+def test_empty_store_says_no_jobs(tmp_path):
+    with ResultsStore(tmp_path / "s.sqlite") as store:
+        files = build_report(store, tmp_path / "r.html", now=NOW)
+    html = files.html.read_text()
+    assert files.jobs == 0 and files.pictures == 0
+    assert 'id="no-jobs"' in html and "No jobs were recorded" in html
+    assert "<tr class=\"job" not in html
+    assert json.loads(files.json.read_text())["jobs"] == []
+    assert files.csv.read_text().count("\n") == 1  # the header only
+
+
+def test_standard_cutters_against_brute_force():
+    doc = synthetic_document(5, n=21)
+    arrays = point_arrays(doc)
+    std = standard_cutters("ball", doc.job.cutter, doc.job.cutter_size, (1.0,))
+    assert all(n.startswith("BALL") for n in std.names) and np.all(np.diff(std.sizes) >= 0)
+    picked = std.largest(arrays["allowable"])
+    for a, k in zip(arrays["allowable"], picked, strict=True):
+        fits = [i for i, s in enumerate(std.sizes) if s <= a]
+        assert k == (max(fits) if fits else -1)
+    regions = dict(per_region(std, arrays["allowable"], arrays["surface"]))
+    for sid, name in regions.items():
+        least = arrays["allowable"][arrays["surface"] == sid].min()
+        assert name == std.names[std.largest(np.array([least]))[0]]
+    # a family the tool library lacks: config diameters, corner radius kept (R = D/2 - r)
+    apt = standard_cutters("apt", "CUTTER/10,2", 3.0, (3.0, 6.0, 12.0))
+    assert apt.names == ("D3", "D6", "D12")
+    np.testing.assert_allclose(apt.sizes, [-0.5, 1.0, 4.0])
+    assert list(apt.largest(np.array([0.2, 1.0, 3.9, np.nan]))) == [-1, 1, 1, 2]
+
+
+def test_paint_map_puts_points_where_they_are():
+    target = np.zeros((101, 101, 4), dtype=np.uint8)
+    xy = np.array([[0.0, 0.0], [10.0, 10.0], [10.0, 10.0]])
+    rgba = np.array([[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255]], dtype=np.uint8)
+    paint_map(target, xy, rgba, np.array([3, 3, 3]), np.array([0, 0, 1]))
+    # square view of half-width 0.53 * 10 around (5, 5): x = 0 -> column 3, y = 10 -> row 3
+    assert tuple(target[97, 3, :3]) == (255, 0, 0)
+    assert tuple(target[3, 97, :3]) == (0, 0, 255)  # the later group covers the earlier
+    assert tuple(target[50, 50, :3]) == (255, 255, 255)
+
+
+def test_painter_path_panel_scales():
+    assert b_range(np.array([-5.0, 8.0, np.nan])) == 10.0
+    assert b_range(np.array([75.0])) == 90.0 and b_range(np.array([400.0])) == 180.0
+    doc3 = synthetic_document(2, n=11, four_axis=False)
+    painter = JobPainter()
+    std = standard_cutters("ball", doc3.job.cutter, doc3.job.cutter_size, (1.0,))
+    pictures, facts = painter.render(point_arrays(doc3), std, doc3.job.cutter_size)
+    assert len(pictures) == 4 and facts["has_b"] is False and facts["view"] == "XY"
+    assert facts["findings"] == doc3.summary.points - doc3.summary.counts.ok
+    assert facts["min_allowable"] == pytest.approx(doc3.summary.largest_safe_cutter)
+
+
+def test_trends_group_by_night():
+    class Row:
+        def __init__(self, t, status, gouges, depth):
+            self.recorded_at, self.status, self.n_gouge, self.worst_depth = t, status, gouges, depth
+            self.n_interference = self.n_holder = 0
+
+    rows = [Row(NOW - 10, "findings", 5, 0.2), Row(NOW - 20, "ok", 0, None),
+            Row(NOW - DAY_S - 5, "failed", 0, None), Row(NOW - 3 * DAY_S - 5, "findings", 2, 0.1)]
+    per_night = nights(rows, NOW, 5)
+    assert [n["jobs"] for n in per_night] == [0, 1, 0, 1, 2]
+    assert per_night[-1]["gouges"] == 5 and per_night[-1]["worst_depth"] == 0.2
+    table = {q: (a, b, c) for q, a, b, c in compare(per_night)}
+    assert table["jobs"] == (2, 1, 0.5) and table["failed"] == (0, 1, 0.25)
+    assert table["worst depth"] == (0.2, None, 0.1)
+
+
+def test_parse_since():
+    assert parse_since("24h") == 86400 and parse_since("90m") == 5400
+    assert parse_since("7d") == 7 * 86400 and parse_since("2") == 7200
+    for bad in ("", "-3h", "soon", "0d"):
+        with pytest.raises(PathcheckError, match="--since"):
+            parse_since(bad)
+
+
+def test_parallel_pictures_equal_in_process(tmp_path):
+    with ResultsStore(tmp_path / "s.sqlite") as store:
+        for k in range(PARALLEL_FROM):
+            store.record_job(synthetic_document(k, n=9), elapsed_s=1.0, recorded_at=NOW - k - 1)
+        many = build_report(store, tmp_path / "many.html", now=NOW)  # process pool
+        one = build_report(store, tmp_path / "one.html", since_s=2.5, now=NOW)  # in process
+    pics_many = PNG_SRC.findall(many.html.read_text())
+    pics_one = PNG_SRC.findall(one.html.read_text())
+    assert many.jobs == PARALLEL_FROM and one.jobs == 2
+    # jobs are listed oldest first: the newest two jobs are the last eight job pictures
+    assert pics_one[1:] == pics_many[-8:]
+
+
+def test_report_command(tmp_path, monkeypatch, capsys):
+    store_path = tmp_path / "s.sqlite"
+    monkeypatch.setenv("PATHCHECK_STORE", str(store_path))
+    with ResultsStore() as store:
+        store.record_job(synthetic_document(1, n=11), elapsed_s=1.0)
+    out = tmp_path / "r" / "night.html"
+    with pytest.raises(SystemExit) as exit_info:
+        main(["report", "--since", "2h", "--out", str(out)])
+    assert exit_info.value.code == 0
+    assert "1 job, 5 pictures" in capsys.readouterr().out
+    assert all(out.with_suffix(s).is_file() for s in (".html", ".json", ".csv"))
+    with pytest.raises(SystemExit) as exit_info:
+        main(["report", "--since", "yesterday", "--out", str(out)])
+    assert exit_info.value.code == 2
+    assert "--since" in capsys.readouterr().err
