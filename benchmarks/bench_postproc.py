@@ -4,6 +4,7 @@
   (G94 rotary rule, rollover B) and LinuxCNC (G93, limited B) machines;
 - reading the program back and into the part frame;
 - reading the real 7-blade impeller program (294 KB, G93 A/C) when ../shared is present.
+Times are CPU seconds of this process (single-threaded code), steady on a loaded machine.
 """
 
 from __future__ import annotations
@@ -34,27 +35,28 @@ def synthetic(n: int = N) -> PostMoves:
 
 
 def timed(fn):
-    t = time.perf_counter()
+    """Result and CPU seconds of ``fn()`` (CPU time: steady on a shared, loaded machine)."""
+    t = time.process_time()
     out = fn()
-    return out, time.perf_counter() - t
+    return out, time.process_time() - t
 
 
 def main() -> None:
     moves = synthetic()
-    print(f"{'step':<46}{'seconds':>9}{'per s':>14}")
+    print(f"{'step':<46}{'cpu s':>9}{'per cpu s':>14}")
+
+    def row(label: str, seconds: float, count: int, unit: str) -> None:
+        print(f"{label:<46}{seconds:>9.2f}{count / seconds:>12,.0f} {unit}")
+
     for name in ("fanuc-hmc", "linuxcnc-hmc"):
         machine = load_machine(name)
         text, t_post = timed(lambda m=machine: post_program(moves, m))
         read, t_read = timed(lambda m=machine, s=text: read_gcode_text(s, m.dialect))
         part, t_part = timed(lambda m=machine, r=read: part_motions(r, m))
         blocks = len(text.splitlines())
-        print(f"{'post ' + f'{N:,} moves, ' + name:<46}{t_post:>9.2f}{N / t_post:>12,.0f} mv")
-        print(
-            f"{'read back ' + f'{blocks:,} blocks':<46}{t_read:>9.2f}{blocks / t_read:>12,.0f} bl"
-        )
-        print(
-            f"{'to part frame ' + f'{len(part):,} points':<46}{t_part:>9.2f}{len(part) / t_part:>12,.0f} pt"
-        )
+        row(f"post {N:,} moves, {name}", t_post, N, "mv")
+        row(f"read back {blocks:,} blocks", t_read, blocks, "bl")
+        row(f"to part frame {len(part):,} points", t_part, len(part), "pt")
     impeller = REALDATA / "linuxcnc-5axis-gcode" / "impeller-7bl-xyzac.ngc"
     if impeller.is_file():
         moves_read, t = timed(lambda: read_gcode(impeller, "linuxcnc"))

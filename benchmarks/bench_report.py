@@ -3,11 +3,13 @@
 Records JOBS (default 200) synthetic jobs of 41 x 41 CC points (a mould raster, ball cutter,
 two thirds 4-axis, 1 in 25 failed) into a fresh store within the last night, then builds the
 report from cold: page, 4 pictures per job, trends, JSON and CSV; with the configured picture
-processes and with one. The issue asks for under 10 s over 200 jobs.
+processes and with one. The issue asks for under 10 s over 200 jobs. `cpu s` is the CPU time
+of the build (all processes): on a busy machine it is the better guide to a quiet one.
 """
 
 from __future__ import annotations
 
+import resource
 import sys
 import tempfile
 import time
@@ -17,6 +19,13 @@ from checker.config import default_config
 from checker.report import build_report
 from checker.report.synthetic import synthetic_document
 from checker.store import ResultsStore
+
+
+def _cpu_s() -> float:
+    """CPU seconds of this process and its finished children (the picture processes)."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
+        resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def main(jobs: int = 200) -> None:
@@ -35,17 +44,17 @@ def main(jobs: int = 200) -> None:
                                  job_path=f"jobs/{i}.apt")
         record_s = (time.perf_counter() - start) / jobs
         print(f"{'jobs':>5} {'points/job':>10} {'record ms/job':>13} {'workers':>7} "
-              f"{'pictures':>8} {'report s':>8} {'page MB':>7}")
+              f"{'pictures':>8} {'report s':>8} {'cpu s':>6} {'page MB':>7}")
         for workers in (cfg.report.render_workers, 1):
             config = cfg.model_copy(
                 update={"report": cfg.report.model_copy(update={"render_workers": workers})}
             )
-            start = time.perf_counter()
+            start, cpu = time.perf_counter(), _cpu_s()
             files = build_report(store, Path(tmp) / "report.html", now=now, config=config)
-            took = time.perf_counter() - start
+            took, cpu = time.perf_counter() - start, _cpu_s() - cpu
             size = files.html.stat().st_size / 1e6
             print(f"{files.jobs:5d} {41 * 41:10d} {1e3 * record_s:13.1f} {workers:7d} "
-                  f"{files.pictures:8d} {took:8.2f} {size:7.1f}")
+                  f"{files.pictures:8d} {took:8.2f} {cpu:6.2f} {size:7.1f}")
 
 
 if __name__ == "__main__":

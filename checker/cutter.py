@@ -80,6 +80,7 @@ class Cutter:
 
     @property
     def family(self) -> int:
+        """Kernel family code: `kernels.FAMILY_BALL` (r variable) or `FAMILY_APT` (R)."""
         return kernels.FAMILY_BALL if self.kind in BALL_FAMILY else kernels.FAMILY_APT
 
     def with_size(self, s: float) -> Cutter:
@@ -161,8 +162,8 @@ class Cutter:
     ) -> np.ndarray:
         """(N,3) tool tip (part frame, mm) of this cutter touching cc with unit normal n at tool
         axis `axis` (N,3 or 3). Fillet contact: tip = cc + r n + R e - (R tan psi + r sec psi) a;
-        tip contact (psi > 0, n.a > cos psi): tip = cc; vertical normal: e from `e`, else the
-        axis passes through the fillet's lowest point (tip below cc for a flat bottom)."""
+        tip contact (psi > 0, n.a > cos psi): tip = cc; normal along the axis: e from `e` (N,3),
+        else the axis passes through cc (tip = cc: cc at the centre of the flat bottom)."""
         cc, n = _as_k3(cc, "cc"), _as_k3(n, "n")
         a = np.broadcast_to(np.asarray(axis, dtype=float), cc.shape)
         a = a / np.linalg.norm(a, axis=1, keepdims=True)

@@ -258,28 +258,24 @@ def _min_row(p, cc, n, e, has_e, family, prm, indptr, indices, i):
         return 0.0, indices[lo]  # the CC point cannot be touched: every pair gives 0
     b = INF
     a = -1
-    if family == FAMILY_BALL or (prm[_FLAT] < 0.5 and nz > prm[_COS_P]):
-        for t in range(lo, hi):
-            j = indices[t]
-            s = _one(p, cc, n, e, has_e, family, prm, i, j)
-            if s < b:
-                b = s
-                a = j
-                if b == 0.0:
-                    break
-        return b, a
     r, tol = prm[_R], prm[_TOL]
     cx, cy, cz = cc[i, 0], cc[i, 1], cc[i, 2]
     rx, ry, rz = r * nx, r * ny, r * nz
     ex = e[i, 0] if has_e else 0.0
     ey = e[i, 1] if has_e else 0.0
     ux, uy, worst = _axis_dir(nx, ny, ex, ey, has_e)
+    tip = family != FAMILY_BALL and prm[_FLAT] < 0.5 and nz > prm[_COS_P]
     for t in range(lo, hi):
         j = indices[t]
         qx, qy, qz = p[j, 0] - cx, p[j, 1] - cy, p[j, 2] - cz
         if qx * nx + qy * ny + qz * nz <= tol:
             continue  # below the tangent plane: inf
-        s = _fillet_size(qx - rx, qy - ry, qz - rz, ux, uy, worst, prm)
+        if family == FAMILY_BALL:
+            s = ball_size(qx, qy, qz, nx, ny, nz, prm)
+        elif tip:
+            s = _apt_tip_contact(qx, qy, qz, prm)
+        else:
+            s = _fillet_size(qx - rx, qy - ry, qz - rz, ux, uy, worst, prm)
         if s < b:
             b = s
             a = j

@@ -119,7 +119,7 @@ class Part:
     units: str = "mm"
     mesh: MeshPart | None = None
     faces: int = 0
-    _bbox: np.ndarray | None = field(default=None, repr=False)
+    _bbox: np.ndarray | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not self.content_hash:

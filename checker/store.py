@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import io
 import sqlite3
+import threading
 import time
 import zlib
 from collections.abc import Iterator
@@ -165,6 +166,7 @@ class ResultsStore:
         cfg = default_config().store
         self.path = Path(path) if path is not None else cfg.resolved_path()
         self.busy_timeout_s = cfg.busy_timeout_s if busy_timeout_s is None else busy_timeout_s
+        self._lock = threading.RLock()  # one connection, shared safely by a process's threads
         if self.path.is_dir():
             raise PathcheckError(
                 "expected an SQLite results store file, found a directory", path=self.path,
@@ -246,18 +248,19 @@ class ResultsStore:
     @contextmanager
     def _write(self, doing: str) -> Iterator[sqlite3.Connection]:
         """One short write transaction (BEGIN IMMEDIATE waits up to the busy timeout)."""
-        try:
-            self._con.execute("BEGIN IMMEDIATE")
-        except sqlite3.Error as err:
-            raise self._fail(err, doing) from err
-        try:
-            yield self._con
-            self._con.execute("COMMIT")
-        except BaseException as err:
-            self._con.execute("ROLLBACK")
-            if isinstance(err, sqlite3.Error):
+        with self._lock:
+            try:
+                self._con.execute("BEGIN IMMEDIATE")
+            except sqlite3.Error as err:
                 raise self._fail(err, doing) from err
-            raise
+            try:
+                yield self._con
+                self._con.execute("COMMIT")
+            except BaseException as err:
+                self._con.execute("ROLLBACK")
+                if isinstance(err, sqlite3.Error):
+                    raise self._fail(err, doing) from err
+                raise
 
     def _migrate(self) -> None:
         """Apply the migrations above the file's version, in one transaction."""
@@ -351,10 +354,11 @@ class ResultsStore:
 
     # ------------------------------------------------------------------ reading
     def _read(self, sql: str, args: tuple = ()) -> list[tuple]:
-        try:
-            return self._con.execute(sql, args).fetchall()
-        except sqlite3.Error as err:
-            raise self._fail(err, "reading") from err
+        with self._lock:
+            try:
+                return self._con.execute(sql, args).fetchall()
+            except sqlite3.Error as err:
+                raise self._fail(err, "reading") from err
 
     def jobs(self, since: float | None = None, until: float | None = None) -> list[JobRow]:
         """Recorded jobs with since <= recorded_at < until (UTC epoch s), oldest first."""

@@ -76,12 +76,21 @@ def tip_path_length(
 ) -> np.ndarray:
     """Length (mm) of the tool tip's path relative to the part over blocks whose machine X, Y, Z
     ``(N, 3)`` and B words ``(N,)`` (deg) are interpolated linearly from 0 to 1, as a control does.
-    Integrated over PATH_SUBSTEPS chords (exact for blocks without B motion)."""
-    t = np.linspace(0.0, 1.0, PATH_SUBSTEPS + 1)[None, :, None]
+    Exact for blocks without B motion; others are integrated over PATH_SUBSTEPS chords."""
     xyz0, xyz1 = np.asarray(xyz0, dtype=float), np.asarray(xyz1, dtype=float)
-    xyz = xyz0[:, None, :] + t * (xyz1 - xyz0)[:, None, :]
-    b0, b1 = np.asarray(b0, dtype=float), np.asarray(b1, dtype=float)
-    b = b0[:, None] + t[..., 0] * (b1 - b0)[:, None]
-    c = np.asarray(machine.kinematics.table_center, dtype=float)
-    tips = _rotate_y(xyz - c, -rotation_rad(b, machine))
-    return np.linalg.norm(np.diff(tips, axis=1), axis=-1).sum(axis=1)
+    length = np.linalg.norm(xyz1 - xyz0, axis=1)
+    th0, th1 = rotation_rad(b0, machine), rotation_rad(b1, machine)
+    turning = np.flatnonzero(th0 != th1)
+    if turning.size:
+        c = np.asarray(machine.kinematics.table_center, dtype=float)
+        p0, dp = xyz0[turning] - c, (xyz1 - xyz0)[turning]
+        a0, da = th0[turning], (th1 - th0)[turning]
+        total = np.zeros(turning.size)
+        prev = _rotate_y(p0, -a0)
+        for k in range(1, PATH_SUBSTEPS + 1):  # a loop over sub-steps, each over all blocks
+            t = k / PATH_SUBSTEPS
+            tip = _rotate_y(p0 + t * dp, -(a0 + t * da))
+            total += np.linalg.norm(tip - prev, axis=1)
+            prev = tip
+        length[turning] = total
+    return length

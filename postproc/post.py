@@ -21,7 +21,7 @@ from postproc.kinematics import (
     rotation_from_axis,
     tip_path_length,
 )
-from postproc.machine import Machine
+from postproc.machine import Machine, load_machine
 from postproc.wrap import pieces_per_move, range_branches, rollover_words
 from postproc.writer import MM_PER_INCH, Rows, comment, format_program
 
@@ -140,6 +140,18 @@ def moves_from_toolpath(
         source=str(toolpath.path),
         units=toolpath.units,
     )
+
+
+def machine_for_toolpath(toolpath, name: str | None = None) -> Machine:
+    """The machine to post ``toolpath`` for: ``name`` (a machine name or .toml file) when given,
+    else the CL file's ``PPRINT/MACHINE NAME``, else the default machine (fanuc-hmc)."""
+    if name is None:
+        for record in toolpath.records:
+            words = (record.text or "").split() if record.word == "PPRINT" else []
+            if len(words) == 2 and words[0].upper() == "MACHINE":
+                name = words[1]
+                break
+    return load_machine(name)
 
 
 @dataclass

@@ -68,7 +68,7 @@ class GcodeMoves:
 class _State:
     scale: float
     units: str
-    pos: np.ndarray  # XYZABC, mm / degrees
+    pos: list[float]  # XYZABC, mm / degrees
     motion: int | None = None
     cycle: str | None = None
     plane: int = 17
@@ -94,7 +94,7 @@ class _Program:
         self.dialect, self.path = dialect, path
         scale = MM_PER_INCH if units == "inch" else 1.0
         self.st = _State(
-            scale=scale, units=units, pos=np.full(6, np.nan), motion=dialect.initial_motion
+            scale=scale, units=units, pos=[math.nan] * 6, motion=dialect.initial_motion
         )
         self.rows: dict[str, list] = {
             k: []
@@ -121,11 +121,11 @@ class _Program:
     def error(self, message: str, line: int) -> PathcheckError:
         return PathcheckError(message, path=self.path, line=line, code="gcode")
 
-    def emit(self, pos: np.ndarray, motion: int, line: int, kind: int, center=None) -> None:
+    def emit(self, pos: list[float], motion: int, line: int, kind: int, center=None) -> None:
         st = self.st
         r = self.rows
-        r["xyz"].append(pos[:3].copy())
-        r["abc"].append(pos[3:].copy())
+        r["xyz"].append(pos[:3])
+        r["abc"].append(pos[3:])
         r["motion"].append(motion)
         r["center"].append(_NO_CENTER if center is None else center)
         r["plane"].append(st.plane)
@@ -137,7 +137,7 @@ class _Program:
         r["coolant"].append(st.coolant)
         r["line"].append(line)
         r["kind"].append(kind)
-        st.pos = pos.copy()
+        st.pos = list(pos)
 
     # -- one block -------------------------------------------------------------------------
     def block(self, block: Block, line: int) -> None:
@@ -233,10 +233,10 @@ class _Program:
             if group in g:
                 self.other[f"G{g[group]}"] += 1
 
-    def _target(self, words: dict[str, float]) -> tuple[np.ndarray, bool]:
+    def _target(self, words: dict[str, float]) -> tuple[list[float], bool]:
         """End position of the block's axis words (absolute or incremental) and whether any."""
         st = self.st
-        pos = st.pos.copy()
+        pos = list(st.pos)
         given = False
         for k, letter in enumerate(_AXES):
             if letter in words:
@@ -263,15 +263,14 @@ class _Program:
         if non_modal in ("10", "92"):
             self.other[f"G{non_modal}"] += 1
             if non_modal == "92" or words.get("L") == 20:
-                st.pos = np.where(
-                    np.isin(np.arange(6), [k for k, a in enumerate(_AXES) if a in words]),
-                    target,
-                    st.pos,
-                )
+                for k, a in enumerate(_AXES):
+                    if a in words:
+                        st.pos[k] = target[k]
             return
         if non_modal in ("28", "30"):
             homed = [k for k, a in enumerate("XYZ") if a in words] or [0, 1, 2]  # none: all
-            target[homed] = np.nan  # at the reference point: unknown in the work frame
+            for k in homed:
+                target[k] = math.nan  # at the reference point: unknown in the work frame
             self.emit(target, 0, line, HOME)
             return
         defines = g.get("motion") in CANNED_CYCLES or g.get("cycle") in CANNED_CYCLES
@@ -287,16 +286,18 @@ class _Program:
                 "axis words without a motion mode: expected G0, G1, G2 or G3 first", line
             )
         if non_modal == "53":  # machine coordinates: unknown in the work frame
-            target[[k for k, a in enumerate("XYZ") if a in words]] = np.nan
+            for k, a in enumerate("XYZ"):
+                if a in words:
+                    target[k] = math.nan
             self.emit(target, st.motion, line, MACHINE_FRAME)
             return
         center = self._arc_center(target, words, line) if st.motion in (2, 3) else None
         self.emit(target, st.motion, line, PROGRAMMED, center)
 
-    def _arc_center(self, end: np.ndarray, words: dict[str, float], line: int) -> np.ndarray:
+    def _arc_center(self, target: list[float], words: dict[str, float], line: int) -> np.ndarray:
         st = self.st
         u, v, w = _PLANES[st.plane]
-        start = st.pos[:3]
+        start, end = np.array(st.pos[:3]), np.array(target[:3])
         center = start.copy()
         if "R" in words:
             radius = words["R"] * st.scale
@@ -323,7 +324,7 @@ class _Program:
         else:
             center[[u, v]] = start[[u, v]] + np.array(offsets)
         if not any(_ARC_OFFSETS[k] in words for k in (u, v)):
-            if np.allclose(end[:3], start, atol=1e-12, equal_nan=True):
+            if np.allclose(end, start, atol=1e-12, equal_nan=True):
                 return np.full(3, np.nan)  # no displacement, no centre: the block does not move
             raise self.error(
                 f"arc without centre: expected {_ARC_OFFSETS[u]}/{_ARC_OFFSETS[v]} or R "
@@ -333,7 +334,7 @@ class _Program:
         center[w] = start[w]
         return center
 
-    def _cycle(self, target: np.ndarray, words: dict[str, float], line: int) -> None:
+    def _cycle(self, target: list[float], words: dict[str, float], line: int) -> None:
         """One hole: rapid to X/Y, rapid to R, feed to Z, rapid back (G98 initial, G99 R)."""
         st = self.st
         if "R" in words:
@@ -342,7 +343,7 @@ class _Program:
         if "Z" in words:
             z = words["Z"] * st.scale
             st.cycle_z = z if st.absolute else st.cycle_r + z
-        hole = target.copy()
+        hole = list(target)
         hole[2] = st.pos[2]
         self.emit(hole, 0, line, CYCLE)
         for z, motion in ((st.cycle_r, 0), (st.cycle_z, 1)):

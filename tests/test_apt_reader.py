@@ -215,6 +215,7 @@ def test_operations_split_at_tool_changes_and_cycles_flagged():
     assert [t.tool_number for t in tp.tool_changes] == [1, 2]
     m = tp.motion_arrays()
     assert m.op.tolist() == [0, 1, 1] and m.cycle.tolist() == [False, True, False]
+    assert np.isnan(m.feed[0]) and m.feed[1] == 100 and np.isnan(m.feed[2])  # the cycle's feed
     assert (tp.operations[1].first_record, tp.operations[1].end_record) == (3, 9)
 
 

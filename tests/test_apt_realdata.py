@@ -90,6 +90,11 @@ def test_solidworks_csys_is_the_setup_frame_and_not_reapplied(toolpaths):
     np.testing.assert_allclose(m.axis, np.tile(tp.frames[0].matrix[:3, 2], (len(m), 1)),
                                atol=1e-6)
     np.testing.assert_allclose(m.tip[0], [-38.637201, -8.8, 247.043872])
+    drill = toolpaths[f"{SW}/Sacrifice-Board.apt"].motion_arrays()
+    assert sorted(set(drill.feed[drill.cycle])) == [364.49, 382.27]  # CYCLE/...,MMPM,f
+    for tp in toolpaths.values():  # every cutting move has a feed
+        m = tp.motion_arrays()
+        assert not np.isnan(m.feed[~m.rapid]).any(), tp.path
     boss = describe_toolpath(toolpaths[f"{SW}/boss.apt"])
     assert boss["totals"]["axis_class"] == "4-axis-Y"  # horizontal spindle along x
     assert [o["axis_class"] for o in boss["operations"]] == ["3-axis"] * 4 + ["4-axis-Y"] * 4

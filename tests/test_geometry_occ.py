@@ -215,3 +215,23 @@ def test_step_without_faces_is_a_part_error(tmp_path):
     with pytest.raises(PathcheckError, match="no surface found") as err:
         load_part(path)
     assert err.value.code == "part" and "wire.stp" in str(err.value)
+
+
+def test_inch_step_is_read_in_mm(tmp_path):
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.Interface import Interface_Static
+    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+
+    writer = STEPControl_Writer()
+    Interface_Static.SetCVal_s("write.step.unit", "INCH")
+    try:
+        writer.Transfer(
+            BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), 25.4, 50.8, 10.0).Shape(), STEPControl_AsIs
+        )
+        path = tmp_path / "box_inch.step"
+        writer.Write(str(path))
+    finally:
+        Interface_Static.SetCVal_s("write.step.unit", "MM")
+    assert "CONVERSION_BASED_UNIT('INCH'" in path.read_text()
+    part = load_part(path)
+    assert part.units == "mm" and np.allclose(part.bbox, [[0, 0, 0], [25.4, 50.8, 10.0]], atol=1e-9)

@@ -392,3 +392,23 @@ def test_parallel_kernels_equal_serial():
     np.testing.assert_array_equal(best, b2)
     np.testing.assert_array_equal(arg, a2)
     assert np.isfinite(best).sum() > 100
+
+
+def test_conical_band_uses_corrected_k():
+    """MATH.md erratum 3: in the conical band k = dz cot(psi) + r csc(psi); the thesis's printed
+    eq. 2.30 (dz / tan(psi) + 2 r sin(psi)) gives a different size, the root-find agrees with
+    the corrected one."""
+    c = _cutter("apt")
+    r, psi = c.r, c.psi
+    n = np.array([[-0.3, 0.0, math.sqrt(1 - 0.09)]])
+    o = r * n[0]
+    p = np.array([[o[0] - 4.0, 0.5, o[2] - 1.2 * r]])  # dz = -1.2 r: conical band
+    got = c.imaginary_size(p, np.zeros((1, 3)), n)[0]
+    want = oracle(c, p[0], n[0])
+    d = p[0, :2] - o[:2]
+    e = n[0, :2] / np.linalg.norm(n[0, :2])
+    dz = p[0, 2] - o[2]
+    k_thesis = dz / math.tan(psi) + 2 * r * math.sin(psi)
+    r_thesis = (d @ d - k_thesis**2) / (2 * (e @ d + k_thesis))
+    assert got == pytest.approx(want, rel=1e-9)
+    assert 0 < got < 100 and abs(r_thesis - want) > 0.05 * want

@@ -14,7 +14,13 @@ from scipy.spatial.transform import Rotation
 
 from checker.errors import PathcheckError
 from postproc.machine import Machine, load_machine
-from postproc.post import PostMoves, moves_from_toolpath, post, post_program
+from postproc.post import (
+    PostMoves,
+    machine_for_toolpath,
+    moves_from_toolpath,
+    post,
+    post_program,
+)
 from postproc.reader import read_gcode_text
 from postproc.replay import part_motions
 from postproc.writer import comment, write_program
@@ -169,6 +175,18 @@ def test_moves_from_toolpath_recomputes_the_tip_at_the_chosen_b():
     assert np.allclose(moves.tip, cc + r * normals - r * axis, atol=1e-9)
     assert np.allclose(moves.tip + r * moves.axis, centre, atol=1e-9)
     assert moves.source == tp.path and moves.line.tolist() == original.line.tolist()
+
+
+def test_machine_for_toolpath():
+    from checker.apt import read_cl_text
+
+    named = read_cl_text("PARTNO/X\nPPRINT/MACHINE linuxcnc-hmc\nCUTTER/6\nGOTO/0,0,0\nEND\n")
+    plain = read_cl_text("PARTNO/X\nCUTTER/6\nGOTO/0,0,0\nEND\n")
+    assert machine_for_toolpath(named).name == "linuxcnc-hmc"
+    assert machine_for_toolpath(plain).name == "fanuc-hmc"
+    assert machine_for_toolpath(named, "fanuc-hmc").name == "fanuc-hmc"
+    with pytest.raises(PathcheckError, match="unknown machine 'mill9'"):
+        machine_for_toolpath(read_cl_text("PPRINT/MACHINE mill9\nCUTTER/6\nGOTO/0,0,0\nEND\n"))
 
 
 def _blocks(text: str, rollover: bool) -> list[dict[str, float]]:

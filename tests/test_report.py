@@ -200,3 +200,17 @@ def test_report_command(tmp_path, monkeypatch, capsys):
         main(["report", "--since", "yesterday", "--out", str(out)])
     assert exit_info.value.code == 2
     assert "--since" in capsys.readouterr().err
+
+
+def test_painter_pictures_do_not_depend_on_the_jobs_before():
+    docs = [synthetic_document(1, n=11), synthetic_document(2, n=11, four_axis=False),
+            synthetic_document(3, n=11, cutter_r=3.0)]
+    docs.append(docs[1])
+    tasks = []
+    for d in docs:
+        std = standard_cutters(d.job.cutter_kind, d.job.cutter, d.job.cutter_size, (1.0,))
+        tasks.append((point_arrays(d), std, d.job.cutter_size))
+    shared = JobPainter()
+    in_turn = [shared.render(*t)[0] for t in tasks]
+    alone = [JobPainter().render(*t)[0] for t in tasks[:3]]
+    assert in_turn[:3] == alone and in_turn[3] == alone[1]

@@ -180,3 +180,18 @@ def test_point_arrays_nulls(doc):
     arrays = point_arrays(three_axis)
     assert arrays["cc"].shape == (25, 3) and np.isnan(arrays["b_best"]).all()
     assert arrays["kind"].all() and set(np.unique(arrays["surface"])) <= {0, 1}
+
+
+def test_one_store_shared_by_threads(tmp_path):
+    from concurrent.futures import ThreadPoolExecutor
+
+    small = synthetic_document(2, n=5)
+    with ResultsStore(tmp_path / "s.sqlite") as store:
+        def write(k: int) -> None:
+            for i in range(10):
+                store.record_job(small, elapsed_s=0.0, job_path=f"t{k}/{i}.apt")
+                store.jobs(since=0.0)
+
+        with ThreadPoolExecutor(4) as pool:
+            list(pool.map(write, range(4)))
+        assert len({r.job_path for r in store.jobs()}) == 40

@@ -150,6 +150,7 @@ class _Reader:
         self.feed_per_rev: float | None = None
         self.rpm = math.nan
         self.in_cycle = False
+        self.cycle_feed = math.nan  # mm/min of the current canned cycle
         self.world = False
         self.frame_now = -1
         self.matrices: list[np.ndarray | None] = []
@@ -197,8 +198,11 @@ class _Reader:
     def push_state(self) -> None:
         """Feed (mm/min, nan), feed per rev (mm, nan), rpm, frame, operation, in cycle."""
         per_rev = math.nan if self.feed_per_rev is None else self.feed_per_rev
-        self.states.append((self.feed_now, per_rev, self.rpm, self.frame_now,
-                            len(self.ops) - 1, self.in_cycle))
+        feed = self.feed_now
+        if self.in_cycle and not math.isnan(self.cycle_feed):
+            feed, per_rev = self.cycle_feed, math.nan
+        self.states.append((feed, per_rev, self.rpm, self.frame_now, len(self.ops) - 1,
+                            self.in_cycle))
         self.dirty = False
 
     def state_of(self, row: int) -> tuple[float, float, float, int, int, bool]:
@@ -281,11 +285,7 @@ class _Reader:
         elif word == "SPINDL":
             self.spindl(rec)
         elif word == "CYCLE":
-            first = rec.args[0] if rec.args else "ON"
-            if first == "OFF":
-                self.in_cycle = False
-            elif first != "INIT":
-                self.in_cycle = True
+            self.cycle(rec)
         elif word in ("CUTTER", "TLDATA"):
             self.boundary(index)
             self.cutter_statement(rec)
@@ -331,6 +331,22 @@ class _Reader:
             self.feed_per_rev, self.feed_now = f * scale, math.nan
         else:
             self.feed_per_rev, self.feed_now = None, f * scale
+
+    def cycle(self, rec: Record) -> None:
+        """``CYCLE/OFF`` ends a canned cycle, ``CYCLE/INIT`` prepares one; anything else starts
+        one, with its feed from ``...,MMPM,f`` / ``IPM,f`` (per rev: times the rpm)."""
+        first = rec.args[0] if rec.args else "ON"
+        if first == "OFF":
+            self.in_cycle = False
+        elif first != "INIT":
+            self.in_cycle = True
+            if first != "ON":  # a new cycle: its own feed or none
+                self.cycle_feed = math.nan
+            for unit, value in zip(rec.args, rec.args[1:], strict=False):
+                if isinstance(unit, str) and unit in FEED_UNITS and not isinstance(value, str):
+                    f = value * (MM_PER_INCH if unit.startswith("I") else 1.0)
+                    self.cycle_feed = f * self.rpm if unit.endswith("PR") else f
+                    break
 
     def spindl(self, rec: Record) -> None:
         words = {a for a in rec.args if isinstance(a, str)}

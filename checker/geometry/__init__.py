@@ -21,6 +21,7 @@ _READERS = {
     ".stl": "stl",
 }
 _CACHE: dict[tuple[str, str], Part] = {}
+_CACHE_MAX = 8  # parts kept in memory (oldest dropped first)
 
 __all__ = ["BESIDE_SUFFIXES", "find_part_beside", "load_part"]
 
@@ -61,6 +62,8 @@ def load_part(path: str | Path) -> Part:
     if key in _CACHE:
         return _CACHE[key]
     part = _read(kind, path, raw, digest)
+    if len(_CACHE) >= _CACHE_MAX:
+        _CACHE.pop(next(iter(_CACHE)))
     _CACHE[key] = part
     return part
 

@@ -3,8 +3,10 @@ principal curvatures at many (u, v) at once, in mm in the part frame.
 
 One numba kernel per call: per point it finds the knot spans, builds the basis functions and
 their derivatives (Cox-de Boor, The NURBS Book A2.3), contracts them with the homogeneous poles
-and applies the quotient rule for rational surfaces (A4.4). Points are processed in parallel
-chunks; no Python runs per point. (u, v) outside the domain are clipped onto it.
+and applies the quotient rule for rational surfaces (A4.4). Surfaces are packed into flat
+arrays, so points on many surfaces go through one call (`evaluate_mixed`); 50,000 points or more
+run in parallel chunks. No Python runs per point. (u, v) outside the domain are clipped onto it.
+Surfaces are treated as immutable once evaluated (their packed poles are cached on them).
 """
 
 from __future__ import annotations

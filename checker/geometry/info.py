@@ -70,6 +70,11 @@ def describe_part(path: str | Path) -> dict:
     return out
 
 
+def _mm(xyz) -> str:
+    """'x, y, z' to 1 um, without negative zeros."""
+    return ", ".join(f"{round(x, 3) + 0.0:.3f}" for x in xyz)
+
+
 def format_part_info(d: dict) -> str:
     """Plain-text view of `describe_part`'s dict: one header, one line per surface."""
     lo, hi = d["bbox"]["min"], d["bbox"]["max"]
@@ -77,8 +82,7 @@ def format_part_info(d: dict) -> str:
     lines = [
         f"part {d['source']}",
         f"  units {d['units']}, {d['faces']} faces, bbox "
-        f"[{lo[0]:.3f}, {lo[1]:.3f}, {lo[2]:.3f}] .. [{hi[0]:.3f}, {hi[1]:.3f}, {hi[2]:.3f}] "
-        f"(size {size[0]:.3f} x {size[1]:.3f} x {size[2]:.3f})",
+        f"[{_mm(lo)}] .. [{_mm(hi)}] (size {' x '.join(f'{x:.3f}' for x in size)})",
     ]
     if "mesh" in d:
         lines.append(

@@ -158,6 +158,7 @@ class JobPainter:
         self.path_ax = ax
         self.standard_map = maps[1]
         self.backgrounds: dict[tuple, object] = {}
+        self._path_scale: float | str | None = None
         self.standard_rgba: dict[tuple[str, ...], np.ndarray] = {}
 
     def _standard_colours(self, names: tuple[str, ...]) -> np.ndarray:
@@ -167,6 +168,20 @@ class JobPainter:
             steps = self.allow_cmap(np.linspace(0.05, 1.0, len(names)), bytes=True)
             self.standard_rgba[names] = np.vstack([_rgba_bytes([STANDARD_NONE]), steps])
         return self.standard_rgba[names]
+
+    def _scale_path_axes(self, scale: float | str) -> None:
+        """Put the path panel on a scale (the lines are drawn with the axes' current one)."""
+        if scale == self._path_scale:
+            return
+        ax = self.path_ax
+        if scale == "size":
+            ax.set_yscale("log")
+            ax.set_ylim(*ALLOWABLE_RANGE)
+        else:
+            ax.set_yscale("linear")
+            ax.set_ylim(-scale, scale)
+            ax.yaxis.set_major_locator(MaxNLocator(5, symmetric=True))
+        self._path_scale = scale
 
     def _background(self, names: tuple[str, ...], scale: float | str) -> object:
         """The drawn static figure for a family of standard cutters and a path-panel scale (a B
@@ -183,15 +198,11 @@ class JobPainter:
                 loc="upper left", bbox_to_anchor=(1.0, 1.02), fontsize=6 if len(names) < 16
                 else 5, frameon=False, handlelength=1.0, labelspacing=0.25,
             )
+            self._scale_path_axes(scale)
             if scale == "size":
-                ax.set_yscale("log")
-                ax.set_ylim(*ALLOWABLE_RANGE)
                 ax.set_ylabel("size, mm", fontsize=8)
                 handles, labels = (self.line_a, self.limit), ("allowable", "real size")
             else:
-                ax.set_yscale("linear")
-                ax.set_ylim(-scale, scale)
-                ax.yaxis.set_major_locator(MaxNLocator(5, symmetric=True))
                 ax.set_ylabel("B, degrees", fontsize=8)
                 handles, labels = (self.line_a, self.line_b), ("best B", "chosen B")
             ax.legend(handles, labels, fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.0),
@@ -223,6 +234,7 @@ class JobPainter:
         scale = self._path_lines(arrays, cutter_size)
         canvas = self.fig.canvas
         canvas.restore_region(self._background(standard.names, scale))
+        self._scale_path_axes(scale)
         img = np.asarray(canvas.buffer_rgba())
         for (r0, r1, c0, c1), (rgba, group) in zip(self.map_boxes, layers, strict=True):
             paint_map(img[r0:r1, c0:c1], xy, rgba, dot + 3 * group, group)

@@ -1,0 +1,112 @@
+"""`pathcheck allowable --part PART --cc CC.csv --cutter "CUTTER/..." [--axis i,j,k]
+[--method pso] [--json OUT]`: the allowable cutter size at given CC points."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import click
+import numpy as np
+
+from checker.errors import PathcheckError
+
+CC_COLUMNS = ("x", "y", "z", "nx", "ny", "nz")
+
+
+def read_cc_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """CC points (N, 3) and unit normals (N, 3) from a CSV with the header x,y,z,nx,ny,nz."""
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as err:
+        raise PathcheckError(f"cannot read CC file: {err}", path=path, code="input") from err
+    if not lines:
+        raise PathcheckError("empty CC file, expected a header x,y,z,nx,ny,nz", path=path, line=1)
+    head = [h.strip().lower() for h in lines[0].split(",")]
+    if head != list(CC_COLUMNS):
+        raise PathcheckError(f"expected the header x,y,z,nx,ny,nz, found {lines[0][:60]!r}",
+                             path=path, line=1)
+    rows = []
+    for no, text in enumerate(lines[1:], 2):
+        if not text.strip():
+            continue
+        cells = text.split(",")
+        if len(cells) != 6:
+            raise PathcheckError(f"expected 6 values, found {len(cells)}", path=path, line=no)
+        try:
+            vals = [float(c) for c in cells]
+        except ValueError:
+            raise PathcheckError(f"expected 6 numbers, found {text.strip()[:60]!r}", path=path,
+                                 line=no) from None
+        if not np.isfinite(vals).all():
+            raise PathcheckError("expected finite numbers, found nan or inf", path=path, line=no)
+        if np.linalg.norm(vals[3:]) < 1e-9:
+            raise PathcheckError("expected a non-zero normal (nx, ny, nz), found 0,0,0",
+                                 path=path, line=no)
+        rows.append(vals)
+    if not rows:
+        raise PathcheckError("expected at least one CC point after the header", path=path, line=2)
+    a = np.array(rows)
+    return a[:, :3], a[:, 3:] / np.linalg.norm(a[:, 3:], axis=1)[:, None]
+
+
+def parse_axis(text: str) -> np.ndarray:
+    """`i,j,k` -> unit (3,) axis."""
+    try:
+        v = np.array([float(t) for t in text.split(",")])
+    except ValueError:
+        v = np.zeros(0)
+    if v.shape != (3,) or not np.isfinite(v).all() or np.linalg.norm(v) < 1e-12:
+        raise PathcheckError(f"--axis: expected three numbers i,j,k not all 0, found {text!r}")
+    return v / np.linalg.norm(v)
+
+
+@click.command()
+@click.option("--part", "part_path", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="part file (geomdl JSON/YAML, STEP, IGES, STL)")
+@click.option("--cc", "cc_path", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="CSV with header x,y,z,nx,ny,nz (part frame, mm)")
+@click.option("--cutter", "cutter_text", required=True, help='cutter, e.g. "CUTTER/10,2"')
+@click.option("--axis", "axis_text", default="0,0,1", show_default=True,
+              help="tool axis i,j,k (tip -> spindle)")
+@click.option("--method", type=click.Choice(["exact", "pso"]), default="exact", show_default=True,
+              help="exact: this engine; pso: the thesis's PSO baseline")
+@click.option("--seed", type=int, default=None, help="random seed of the PSO baseline")
+@click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="write the result document to this file")
+def allowable(part_path, cc_path, cutter_text, axis_text, method, seed, json_out) -> None:
+    """The largest gouge- and interference-free cutter of the family of --cutter at each CC
+    point (R for flat, bull-nose and APT cutters; r for ball and tapered ball).
+
+    \b
+    pathcheck allowable --part mould.json --cc cc.csv --cutter "CUTTER/10,5"
+    pathcheck allowable --part mould.json --cc cc.csv --cutter "CUTTER/10,2" --json out.json
+    """
+    from rich.console import Console
+
+    from checker.config import default_config
+    from checker.cutter import parse_cutter
+    from checker.engine import allowable as run
+    from checker.engine.document import allowable_document, allowable_table
+    from checker.geometry import load_part
+    from checker.geometry.sampling import sample_part
+
+    cutter = parse_cutter(cutter_text)
+    axis = parse_axis(axis_text)
+    cc, normals = read_cc_csv(cc_path)
+    t0 = time.perf_counter()
+    part = load_part(part_path)
+    t1 = time.perf_counter()
+    tp = sample_part(part)
+    t2 = time.perf_counter()
+    res = run(tp, part, cutter, cc, normals, axis, method=method, seed=seed,
+              config=default_config())
+    t3 = time.perf_counter()
+    doc = allowable_document(res, cc, normals, cutter, method,
+                             {"load_s": t1 - t0, "sample_s": t2 - t1, "search_s": t3 - t2})
+    Console().print(allowable_table(doc))
+    click.echo(f"{len(cc)} CC points; load {t1 - t0:.3f} s, sample {t2 - t1:.3f} s, "
+               f"search {t3 - t2:.3f} s")
+    if json_out is not None:
+        json_out.write_text(json.dumps(doc, indent=2), encoding="utf-8")

@@ -1,0 +1,80 @@
+"""`pathcheck JOB.apt [--part PART] [--cutter "CUTTER/..."] [--json OUT] [-o JOB.nc]`: check a
+job; exit 0 when clean, 1 with findings (gouge, interference, holder), 2 on bad input."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+
+def summary_view(doc):
+    """Rich renderables of the results document: the job line, verdict counts, worst findings
+    (line, depth, location) and the largest safe cutter."""
+    from rich.table import Table
+
+    s, j = doc.summary, doc.job
+    var = "r" if j.cutter_kind in ("ball", "tapered_ball") else "R"
+    c = s.counts
+    head = (f"{j.path}: {s.cc_points} CC points, cutter {j.cutter} ({j.cutter_kind}, {var} = "
+            f"{j.cutter_size:g} mm), {j.axis_class}, {s.time_s:.2f} s\n"
+            f"ok {c.ok}  gouge {c.gouge}  interference {c.interference}  holder {c.holder}  "
+            f"inaccessible {c.inaccessible}")
+    safe = ("largest safe cutter: " + ("unbounded" if s.largest_safe_cutter is None
+                                       else f"{var} = {s.largest_safe_cutter:.4f} mm")
+            + f"; largest safe standard cutter: {s.largest_safe_standard_cutter or 'none'}")
+    out = [head]
+    if s.worst:
+        t = Table(title="worst findings")
+        for col in ("line", "verdict", "depth (mm)", "margin (mm)", "cc (mm)"):
+            t.add_column(col)
+        for f in s.worst:
+            t.add_row(str(f.line), f.verdict, f"{f.depth or 0:.4f}",
+                      "-" if f.margin is None else f"{f.margin:.4f}",
+                      ", ".join(f"{x:.3f}" for x in f.cc))
+        out.append(t)
+    out.append(safe)
+    return out
+
+
+@click.command()
+@click.argument("job", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--part", "part_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="part file (default: the file beside JOB with the same stem)")
+@click.option("--cutter", "cutter_text", default=None, help='override the cutter, "CUTTER/..."')
+@click.option("--config", "config_path", type=click.Path(dir_okay=False, path_type=Path),
+              default=None, help="configuration TOML overriding config/defaults.toml")
+@click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="write the results document (JSON) here")
+@click.option("-o", "gcode_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="corrected G-code (4-axis jobs)")
+def check(job, part_path, cutter_text, config_path, json_out, gcode_out) -> None:
+    """Check JOB (APT-CL or NX CLSF) against its part: allowable cutter, verdict and margin at
+    every CC point.
+
+    \b
+    pathcheck samples/mould/mould.apt
+    pathcheck samples/mould/mould.apt --json out/mould.json
+    """
+    from rich.console import Console
+
+    from checker.errors import PathcheckError
+    from checker.job import check_job
+
+    if not job.is_file():
+        raise PathcheckError("job file not found: expected an existing CL file", path=job)
+    doc = check_job(job, part_path=part_path, cutter=cutter_text, config=config_path,
+                    output=gcode_out)
+    console = Console()
+    for item in summary_view(doc):
+        console.print(item)
+    if gcode_out is not None and doc.gcode is None:
+        click.echo(f"note: no G-code written to {gcode_out}: {doc.job.axis_class} jobs are "
+                   "checked, not posted", err=True)
+    if json_out is not None:
+        json_out.parent.mkdir(parents=True, exist_ok=True)
+        json_out.write_text(doc.model_dump_json(indent=1), encoding="utf-8")
+    c = doc.summary.counts
+    if c.gouge + c.interference + c.holder:
+        sys.exit(1)

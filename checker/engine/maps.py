@@ -1,0 +1,140 @@
+"""Allowable-cutter maps (thesis ch. 4): the allowable size at an iso-parametric grid of CC
+points on every surface, and at each point the largest standard cutter of the tool library
+that does not exceed it; pictures drawn with matplotlib (Agg) like thesis figs 3-2, 4-2, 4-3."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from checker.engine.api import allowable
+from checker.geometry.evaluate import evaluate
+from checker.geometry.sampling import TestPoints
+from checker.part import Part
+
+
+@dataclass
+class SurfaceMap:
+    """One surface's grid: `u (nu,)`, `v (nv,)`, `kept (nu, nv)` (inside the trim), `cc`,
+    `normal (nu, nv, 3)` part frame, `size (nu, nv)` allowable (mm, inf unbounded, nan not
+    kept), `standard (nu, nv)` index into the tool list (-1 none fits)."""
+
+    id: int
+    name: str
+    u: np.ndarray
+    v: np.ndarray
+    kept: np.ndarray
+    cc: np.ndarray
+    normal: np.ndarray
+    size: np.ndarray
+    standard: np.ndarray
+
+
+def allowable_maps(part: Part, tp: TestPoints, cutter, grid: tuple[int, int], tools: list,
+                   axis=(0.0, 0.0, 1.0)) -> list[SurfaceMap]:
+    """Maps of every surface on a `grid` (nu, nv) of (u, v); `tools` the standard cutters of
+    the family, ascending by size. One batched engine call for all surfaces."""
+    nu, nv = grid
+    sizes = np.array([t.size for t in tools], dtype=float)
+    grids, rows_cc, rows_n, rows_s, rows_uv = [], [], [], [], []
+    for s in part.surfaces:
+        (u0, u1), (v0, v1) = s.domain
+        u, v = np.linspace(u0, u1, nu), np.linspace(v0, v1, nv)
+        U, V = np.meshgrid(u, v, indexing="ij")
+        kept = np.ones(U.shape, bool) if s.trim is None else \
+            np.asarray(s.trim.contains(U.ravel(), V.ravel()), bool).reshape(U.shape)
+        ev = evaluate(s, U.ravel(), V.ravel())
+        grids.append((s, u, v, kept, ev.points.reshape(nu, nv, 3), ev.normals.reshape(nu, nv, 3)))
+        k = kept.ravel()
+        rows_cc.append(ev.points[k])
+        rows_n.append(ev.normals[k])
+        rows_s.append(np.full(int(k.sum()), s.id))
+        rows_uv.append(np.column_stack([U.ravel()[k], V.ravel()[k]]))
+    res = allowable(tp, part, cutter, np.concatenate(rows_cc), np.concatenate(rows_n), axis,
+                    cc_surface=np.concatenate(rows_s), cc_uv=np.concatenate(rows_uv))
+    out, at = [], 0
+    for s, u, v, kept, cc, nrm in grids:
+        k = int(kept.sum())
+        size = np.full(kept.shape, np.nan)
+        size[kept] = res.size[at:at + k]
+        at += k
+        std = np.where(kept, np.searchsorted(sizes, np.nan_to_num(size, nan=-1.0, posinf=1e300) * (1 + 1e-12),
+                                             side="right") - 1, -1)
+        out.append(SurfaceMap(s.id, s.name, u, v, kept, cc, nrm, size, std))
+    return out
+
+
+def maps_document(maps: list[SurfaceMap], cutter, tools: list) -> dict:
+    """JSON view: the cutter, the tools, and per surface the grid with allowable (null =
+    unbounded) and the standard cutter name (null = none fits) per kept point."""
+    surfaces = []
+    for m in maps:
+        pts = []
+        for i, j in zip(*np.nonzero(m.kept), strict=True):
+            s = float(m.size[i, j])
+            pts.append({"u": float(m.u[i]), "v": float(m.v[j]),
+                        "cc": [round(float(x), 6) for x in m.cc[i, j]],
+                        "normal": [round(float(x), 9) for x in m.normal[i, j]],
+                        "allowable": round(s, 6) if np.isfinite(s) else None,
+                        "standard": tools[m.standard[i, j]].name if m.standard[i, j] >= 0 else None})
+        surfaces.append({"id": m.id, "name": m.name, "grid": [len(m.u), len(m.v)], "points": pts})
+    return {"cutter": cutter.to_apt(), "kind": cutter.kind,
+            "tools": [{"name": t.name, "size": t.size} for t in tools], "surfaces": surfaces}
+
+
+def draw_maps(maps: list[SurfaceMap], cutter, tools: list, out_dir: Path) -> list[Path]:
+    """`allowable_map.png` (per surface, the allowable size over (u, v), like thesis fig. 3-2)
+    and `standard_map.png` (top view, the largest standard cutter per CC point, like figs. 4-2
+    and 4-3). Returns the files written."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    var = "r" if cutter.kind in ("ball", "tapered_ball") else "R"
+    finite = np.concatenate([m.size[np.isfinite(m.size)] for m in maps] + [np.zeros(1)])
+    vmax = float(np.percentile(finite, 98)) if finite.size > 1 else 1.0
+    n = len(maps)
+    cols = min(4, n)
+    rows = (n + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.9 * rows), squeeze=False)
+    for ax, m in zip(axes.ravel(), maps, strict=False):
+        z = np.where(np.isinf(m.size), vmax, m.size)
+        im = ax.pcolormesh(m.u, m.v, z.T, shading="nearest", cmap="viridis", vmin=0, vmax=vmax)
+        ax.set_title(f"{m.id}: {m.name}", fontsize=8)
+        ax.set_xlabel("u", fontsize=7)
+        ax.set_ylabel("v", fontsize=7)
+        ax.tick_params(labelsize=6)
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    fig.colorbar(im, ax=axes.ravel().tolist(), label=f"allowable {var} (mm)")
+    fig.suptitle(f"allowable {var} for {cutter.kind} cutters (unbounded shown at the top colour)")
+    f1 = out_dir / "allowable_map.png"
+    fig.savefig(f1, dpi=90)
+    plt.close(fig)
+
+    colours = ["#1f2a6b"] + list(plt.get_cmap("turbo")(np.linspace(0.35, 0.95, max(len(tools), 1))))
+    cmap = ListedColormap(colours[: len(tools) + 1])
+    norm = BoundaryNorm(np.arange(-1.5, len(tools)), cmap.N)
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    for m in maps:
+        k = m.kept
+        ax.scatter(m.cc[..., 0][k], m.cc[..., 1][k], c=m.standard[k], cmap=cmap, norm=norm, s=9,
+                   marker="s", linewidths=0)
+    handles = [plt.Line2D([], [], marker="s", ls="", color=colours[0], label="none fits")]
+    handles += [plt.Line2D([], [], marker="s", ls="", color=colours[i + 1], label=t.name)
+                for i, t in enumerate(tools)]
+    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_title(f"largest standard {cutter.kind} cutter per CC point (top view)")
+    fig.tight_layout()
+    f2 = out_dir / "standard_map.png"
+    fig.savefig(f2, dpi=90)
+    plt.close(fig)
+    return [f1, f2]
