@@ -12,6 +12,7 @@ validated and ignored: it rounds the top of the flutes, outside the cutting mode
 
 from __future__ import annotations
 
+import importlib
 import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -19,13 +20,18 @@ from pathlib import Path
 
 import numpy as np
 
-from checker import kernels
 from checker.errors import PathcheckError
 
 KINDS = ("flat", "ball", "bullnose", "apt", "tapered_ball")
 BALL_FAMILY = ("ball", "tapered_ball")
 _ANGLE_DIGITS = 12  # angles are kept as radians(round(degrees, 12)) so CUTTER/ text round-trips
 
+
+
+def _kernels():
+    """`checker.kernels`, imported on first use so that reading a CL file does not pay for
+    numba."""
+    return importlib.import_module("checker.kernels")
 
 def _consistency_tol(d: float) -> float:
     """Slack (mm) for redundant values written with 4-6 decimals (NX writes 1e-4 inch)."""
@@ -81,7 +87,7 @@ class Cutter:
     @property
     def family(self) -> int:
         """Kernel family code: `kernels.FAMILY_BALL` (r variable) or `FAMILY_APT` (R)."""
-        return kernels.FAMILY_BALL if self.kind in BALL_FAMILY else kernels.FAMILY_APT
+        return _kernels().FAMILY_BALL if self.kind in BALL_FAMILY else _kernels().FAMILY_APT
 
     def with_size(self, s: float) -> Cutter:
         """Same family (r, psi, theta or, for balls, theta), new size `s` (mm); d recomputed."""
@@ -126,7 +132,7 @@ class Cutter:
         if not (len(p) == len(cc) == len(n)):
             raise ValueError("p, cc and n must have the same length")
         ee, has_e = _e_arg(e, len(p))
-        return kernels.pair_sizes(p, cc, n, ee, has_e, self.family, self.kernel_params(tol))
+        return _kernels().pair_sizes(p, cc, n, ee, has_e, self.family, self.kernel_params(tol))
 
     def min_imaginary_size(
         self,
@@ -153,7 +159,7 @@ class Cutter:
         if len(indices) and (indices.min() < 0 or indices.max() >= len(p)):
             raise ValueError("candidate index out of range")
         ee, has_e = _e_arg(e, len(cc))
-        return kernels.min_sizes(
+        return _kernels().min_sizes(
             p, cc, n, ee, has_e, self.family, self.kernel_params(tol), indptr, indices
         )
 
@@ -170,14 +176,14 @@ class Cutter:
         na = np.einsum("ij,ij->i", n, a)
         perp = n - na[:, None] * a
         nh = np.linalg.norm(perp, axis=1)
-        vertical = nh <= kernels.EPS_H
+        vertical = nh <= _kernels().EPS_H
         ev = np.zeros_like(perp)
         ev[~vertical] = perp[~vertical] / nh[~vertical, None]
         if e is not None and vertical.any():
             eg = np.broadcast_to(np.asarray(e, dtype=float), cc.shape)
             eg = eg - np.einsum("ij,ij->i", eg, a)[:, None] * a
             en = np.linalg.norm(eg, axis=1)
-            use = vertical & (en > kernels.EPS_H)
+            use = vertical & (en > _kernels().EPS_H)
             ev[use] = eg[use] / en[use, None]
         tip = cc + self.r * n + self.R * ev - self.f * a
         if self.psi > 0.0:
@@ -230,7 +236,7 @@ class Cutter:
 
 @lru_cache(maxsize=256)
 def _params(r: float, psi: float, theta: float, tol: float) -> np.ndarray:
-    out = kernels.params(r, psi, theta, tol)
+    out = _kernels().params(r, psi, theta, tol)
     out.flags.writeable = False
     return out
 

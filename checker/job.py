@@ -153,9 +153,9 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
 def _summary(points, size, verdict, margin, depth, cutter, elapsed: float) -> Summary:
     counts = VerdictCounts(**{v: int((verdict == v).sum()) for v in VerdictCounts.model_fields})
     bad = np.flatnonzero(np.isin(verdict, _FINDINGS))
-    order = bad[np.lexsort((margin[bad], -depth[bad]))][:_WORST]
+    order = bad[np.lexsort((np.nan_to_num(margin[bad], posinf=1e300), -depth[bad]))][:_WORST]
     worst = [Finding(index=int(i), verdict=str(verdict[i]), line=points[i].line, cc=points[i].cc,
-                     depth=float(depth[i]), margin=float(margin[i])) for i in order]
+                     depth=float(depth[i]), margin=points[i].margin) for i in order]
     reach = np.isfinite(size) & (verdict != "inaccessible")
     smallest = float(size[reach].min()) if reach.any() else None
     return Summary(

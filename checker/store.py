@@ -172,7 +172,12 @@ class ResultsStore:
                 "expected an SQLite results store file, found a directory", path=self.path,
                 code="store",
             )
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise PathcheckError(
+                f"cannot create the store's folder: {err.strerror}", path=self.path, code="store"
+            ) from err
         self._con = self._connect()
         try:
             self._migrate()

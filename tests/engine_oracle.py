@@ -35,7 +35,7 @@ def _inside(s, ball, r, theta, cc, n, p):
         rho = math.hypot(p[0] - ox - s * ex, p[1] - oy - s * ey)
     else:  # vertical normal: e is free, some direction e puts the axis nearest to p
         rho = abs(math.hypot(p[0] - ox, p[1] - oy) - s)
-    if y < -r:
+    if y <= -r + 1e-9:  # on or below the bottom plane: touched at most, not cut
         return False
     if y < 0.0:
         return rho < s + math.sqrt(r * r - y * y) - 1e-12

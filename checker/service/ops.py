@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import ValidationError
 
 from checker.config import Config
 from checker.errors import PathcheckError
@@ -90,11 +91,13 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
 
 
 def check(req: p.CheckRequest, state: WorkerState) -> dict:
-    """Check a job with `checker.job.check_job`; `post` also returns the G-code text."""
+    """Check a job with `checker.job.check_job`; `post` also returns the G-code text. Inline
+    CL text is named `<apt>` in errors and in the results document."""
     if isinstance(req.part, p.PartPath):
         _existing(req.part.path)
     if req.apt_path is not None:
         _existing(req.apt_path, "apt_path", "a CL file")
+    config = _with_options(state.config, req.options)
     check_job = _library("checker.job", "check_job", "check")
     with tempfile.TemporaryDirectory(prefix="pathcheck-service-") as tmp:
         apt_path = Path(req.apt_path) if req.apt_path else Path(tmp) / "job.apt"
@@ -102,17 +105,49 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
             apt_path.write_text(req.apt)
         part_path = _part_file(req.part, Path(tmp)) if req.part is not None else None
         gcode_path = Path(tmp) / "job.nc" if req.post else None
-        kwargs: dict[str, Any] = dict(req.options)
-        if gcode_path is not None:
-            kwargs["output"] = gcode_path
-        doc = check_job(
-            apt_path, part_path=part_path, cutter=req.cutter, machine=req.machine, **kwargs
-        )
-        state.last_document, state.last_job_path = doc, str(req.apt_path or "<service>")
+        try:
+            doc = check_job(apt_path, part_path=part_path, cutter=req.cutter,
+                            machine=req.machine, config=config, output=gcode_path)
+        except PathcheckError as err:
+            if req.apt is None or err.path != str(apt_path):
+                raise
+            raise PathcheckError(err.message, path=INLINE_APT, line=err.line,
+                                 code=err.code) from None
+        if req.apt is not None:
+            doc.job.path = INLINE_APT
+        if gcode_path is not None and not gcode_path.is_file():
+            raise PathcheckError("post: true, but this build's check_job wrote no G-code",
+                                 code="unavailable")
+        state.last_document, state.last_job_path = doc, doc.job.path
         out: dict[str, Any] = {"results": doc.model_dump(mode="json")}
         if gcode_path is not None:
             out["gcode"] = gcode_path.read_text()
         return out
+
+
+INLINE_APT = "<apt>"
+OPTION_SECTIONS = ("geometry", "check", "four_axis", "intermediate", "engine")
+
+
+def _with_options(config: Config, options: dict[str, Any]) -> Config:
+    """`config` with `options` {"SECTION.FIELD": value} applied (sections of OPTION_SECTIONS)
+    and validated; errors name the option."""
+    if not options:
+        return config
+    data = config.model_dump()
+    for key, value in options.items():
+        section, _, name = key.partition(".")
+        if section not in OPTION_SECTIONS or name not in data[section]:
+            raise PathcheckError(
+                f"field 'options.{key}': expected SECTION.FIELD of the config with SECTION one "
+                f"of {', '.join(OPTION_SECTIONS)}, found no such setting", code="request")
+        data[section][name] = value
+    try:
+        return Config.model_validate(data)
+    except ValidationError as err:
+        first = err.errors(include_url=False)[0]
+        key = ".".join(str(x) for x in first["loc"])
+        raise PathcheckError(f"field 'options.{key}': {first['msg']}", code="request") from None
 
 
 OPS: dict[type, Callable[[Any, WorkerState], dict]] = {
