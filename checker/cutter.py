@@ -27,11 +27,11 @@ BALL_FAMILY = ("ball", "tapered_ball")
 _ANGLE_DIGITS = 12  # angles are kept as radians(round(degrees, 12)) so CUTTER/ text round-trips
 
 
-
 def _kernels():
     """`checker.kernels`, imported on first use so that reading a CL file does not pay for
     numba."""
     return importlib.import_module("checker.kernels")
+
 
 def _consistency_tol(d: float) -> float:
     """Slack (mm) for redundant values written with 4-6 decimals (NX writes 1e-4 inch)."""
