@@ -123,7 +123,8 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
         d = _depth(c, tips[rows], axes[rows], res.limiting_point)
         depth[rows] = np.maximum(d, np.maximum(-con.gap, 0.0))
         v = res.verdict.astype(object)
-        v[(v == "ok") & (con.gap < -cfg.check.tolerance)] = "gouge"  # the path itself cuts in
+        cuts_in = con.gap < -cfg.check.tolerance  # the real cutter at this pose penetrates
+        v[cuts_in & (v != "interference")] = "gouge"
         verdict[rows] = v
     first = cutters[int(ops[0])]
     points = [

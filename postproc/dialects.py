@@ -84,6 +84,7 @@ class Dialect:
     """One control's G-code language, as tables plus hooks."""
 
     name: str
+    letters: frozenset[str]  # word letters the control knows
     g_groups: dict[str, str]
     block_number_letters: tuple[str, ...]
     program_number_letter: str | None  # "O1000" line after "%"; None: no program number
@@ -113,6 +114,7 @@ class Dialect:
 
 FANUC = Dialect(
     name="fanuc",
+    letters=frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZ"),
     g_groups={
         **_COMMON_G,
         **{c: "cycle" for c in (*CANNED_CYCLES, "80")},  # Fanuc group 09, apart from G00-G03
@@ -138,6 +140,7 @@ FANUC = Dialect(
 
 LINUXCNC = Dialect(
     name="linuxcnc",
+    letters=frozenset("ABCDFGHIJKLMNPQRSTUVWXYZ"),  # rs274ngc: no E; O starts o-word control
     g_groups={
         **_COMMON_G,
         "43.1": "length_offset",

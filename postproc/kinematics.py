@@ -53,10 +53,15 @@ def axis_from_rotation(theta: np.ndarray) -> np.ndarray:
 
 
 def rotation_from_axis(
-    axis: np.ndarray, *, j_tolerance: float = 1e-6, lines: np.ndarray | None = None
+    axis: np.ndarray,
+    *,
+    j_tolerance: float = 1e-6,
+    lines: np.ndarray | None = None,
+    path: str | None = None,
 ) -> np.ndarray:
     """Part rotation ``b (N,)`` degrees that puts part-frame axes ``(N, 3)`` along the spindle:
-    ``b = atan2(-i, k)``. An axis with ``|j| > j_tolerance`` is not a 4-axis-about-Y axis."""
+    ``b = atan2(-i, k)``. An axis with ``|j| > j_tolerance`` is not a 4-axis-about-Y axis (an
+    error naming ``path`` and the line from ``lines``)."""
     axis = np.asarray(axis, dtype=float)
     bad = np.flatnonzero(np.abs(axis[:, 1]) > j_tolerance)
     if bad.size:
@@ -65,6 +70,7 @@ def rotation_from_axis(
         raise PathcheckError(
             f"tool axis {tuple(np.round(axis[k], 6))} is not a 4-axis axis about Y: expected j = 0 "
             f"(|j| <= {j_tolerance}), found j = {axis[k, 1]:.6g}",
+            path=path,
             line=line,
             code="kinematics",
         )

@@ -46,6 +46,9 @@ class Rotary(_Model):
     - ``limited``: words in ``[b_min, b_max]``, the table moves by the difference of words;
     - ``0_360`` / ``-180_180``: continuous table, words in that closed range, moved like ``limited``
       (a cut crossing the range end is retracted, rotated back a full turn and re-entered);
+    - a cut that turns B by more than ``max_turn_in_cut`` degrees is not cut with the table
+      turning: the post retracts, turns the table and re-enters at the end point (a comment says
+      so in the program).
     - ``shortest``: rollover axis, words in ``[0, 360)``, the control takes the shorter way;
     - ``signed``: rollover axis, ``|word|`` in ``[0, 360)`` is the target, its sign the direction.
     """
@@ -54,6 +57,7 @@ class Rotary(_Model):
     b_min: float = -360.0
     b_max: float = 360.0
     max_feed: PositiveFloat = 3600.0  # deg/min
+    max_turn_in_cut: PositiveFloat = 45.0  # deg: a cut turning more is retract-rotate-re-enter
 
     @model_validator(mode="after")
     def _range(self) -> Rotary:
@@ -114,6 +118,14 @@ class Program(_Model):
     tool_change: list[str] = ["T{tool} M06"]
     safe_z: float = 200.0  # mm, work frame: retract plane along the spindle (machine +Z)
     reentry_clearance: PositiveFloat = 2.0  # mm above the re-entry point before feeding in
+
+    @field_validator("header", "footer", "tool_change")
+    @classmethod
+    def _printable(cls, lines: list[str]) -> list[str]:
+        for text in lines:
+            if not all(" " <= c <= "~" for c in text):
+                raise ValueError(f"expected printable ASCII G-code, found {text!r}")
+        return lines
 
 
 class Machine(_Model):

@@ -10,9 +10,11 @@ tool change -> feed words (G94 rotary rule or G93 inverse time) -> travel-limit 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
+from checker.config import default_config
 from checker.errors import PathcheckError
 from postproc.dialects import get_dialect
 from postproc.kinematics import (
@@ -23,7 +25,7 @@ from postproc.kinematics import (
 )
 from postproc.machine import Machine, load_machine
 from postproc.wrap import pieces_per_move, range_branches, rollover_words
-from postproc.writer import MM_PER_INCH, Rows, comment, format_program
+from postproc.writer import MM_PER_INCH, Rows, comment, format_program, write_program
 
 
 @dataclass(frozen=True)
@@ -107,17 +109,25 @@ def moves_from_toolpath(
     comments: list[str] | None = None,
 ) -> PostMoves:
     """PostMoves from a `checker.toolpath.ToolPath`: the rows of
-    ``toolpath.motion_arrays(arc_chord_tol)`` with their rapid flag, feed, spindle, coolant
-    (where the arrays carry it), line and the tool number of their operation. With ``b_deg
-    (N,)`` (the chosen B, degrees) the axis becomes ``(-sin b, 0, cos b)``, else B follows from
-    the CL axis; with ``cc (N,3)``, ``normals (N,3)`` (part frame, out of the material) and
-    ``cutter`` the tip is recomputed from the contact by ``cutter.tip_from_contact(cc, n,
-    axis)`` at the new axis. ``comments`` (one per row, '' none) are written before the blocks
-    (flags)."""
+    ``toolpath.motion_arrays(arc_chord_tol)`` (arcs cut into chords of that sagitta, mm; None:
+    the config's ``check.arc_chord_tolerance``, the rows the checker sees) with their rapid
+    flag, feed, spindle, coolant (where the arrays carry it), line and the tool number of their
+    operation. With ``b_deg (N,)`` (the chosen B, degrees) the axis becomes ``(-sin b, 0, cos
+    b)``, else B follows from the CL axis; with ``cc (N,3)``, ``normals (N,3)`` (part frame,
+    out of the material) and ``cutter`` the tip is recomputed from the contact by
+    ``cutter.tip_from_contact(cc, n, axis)`` at the new axis. ``comments`` (one per row, ''
+    none) are written before the blocks (flags)."""
+    if arc_chord_tol is None:
+        arc_chord_tol = default_config().check.arc_chord_tolerance
     arrays = toolpath.motion_arrays(arc_chord_tol)
     lines = np.asarray(arrays.line)
     if b_deg is None:
-        b = rotation_from_axis(np.asarray(arrays.axis, dtype=float), lines=lines)
+        b = rotation_from_axis(
+            np.asarray(arrays.axis, dtype=float),
+            j_tolerance=default_config().four_axis.axis_j_tolerance,
+            lines=lines,
+            path=str(toolpath.path),
+        )
     else:
         b = np.asarray(b_deg, dtype=float)
     tip = np.asarray(arrays.tip, dtype=float)
@@ -232,6 +242,15 @@ def _starts(moves: PostMoves) -> np.ndarray:
     return np.union1d([0], change)
 
 
+def _big_turns(moves: PostMoves, machine: Machine) -> np.ndarray:
+    """Cuts (not starts) whose B turns more than ``rotary.max_turn_in_cut`` degrees: made as
+    retract, rotate, re-enter."""
+    turn = np.abs(np.diff(np.unwrap(moves.b_deg, period=360.0), prepend=moves.b_deg[:1]))
+    big = (turn > machine.rotary.max_turn_in_cut) & ~moves.rapid
+    big[_starts(moves)] = False
+    return np.flatnonzero(big)
+
+
 def _row(
     xyz, word, turn, motion, src, *, end=False, g43=False, force=False
 ) -> dict[str, np.ndarray]:
@@ -274,19 +293,21 @@ def _assemble(moves: PostMoves, machine: Machine) -> dict[str, np.ndarray]:
         "force": np.zeros(m, bool),
     }
     starts = _starts(moves)
-    first = np.searchsorted(p["src"], starts, "left")
-    last_piece = np.searchsorted(p["src"], starts, "right") - 1
-    approach = dict(zip(last_piece.tolist(), starts.tolist(), strict=True))
-    skip = np.zeros(m, bool)  # a move that starts with an approach keeps only its end row
+    whole = np.union1d(starts, _big_turns(moves, machine))  # moves kept as their end row only
+    first = np.searchsorted(p["src"], whole, "left")
+    last_piece = np.searchsorted(p["src"], whole, "right") - 1
+    skip = np.zeros(m, bool)
     for a, b in zip(first, last_piece, strict=True):
         skip[a:b] = True
+    approach = set(last_piece[np.isin(whole, starts)].tolist())
+    reenter = {int(i): int(f) for i, f in zip(last_piece, first, strict=True) if i not in approach}
     jumps = {int(i) for i in np.flatnonzero(np.diff(branch) != 0) + 1 if not skip[i]}
-    jumps -= set(approach)
+    jumps -= approach | set(reenter)
     clearance = machine.program.reentry_clearance
     safe = machine.program.safe_z
     chunks: list[dict[str, np.ndarray]] = []
     last = 0
-    for i in sorted(set(approach) | jumps):
+    for i in sorted(approach | jumps | set(reenter)):
         keep = ~skip[last:i]
         chunks.append({key: val[last:i][keep] for key, val in rows.items()})
         x, y, z = rows["xyz"][i]
@@ -303,14 +324,19 @@ def _assemble(moves: PostMoves, machine: Machine) -> dict[str, np.ndarray]:
                 chunks.append(
                     _row([x, y, z + clearance], word[i], turn[i], 0, k, g43=tool, force=True)
                 )
-        elif rows["motion"][i] == 0:  # rapid across the end of the word range
-            xp, yp, zp = rows["xyz"][i - 1]
+        elif rows["motion"][i] == 0 or i in reenter:
+            # a rapid across the end of the word range, or a cut turning too far: retract from
+            # the previous point, turn the table, come back over the end point (feed in if a cut)
+            j = reenter.get(i, i) - 1
+            xp, yp, zp = rows["xyz"][j]
             up = max(safe, zp)
             chunks += [
-                _row([xp, yp, up], word[i - 1], turn[i - 1], 0, k),
+                _row([xp, yp, up], word[j], turn[j], 0, k),
                 _row([xp, yp, up], word[i], turn[i], 0, k),
                 _row([x, y, up], word[i], turn[i], 0, k),
             ]
+            if rows["motion"][i] == 1:
+                chunks.append(_row([x, y, z + clearance], word[i], turn[i], 0, k))
         else:  # a cut across the end of the word range: split there, retract, turn back, re-enter
             chunks += _crossing(rows, i, span, machine, moves)
         chunks.append(here)
@@ -361,7 +387,8 @@ def _feed_words(rows: dict[str, np.ndarray], moves: PostMoves, machine: Machine)
     """F word ``(M,)`` of each feed row (nan elsewhere). Block time ``t = max(L / feed, |dB| /
     rotary max, |dXYZ| / linear max)`` minutes, L the tip path length relative to the part; G93:
     ``F = 1 / t``; G94 (the rotary rule): ``F = D / t`` with D the distance the dialect's control
-    applies F to, so the control's block time is ``t``."""
+    applies F to, so the control's block time is ``t`` (and t >= D / linear max, so the control
+    never clamps F)."""
     out = np.full(rows["motion"].size, np.nan)
     i = np.flatnonzero(rows["motion"] == 1)
     prev = i - 1
@@ -370,19 +397,19 @@ def _feed_words(rows: dict[str, np.ndarray], moves: PostMoves, machine: Machine)
     length = tip_path_length(xyz0, xyz1, turn0, turn1, machine)
     dxyz = xyz1 - xyz0
     dturn = turn1 - turn0
-    t = np.maximum.reduce(
-        [
-            length / moves.feed[rows["src"][i]],
-            np.abs(dturn) / machine.rotary.max_feed,
-            np.linalg.norm(dxyz, axis=1) / machine.feeds.max_linear,
-        ]
-    )
     scale = 1.0 / MM_PER_INCH if machine.units == "inch" else 1.0
+    limits = [
+        length / moves.feed[rows["src"][i]],
+        np.abs(dturn) / machine.rotary.max_feed,
+        np.linalg.norm(dxyz, axis=1) / machine.feeds.max_linear,
+    ]
+    g93 = machine.feeds.rotary_mode == "g93"
+    distance = get_dialect(machine.dialect).feed_distance(dxyz * scale, dturn)
+    if not g93:
+        limits.append(distance / (machine.feeds.max_linear * scale))
+    t = np.maximum.reduce(limits)
     with np.errstate(divide="ignore", invalid="ignore"):
-        if machine.feeds.rotary_mode == "g93":
-            f = 1.0 / t
-        else:
-            f = get_dialect(machine.dialect).feed_distance(dxyz * scale, dturn) / t
+        f = 1.0 / t if g93 else distance / t
     out[i] = np.where(t > 0, f, np.nan)
     return out
 
@@ -396,8 +423,9 @@ def _spindle_block(rpm: float, code) -> str:
 def _pre_blocks(
     rows: dict[str, np.ndarray], moves: PostMoves, machine: Machine
 ) -> dict[int, list[str]]:
-    """Blocks before the first row of a source move: its comment (flag), tool change, spindle,
-    coolant, each written only where it changes (and again after a tool change)."""
+    """Blocks before the first row of a source move: its comment (flag), a note where a cut turns
+    too far for cutting, tool change, spindle, coolant, each written only where it changes (and
+    again after a tool change)."""
     code = get_dialect(machine.dialect).format_code
     src_ids, first_row = np.unique(rows["src"], return_index=True)
     n = len(moves)
@@ -411,13 +439,24 @@ def _pre_blocks(
         toolchange | np.concatenate([[True], moves.coolant[1:] != moves.coolant[:-1]])
     )
     has_comment = np.array([bool(c.strip()) for c in moves.comment])
+    big = np.zeros(n, bool)
+    big[_big_turns(moves, machine)] = True
     pre: dict[int, list[str]] = {}
-    events = np.flatnonzero(has_comment | toolchange | spindle_change | coolant_change)
+    events = np.flatnonzero(has_comment | big | toolchange | spindle_change | coolant_change)
     row_of = dict(zip(src_ids.tolist(), first_row.tolist(), strict=True))
     for k in events.tolist():
         blocks = []
         if has_comment[k]:
             blocks.append(comment(moves.comment[k]))
+        if big[k]:
+            db = moves.b_deg[k] - moves.b_deg[k - 1]
+            db = (db + 180.0) % 360.0 - 180.0
+            blocks.append(
+                comment(
+                    f"B turns {db:+.3f} deg in one cut (line {int(moves.line[k])}): retract, "
+                    "rotate, re-enter"
+                )
+            )
         if toolchange[k]:
             blocks += [t.format(tool=int(moves.tool[k])) for t in machine.program.tool_change]
         if spindle_change[k]:
@@ -477,3 +516,26 @@ def post(moves: PostMoves, machine: Machine, *, program_name: str = "PATHCHECK")
 def post_program(moves: PostMoves, machine: Machine, *, program_name: str = "PATHCHECK") -> str:
     """G-code text for ``moves`` on ``machine`` (see `post`)."""
     return post(moves, machine, program_name=program_name).text
+
+
+def post_toolpath(
+    toolpath,
+    out: str | Path,
+    *,
+    machine: str | None = None,
+    b_deg=None,
+    cc=None,
+    normals=None,
+    cutter=None,
+    comments: list[str] | None = None,
+    arc_chord_tol: float | None = None,
+) -> Path:
+    """The job's corrected G-code in one call (what `pathcheck JOB.apt -o JOB.nc [--machine
+    NAME]` needs): the machine by `machine_for_toolpath`, the moves by `moves_from_toolpath`
+    (same arguments), posted and written atomically to ``out``; returns the path written."""
+    moves = moves_from_toolpath(
+        toolpath, b_deg, cc, normals, cutter, arc_chord_tol=arc_chord_tol, comments=comments
+    )
+    name = Path(str(toolpath.path)).stem.upper() or "PATHCHECK"
+    text = post_program(moves, machine_for_toolpath(toolpath, machine), program_name=name)
+    return write_program(text, out)

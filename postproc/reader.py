@@ -147,6 +147,8 @@ class _Program:
         words: dict[str, float] = {}
         tools: list[float] = []
         for letter, value in block.words:
+            if letter not in self.dialect.letters:
+                raise self.error(f"{letter} is not a word of the {self.dialect.name} dialect", line)
             if letter in "GMT" and not math.isfinite(value):
                 raise self.error(
                     f"{letter} word has no known value (an unset parameter?): expected a number",

@@ -35,7 +35,7 @@ def _inside(s, ball, r, theta, cc, n, p):
         rho = math.hypot(p[0] - ox - s * ex, p[1] - oy - s * ey)
     else:  # vertical normal: e is free, some direction e puts the axis nearest to p
         rho = abs(math.hypot(p[0] - ox, p[1] - oy) - s)
-    if y <= -r + 1e-9:  # on or below the bottom plane: touched at most, not cut
+    if y <= -r:  # on or below the bottom plane: touched at most, not cut
         return False
     if y < 0.0:
         return rho < s + math.sqrt(r * r - y * y) - 1e-12
@@ -91,6 +91,53 @@ def dense_points(part: Part, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return np.concatenate(P), np.concatenate(S), np.concatenate(UV)
 
 
+def height_grids(part: Part, dense: int) -> list:
+    """Per surface (surface, U, V, height) on a dense (u, v) grid."""
+    out = []
+    for s in part.surfaces:
+        (u0, u1), (v0, v1) = s.domain
+        g = np.linspace(0.0, 1.0, dense)
+        U, V = np.meshgrid(u0 + g * (u1 - u0), v0 + g * (v1 - v0), indexing="ij")
+        out.append((s, U, V, evaluate(s, U.ravel(), V.ravel()).points[:, 2].reshape(U.shape)))
+    return out
+
+
+def contour_points(grids: list, z: float):
+    """Points of every surface at height z (the bottom plane of a flat-bottomed cutter, where
+    the size jumps to inf): sign changes of the height along the lines of the dense grids,
+    refined by regula falsi, the end on the upper side kept: points (K, 3), surface ids,
+    uv (K, 2)."""
+    out, sids, uvs = [], [], []
+    for s, U, V, h0 in grids:
+        h = h0 - z
+        for axis in (0, 1):
+            a = (slice(None, -1), slice(None)) if axis == 0 else (slice(None), slice(None, -1))
+            b = (slice(1, None), slice(None)) if axis == 0 else (slice(None), slice(1, None))
+            i = np.nonzero((h[a] > 0) != (h[b] > 0))
+            if not i[0].size:
+                continue
+            ua, va, ha = U[a][i], V[a][i], h[a][i]
+            ub, vb, hb = U[b][i], V[b][i], h[b][i]
+            for _ in range(4):  # secant / regula falsi on the segment
+                t = ha / (ha - hb)
+                um, vm = ua + t * (ub - ua), va + t * (vb - va)
+                hm = evaluate(s, um, vm).points[:, 2] - z
+                left = (hm > 0) == (ha > 0)
+                ua, va, ha = np.where(left, um, ua), np.where(left, vm, va), np.where(left, hm, ha)
+                ub, vb, hb = np.where(left, ub, um), np.where(left, vb, vm), np.where(left, hb, hm)
+            pick = np.where(ha > 0, 0, 1)  # keep the end on the upper side (cut side)
+            uu, vv = np.where(pick == 0, ua, ub), np.where(pick == 0, va, vb)
+            if s.trim is not None:
+                keep = np.asarray(s.trim.contains(uu, vv), dtype=bool)
+                uu, vv = uu[keep], vv[keep]
+            out.append(evaluate(s, uu, vv).points)
+            sids.append(np.full(uu.size, s.id))
+            uvs.append(np.column_stack([uu, vv]))
+    if not out:
+        return np.zeros((0, 3)), np.zeros(0, int), np.zeros((0, 2))
+    return np.concatenate(out), np.concatenate(sids), np.concatenate(uvs)
+
+
 def oracle_sizes(part: Part, cutter, cc: np.ndarray, n: np.ndarray, dense: int,
                  s_max: float = 1000.0) -> np.ndarray:
     """Allowable size per CC row: bisection over every dense point, then a 41 x 41 local grid
@@ -101,6 +148,28 @@ def oracle_sizes(part: Part, cutter, cc: np.ndarray, n: np.ndarray, dense: int,
     m = len(cc)
     best, k = np.empty(m), np.empty(m, dtype=np.int64)
     _row_min(ball, r, th, cc, n, pts, s_max, best, k)
+    if not ball:  # flat bottom: the minimum often lies on the contour at the bottom plane
+        grids = height_grids(part, dense)
+        for i in range(m):
+            zb = cc[i, 2] + r * n[i, 2] - r + 1e-9
+            cp, cs, cuv = contour_points(grids, zb)
+            if not len(cp):
+                continue
+            lb, la = np.empty(1), np.empty(1, dtype=np.int64)
+            _row_min(ball, r, th, cc[i:i + 1], n[i:i + 1], cp, s_max, lb, la)
+            best[i] = min(best[i], lb[0])
+            if la[0] < 0:
+                continue
+            s = part.surfaces[int(cs[la[0]])]  # a fine grid around the best contour point
+            (u0, u1), (v0, v1) = s.domain
+            g = np.linspace(-2.0, 2.0, 81) / (dense - 1)
+            U, V = np.meshgrid(np.clip(cuv[la[0], 0] + g * (u1 - u0), u0, u1),
+                               np.clip(cuv[la[0], 1] + g * (v1 - v0), v0, v1), indexing="ij")
+            fine = [(s, U, V, evaluate(s, U.ravel(), V.ravel()).points[:, 2].reshape(U.shape))]
+            fp = contour_points(fine, zb)[0]
+            if len(fp):
+                _row_min(ball, r, th, cc[i:i + 1], n[i:i + 1], fp, s_max, lb, la)
+                best[i] = min(best[i], lb[0])
     # local densification around each row's best dense point
     out = best.copy()
     for i in np.flatnonzero(np.isfinite(best)):

@@ -36,6 +36,7 @@ def test_shipped_machines_load():
         ("[format]\nlinear_decimals = 12\n", "format.linear_decimals"),
         ("[feeds]\nmax_linear = -1\n", "feeds.max_linear"),
         ("colour = 'red'\n", "colour"),
+        ('[program]\nheader = ["G17 \u00e9"]\n', "program.header"),
     ],
 )
 def test_invalid_machine_file_names_the_field(tmp_path, body, field):

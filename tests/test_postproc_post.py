@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from checker.errors import PathcheckError
@@ -20,6 +22,7 @@ from postproc.post import (
     moves_from_toolpath,
     post,
     post_program,
+    post_toolpath,
 )
 from postproc.reader import read_gcode_text
 from postproc.replay import part_motions
@@ -116,6 +119,35 @@ def test_round_trip_synthetic(name, update):
     assert np.allclose(read.feed[idx][feed_rows], moves.feed[src][feed_rows], rtol=2e-3)
 
 
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    name=st.sampled_from(["fanuc-hmc", "linuxcnc-hmc"]),
+    wrap=st.sampled_from(["shortest", "signed", "0_360", "-180_180", "limited"]),
+    direction=st.sampled_from([1, -1]),
+)
+def test_round_trip_random_paths(seed, name, wrap, direction):
+    """Random 4-axis paths (B steps up to 40 deg, rapids, tool changes) on random machines."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 40))
+    b = rng.uniform(-720, 720) + np.cumsum(rng.uniform(-40, 40, n))
+    tip = rng.uniform(-120, 120, (n, 3))
+    rapid = rng.random(n) < 0.2
+    rapid[0] = True
+    machine = variant(
+        name,
+        kinematics={"table_center": tuple(rng.uniform(-50, 50, 3)), "b_direction": direction},
+        rotary={"wrap": wrap, "b_min": -400.0, "b_max": 400.0},
+        feeds={"rotary_mode": rng.choice(["g93", "g94"])},
+    )
+    tool = np.where(np.arange(n) < n // 2, 1, int(rng.integers(1, 4)))
+    moves = PostMoves.build(tip, b, rapid=rapid, feed=rng.uniform(50, 3000), tool=tool)
+    _, read, idx, src, tip_err, axis_err = round_trip(moves, machine)
+    assert np.array_equal(np.unique(src), np.arange(n))
+    assert tip_err.max() < 1e-4 and axis_err.max() < 1e-4
+    assert np.all(read.known[idx])
+
+
 def test_round_trip_inch_program():
     # the job is in inches: the program is written in inches (G20) on a mm machine definition
     moves = dataclasses.replace(blade_path(), units="inch")
@@ -175,6 +207,55 @@ def test_moves_from_toolpath_recomputes_the_tip_at_the_chosen_b():
     assert np.allclose(moves.tip, cc + r * normals - r * axis, atol=1e-9)
     assert np.allclose(moves.tip + r * moves.axis, centre, atol=1e-9)
     assert moves.source == tp.path and moves.line.tolist() == original.line.tolist()
+
+
+def test_cl_arcs_are_posted_as_chords_within_tolerance():
+    from checker.apt import read_cl_text
+
+    text = (
+        "PARTNO/ARC\nUNITS/MM\nCUTTER/6\nLOADTL/1\nRAPID\nGOTO/10,0,20\nFEDRAT/300,MMPM\n"
+        "GOTO/10,0,10\nCIRCLE/0,0,10,0,0,1,10\nGOTO/0,10,10\nEND\n"
+    )
+    moves = moves_from_toolpath(read_cl_text(text))
+    machine = load_machine("linuxcnc-hmc")
+    read = part_motions(read_gcode_text(post_program(moves, machine), "linuxcnc"), machine)
+    on_arc = read.known & np.isclose(read.tip[:, 2], 10.0) & (read.tip[:, 1] > 1e-6)
+    r = np.hypot(read.tip[on_arc, 0], read.tip[on_arc, 1])
+    assert on_arc.sum() > 10  # a quarter circle of radius 10 at 0.01 mm sagitta: chords
+    assert np.all(r <= 10.0 + 1e-4) and np.all(r >= 10.0 - 0.01 - 1e-4)
+    assert np.allclose(read.tip[on_arc][-1], [0.0, 10.0, 10.0], atol=1e-4)
+
+
+def test_five_axis_cl_is_not_posted_for_a_b_table():
+    from checker.apt import read_cl_text
+
+    text = "PARTNO/X\nMULTAX\nCUTTER/6\nGOTO/0,0,50,0,0,1\nGOTO/5,0,50,0,0.6,0.8\nEND\n"
+    with pytest.raises(PathcheckError, match=r"job5.apt:5: tool axis .* not a 4-axis axis"):
+        moves_from_toolpath(read_cl_text(text, path="job5.apt"))
+
+
+def test_post_toolpath_writes_the_job_program(tmp_path):
+    job = REPO / "samples" / "compressor" / "compressor_small.apt"
+    if not job.is_file():
+        pytest.skip("samples/compressor/compressor_small.apt not present")
+    from checker.apt import read_cl
+
+    tp = read_cl(job)
+    moves = moves_from_toolpath(tp)
+    b = moves.b_deg + 5.0  # as if the checker had chosen other angles
+    flags = [""] * len(moves)
+    flags[3] = "FLAG interference 0.2 mm"
+    out = post_toolpath(tp, tmp_path / "job.nc", b_deg=b, comments=flags)
+    text = out.read_text()
+    assert text.splitlines()[1] == "O1000 (COMPRESSOR_SMALL)"  # PPRINT/MACHINE fanuc-hmc
+    assert "(FLAG interference 0.2 mm)" in text
+    machine = load_machine("fanuc-hmc")
+    read = part_motions(read_gcode_text(text, "fanuc"), machine)
+    cut = read.known & ~read.rapid
+    # every chosen B of a cut comes back from the program (angles modulo 360)
+    diff = (read.b_deg[cut][None, :] - b[~moves.rapid][:, None] + 180.0) % 360.0 - 180.0
+    assert np.abs(diff).min(axis=1).max() < 1e-4
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["job.nc"]
 
 
 def test_machine_for_toolpath():
@@ -283,6 +364,10 @@ def test_rotary_speed_limit_stretches_block_time():
     moves = PostMoves.build(tip, [0.0, 20.0, 40.0], rapid=[True, False, False], feed=500.0, tool=1)
     f = [float(v) for v in re.findall(r"B-?[0-9.]+ F([0-9.]+)", post_program(moves, machine))]
     assert f == [pytest.approx(5.0), pytest.approx(5.0)]  # 20 deg at 100 deg/min = 0.2 min
+    # G94: the Fanuc rule inflates F where B turns; it never exceeds the machine's maximum
+    slow = variant("fanuc-hmc", feeds={"max_linear": 1000.0})
+    words = [float(v) for v in re.findall(r"F([0-9.]+)", post_program(blade_path(), slow))]
+    assert max(words) <= 1000.0 and max(words) > 990.0
 
 
 def test_program_structure_tool_changes_flags():

@@ -99,6 +99,7 @@ def test_home_machine_frame_and_parameters():
         ("fanuc", "G0 X0 Y0\nG2 X5 Y0\n", r"arc without centre: expected I/J or R"),
         ("fanuc", "G0 X0 Y0\nG2 X50 Y0 R10\n", r"arc radius R10 cannot join"),
         ("linuxcnc", "M#<nothing>\n", r"M word has no known value"),
+        ("linuxcnc", "G1 X1 E2 F100\n", r"E is not a word of the linuxcnc dialect"),
         ("fanuc", "G0 X" + "9" * 400 + "\n", r"expected a number of reasonable size"),
     ],
 )

@@ -71,17 +71,22 @@ def test_minus180_180_and_limited():
     # a wide limited range needs no retract: the branch is chosen to last
     wide = post_program(ring([190, 197, 204, 211]), machine("limited", b_min=-200.0, b_max=200.0))
     assert b_words(wide) == ["-170.0", "-163.0", "-156.0", "-149.0"]
-    crossing = post_program(
-        ring([-10, 100, 199, 250]), machine("limited", b_min=-200.0, b_max=200.0)
-    )
-    assert b_words(crossing) == ["-10.0", "100.0", "199.0", "200.0", "-160.0", "-110.0"]
+    path = [-10.0, 20.0, 50.0, 80.0, 110.0, 140.0, 170.0, 199.0, 229.0, 250.0]
+    crossing = post_program(ring(path), machine("limited", b_min=-200.0, b_max=200.0))
+    assert b_words(crossing) == [
+        *[f"{b:.1f}" for b in path[:8]],
+        "200.0",
+        "-160.0",
+        "-131.0",
+        "-110.0",
+    ]
 
 
 def test_limited_range_below_a_turn_is_a_travel_error():
     with pytest.raises(PathcheckError, match=r"B = 150.0000 deg cannot be reached.*\[-120, 120\]"):
         post_program(ring([0, 60, 120, 150]), machine("limited", b_min=-120.0, b_max=120.0))
     with pytest.raises(PathcheckError, match="less than a full turn"):
-        post_program(ring([90, 140, 200]), machine("limited", b_min=-170.0, b_max=160.0))
+        post_program(ring([120, 150, 195]), machine("limited", b_min=-170.0, b_max=160.0))
 
 
 @pytest.mark.parametrize("wrap", ["shortest", "signed", "0_360", "-180_180", "limited"])
@@ -104,3 +109,13 @@ def test_long_turns_are_split_and_unrolled():
     assert np.signbit(words).tolist() == [False, False, False, False, True]
     assert np.allclose(unroll_rollover(words, "signed"), [0.0, 170.0, 340.0, 510.0, 350.0])
     assert range_branches(np.array([350.0, 370.0, 380.0]), 0.0, 360.0).tolist() == [0, -1, -1]
+
+
+def test_a_cut_turning_too_far_is_retract_rotate_reenter():
+    m = machine("shortest", max_turn_in_cut=45.0)
+    text = post_program(ring([0, 10, 100, 110]), m)
+    blocks = [ln for ln in text.splitlines() if not ln.startswith(("%", "(P"))]
+    i = blocks.index("(B turns +90.000 deg in one cut [line 3]: retract, rotate, re-enter)")
+    # from the point at B10: up to the safe plane, turn to B100, down over the end point, feed in
+    assert blocks[i + 1 : i + 5] == ["G0 Z250.0", "B100.0", "Z52.0", "G1 Z50.0 F250.0"]
+    assert b_words(text) == ["0.0", "10.0", "100.0", "110.0"]

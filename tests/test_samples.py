@@ -114,8 +114,12 @@ def test_compressor_job_is_four_axis_about_y(repo):
     assert (c.kind, c.d, c.r) == ("ball", 6.0, 3.0)
     assert cut.sum() == 2 * 41 * 41
     assert (ma.axis[:, 1] == 0.0).all()
+    # B = atan2(-i, k): the radial direction at the blade (+-15 deg) turned 20 deg towards
+    # the pressure side (+B) or the suction side (-B)
     b = np.degrees(np.arctan2(-ma.axis[cut, 0], ma.axis[cut, 2]))
-    assert -30 < b.min() < -10 and 10 < b.max() < 30
+    pressure, suction = b[:41 * 41], b[41 * 41:]
+    assert pressure.min() > 5 and pressure.max() < 35
+    assert suction.min() > -35 and suction.max() < -5
 
 
 def test_compressor_cl_points_sit_on_blade_zero(repo):
@@ -147,17 +151,22 @@ def test_mould_cl_points_sit_on_the_cavity(repo):
 
 
 def test_larger_ball_gouges_the_compressor_path(repo):
-    """The same CC points and axes with a D16 ball: the ball centre lies 8 mm off the blade, so
-    on the lowest row (4.8 mm above the hub) the ball cuts into the hub; the D6 does not."""
+    """The small job's CC points and axes with larger balls (tips recomputed for each): the D6
+    touches everywhere; a D12's centre lies 6 mm off the blade, so on the lowest row (4.8 mm
+    above the hub) it cuts into the hub and nowhere else; a D16 also reaches the neighbouring
+    blade across the passage."""
     part = load_part(repo / "samples/compressor/compressor_small.json")
     tp = sample_part(part)
     us, vs = np.linspace(0, 1, 9), np.linspace(make_samples.COMP_V0, 1, 5)
-    gaps = {}
-    for d in (6.0, 16.0):
+    res = {}
+    for d in (6.0, 12.0, 16.0):
         cutter = cutter_from_apt([d, d / 2])
         ps = make_samples.grid_pass(part, 3, us, vs, cutter, make_samples.compressor_axes)
         got = cl_to_cc(part, tp, cutter, ps.tips, ps.axes)
-        gaps[d] = got.gap.reshape(5, 9), got.surface.reshape(5, 9)
-    assert np.abs(gaps[6.0][0]).max() < 1e-6
-    low_gap, low_surface = gaps[16.0][0][0], gaps[16.0][1][0]
-    assert (low_gap < -1.0).all() and (low_surface == 0).all()
+        res[d] = got.gap.reshape(5, 9), got.surface.reshape(5, 9)
+    assert np.abs(res[6.0][0]).max() < 1e-6
+    gap, surface = res[12.0]
+    assert (gap[0] < -0.5).all() and (surface[0] == 0).all()
+    assert np.abs(gap[1:]).max() < 1e-6 and np.isin(surface[1:], [3, 4]).all()
+    gap, surface = res[16.0]
+    assert (gap[surface == 2] < -0.3).all() and (surface == 2).sum() >= 5

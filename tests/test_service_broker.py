@@ -19,7 +19,7 @@ from checker.errors import PathcheckError
 from checker.service.broker import Broker
 
 MAX_BYTES = 64 * 1024
-TIMEOUT_S = 2.0
+TIMEOUT_S = 5.0  # long enough for a cold worker to import the library on a busy machine
 
 
 def _config():
@@ -57,6 +57,22 @@ def test_ping_req_and_dealer(broker):
         assert reply["ok"] is True and reply["pong"] is True
         assert reply["id"] == "abc" and reply["op"] == "ping" and reply["v"] == 1
         assert reply["worker"] in broker.worker_pids()
+
+
+def test_plain_dealer_without_delimiter_gets_a_reply_in_the_same_shape(broker):
+    sock = zmq.Context.instance().socket(zmq.DEALER)
+    sock.connect(broker.address)
+    try:
+        for k in range(3):
+            sock.send(json.dumps({"op": "ping", "id": k}).encode())
+        replies = []
+        while len(replies) < 3 and sock.poll(10_000):
+            frames = sock.recv_multipart()
+            assert len(frames) == 1
+            replies.append(json.loads(frames[0]))
+    finally:
+        sock.close(linger=0)
+    assert sorted(r["id"] for r in replies) == [0, 1, 2] and all(r["ok"] for r in replies)
 
 
 def test_stats_reports_broker_and_worker(broker):

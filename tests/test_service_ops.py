@@ -4,6 +4,7 @@ the same numbers), analytic cases, the part cache, and one round trip over a rea
 from __future__ import annotations
 
 import json
+import re
 import threading
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from checker.service.worker import handle
 REPO = Path(__file__).resolve().parents[1]
 MOULD = REPO / "samples" / "mould" / "mould.json"
 CUTTER = "CUTTER/12,3"
+SMALL = REPO / "samples" / "compressor" / "compressor_small"
 
 
 def _engine():
@@ -27,8 +29,8 @@ def _engine():
         "checker.engine", reason="checker.engine (the engine issue) not present yet")
 
 
-def _call(state: WorkerState, **request) -> dict:
-    reply, meta = handle(json.dumps(request).encode(), state, NullRecorder())
+def _call(state: WorkerState, recorder=None, **request) -> dict:
+    reply, meta = handle(json.dumps(request).encode(), state, recorder or NullRecorder())
     assert meta["ok"] == reply["ok"] and meta["op"] == request["op"]
     return reply
 
@@ -165,68 +167,90 @@ def test_library_errors_become_error_replies(state):
         outside["error"]["message"]
 
 
-def test_check_returns_the_results_document_and_gcode(state):
-    pytest.importorskip("checker.job", reason="checker.job (check_job) not present yet")
+def test_check_returns_the_results_document_and_records_it(state, tmp_path):
+    job_module = pytest.importorskip("checker.job", reason="checker.job not present yet")
     from checker.results import ResultsDocument
+    from checker.service.recorder import open_recorder
+    from checker.store import ResultsStore
 
-    job = REPO / "samples" / "mould" / "mould.apt"
-    reply = _call(state, op="check", apt=job.read_text(), part={"path": str(MOULD)})
+    job, part = SMALL.with_suffix(".apt"), SMALL.with_suffix(".json")
+    recorder = open_recorder(tmp_path / "store.sqlite")
+    reply = _call(state, recorder, op="check", apt=job.read_text(), part={"path": str(part)})
     assert reply["ok"], reply
+    with ResultsStore(tmp_path / "store.sqlite") as store:
+        (row,) = store.jobs()
+        (request,) = store.requests()
+        n_points = len(reply["results"]["points"])
+        assert (row.source, row.job_path, row.points) == ("service", "<apt>", n_points)
+        assert request[1:3] == ("check", 1) and request[5] == row.id
+        assert store.document(row.id).model_dump(mode="json") == reply["results"]
     doc = ResultsDocument.model_validate(reply["results"])
-    assert doc.summary.points == len(doc.points) > 0
-    truncated = "\n".join(job.read_text().splitlines()[:12]) + "\nGOTO/1.0,2.0,$\n"
-    bad = _call(state, op="check", apt=truncated, part={"path": str(MOULD)})
-    assert bad["ok"] is False and bad["error"].get("line") is not None
+    direct = job_module.check_job(job, part_path=part)
+    assert doc.job.path == "<apt>" and doc.summary.points == direct.summary.points > 0
+    assert [p.allowable for p in doc.points] == [p.allowable for p in direct.points]
+    assert doc.summary.counts == direct.summary.counts
 
 
-def test_allowable_over_a_socket_hits_the_cache_the_second_time(mould_rows):
-    from checker.client import Client
+def test_check_errors_name_the_line_and_the_option(state):
+    pytest.importorskip("checker.job", reason="checker.job not present yet")
+    part = {"path": str(SMALL.with_suffix(".json"))}
+    lines = SMALL.with_suffix(".apt").read_text().splitlines()
+    goto = next(i for i, text in enumerate(lines) if text.startswith("GOTO"))
+    broken = "\n".join([*lines[:goto], "GOTO/1.0,2.0,abc", *lines[goto + 1:]])
+    bad = _call(state, op="check", apt=broken, part=part)
+    assert bad["ok"] is False and bad["error"]["line"] == goto + 1
+    assert bad["error"]["message"].startswith(f"<apt>:{goto + 1}: ")
+    option = _call(state, op="check", apt="X", part=part, options={"service.debug_ops": True})
+    assert option["error"]["code"] == "request" and "options.service.debug_ops" in \
+        option["error"]["message"]
+    value = _call(state, op="check", apt="X", part=part, options={"check.tolerance": -1})
+    assert value["error"]["code"] == "request" and "options.check.tolerance" in \
+        value["error"]["message"]
+
+
+@pytest.fixture(scope="module")
+def served():
+    """The address of a broker with one worker (stopped after the module)."""
     from checker.service.broker import Broker
 
     broker = Broker(default_config(), bind="tcp://127.0.0.1:*", workers=1)
     thread = threading.Thread(target=broker.run, daemon=True)
     thread.start()
-    try:
-        with Client(broker.wait_started(60), timeout_s=120) as client:
-            fields = {"part": {"path": str(MOULD)}, "cc": mould_rows[:1].tolist(),
-                      "cutter": CUTTER}
-            first, second = (client.call("allowable", **fields) for _ in range(2))
-    finally:
-        broker.stop()
-        thread.join(30)
+    yield broker.wait_started(60)
+    broker.stop()
+    thread.join(30)
+
+
+def test_allowable_over_a_socket_hits_the_cache_the_second_time(served, mould_rows):
+    from checker.client import Client
+
+    with Client(served, timeout_s=120) as client:
+        fields = {"part": {"path": str(MOULD)}, "cc": mould_rows[:1].tolist(), "cutter": CUTTER}
+        first, second = (client.call("allowable", **fields) for _ in range(2))
     assert first["ok"] and second["ok"]
     assert (first["cached"], second["cached"]) == (False, True)
     assert second["points"] == first["points"]
 
 
-def test_post_hook_writes_the_gcode_the_service_returns(tmp_path):
+def test_post_hook_writes_the_gcode_the_service_returns(served, tmp_path, capsys):
     pytest.importorskip("checker.job", reason="checker.job (check_job) not present yet")
     import importlib.util
 
-    from checker.client import Client
-    from checker.service.broker import Broker
+    from pygcode import Line
 
     spec = importlib.util.spec_from_file_location("post_hook", REPO / "samples" / "post_hook.py")
     hook = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(hook)
-    broker = Broker(default_config(), bind="tcp://127.0.0.1:*", workers=1)
-    thread = threading.Thread(target=broker.run, daemon=True)
-    thread.start()
-    job = REPO / "samples" / "mould" / "mould.apt"
-    out = tmp_path / "mould.nc"
-    try:
-        address = broker.wait_started(60)
-        code = hook.main([str(job), "--part", str(MOULD), "-o", str(out), "--address", address])
-        with Client(address, timeout_s=300) as client:
-            reply = client.call("check", apt=job.read_text(), part={"path": str(MOULD)},
-                                post=True)
-        missing = hook.main([str(tmp_path / "none.apt"), "--address", address])
-    finally:
-        broker.stop()
-        thread.join(30)
-    assert reply["ok"], reply
-    counts = reply["results"]["summary"]["counts"]
-    assert code == (1 if counts["gouge"] + counts["interference"] + counts["holder"] else 0)
-    assert out.read_text() == reply["gcode"] and "G1" in reply["gcode"].replace("G01", "G1")
-    assert missing == 2 and not (tmp_path / "none.nc").exists()
-    assert list(tmp_path.glob("*.tmp")) == []
+    job, part = SMALL.with_suffix(".apt"), SMALL.with_suffix(".json")
+    out = tmp_path / "small.nc"
+    code = hook.main([str(job), "--part", str(part), "-o", str(out), "--address", served])
+    printed = capsys.readouterr()
+    if code == 2 and "wrote no G-code" in printed.err:
+        pytest.skip(f"posting not present yet: {printed.err.strip()}")
+    assert code in (0, 1), printed.err
+    findings = [int(n) for n in re.findall(r"(\d+) (?:gouge|interference|holder)", printed.out)]
+    assert code == (1 if sum(findings) else 0)
+    blocks = [Line(text) for text in out.read_text().splitlines() if text.strip("% ")]
+    assert any("B" in {w.letter for w in line.block.words} for line in blocks)
+    assert hook.main([str(tmp_path / "none.apt"), "--address", served]) == 2
+    assert not (tmp_path / "none.nc").exists() and list(tmp_path.glob("*.tmp")) == []

@@ -27,7 +27,8 @@ class Server:
 
     def __init__(self, tmp: Path) -> None:
         config = tmp / "service.toml"
-        config.write_text("[service]\ndebug_ops = true\nrequest_timeout_s = 20.0\n")
+        config.write_text("[service]\ndebug_ops = true\nrequest_timeout_s = 20.0\n"
+                          "max_message_bytes = 65536\n")
         self.store = tmp / "store.sqlite"
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "checker.cli", "serve", "--bind", "tcp://127.0.0.1:*",
@@ -95,8 +96,9 @@ def test_one_log_line_per_request_and_every_request_recorded(server):
         for _ in range(5):
             assert c.call("ping")["ok"]
         assert not c.request(b"{oops")["ok"]
+        assert c.call("ping", pad="x" * 70_000)["error"]["code"] == "limit"  # broker answers
     deadline = time.monotonic() + 10
-    while sum("request client=" in line for line in server.lines) < before + 6:
+    while sum("request client=" in line for line in server.lines) < before + 7:
         assert time.monotonic() < deadline, "".join(server.lines[-10:])
         time.sleep(0.05)
     assert any("op=? ok=false code=json" in line for line in server.lines)
@@ -104,6 +106,7 @@ def test_one_log_line_per_request_and_every_request_recorded(server):
         rows = store.requests(since=t0)
     assert [r[1] for r in rows].count("ping") == 5
     assert any(r[1] == "?" and r[2] == 0 and "not valid JSON" in r[4] for r in rows)
+    assert any(r[2] == 0 and "the limit is 65536 bytes" in r[4] for r in rows)
 
 
 def test_call_reads_the_request_from_stdin_and_writes_out(server, tmp_path):

@@ -213,7 +213,7 @@ def _seed_starts(tp: TestPoints, part: Part, sc, spacing: float):
     sid = tp.surface[idx].astype(np.int64)
     uv = tp.uv[idx]
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
-    half = tp.spacing[idx]
+    half = 0.5 * tp.spacing[idx]
     step = np.column_stack([half / np.maximum(np.linalg.norm(ev.du, axis=1), 1e-12),
                             half / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
     return srow, sid, uv, step

@@ -17,6 +17,8 @@ from checker.part import Part
 
 _ABOVE = 1e-9  # mm above the bottom plane: on it the kernels already count a point as uncut
 _FLOOR_STEPS = 3
+_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125])
+_REACH = 4.0  # longest Newton step, stencil half-widths
 _OFFS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.float64)
 
 
@@ -105,11 +107,18 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
         k = np.where(F[:, 4] <= F.min(axis=1), 4, np.argmin(F, axis=1))
         _keep_best(best_f, best_uv, best_p, F[ar, k], UV[ar, k], P[ar, k])
         g, Hm = _quadratic(F, h)
-        new = np.clip(_newton(c, g, Hm, h, UV[ar, k], np.isfinite(F).all(axis=1)), lo, hi)
-        fn, pn, new = obj(rows, sid, new[:, 0], new[:, 1])
+        step = _newton(c, g, Hm, h, UV[ar, k], np.isfinite(F).all(axis=1)) - c
+        # backtracking along the step: fractions 1, 1/2, 1/4, 1/8 evaluated at once
+        trial = np.clip(c[:, None, :] + _FRACTIONS[None, :, None] * step[:, None, :],
+                        lo[:, None, :], hi[:, None, :]).reshape(-1, 2)
+        nt = len(_FRACTIONS)
+        ft, pt, trial = obj(np.repeat(rows, nt), np.repeat(sid, nt), trial[:, 0], trial[:, 1])
+        j = np.argmin(ft.reshape(-1, nt), axis=1)
+        pick = ar * nt + j
+        fn, pn, new = ft[pick], pt[pick], trial[pick]
         newton_won = fn < best_f
         _keep_best(best_f, best_uv, best_p, fn, new, pn)
-        evals += 10
+        evals += 9 + nt
         shrink = np.where(k == 4, 0.25, 0.5)[:, None] * h
         jump = np.clip(2.0 * np.abs(new - c), 0.125 * h, h)
         h = np.clip(np.where(newton_won[:, None], jump, shrink), hmin, 0.25 * width)
@@ -138,7 +147,7 @@ def _quadratic(F: np.ndarray, h: np.ndarray):
 
 
 def _newton(c, g, Hm, h, fallback, finite):
-    """Newton step from the stencil centre, at most 2 half-widths per coordinate; the best
+    """Newton point from the stencil centre, at most _REACH half-widths per coordinate; the best
     stencil point where the model is not finite or not convex."""
     with np.errstate(invalid="ignore", over="ignore"):
         det = Hm[:, 0, 0] * Hm[:, 1, 1] - Hm[:, 0, 1] ** 2
@@ -148,5 +157,6 @@ def _newton(c, g, Hm, h, fallback, finite):
     safe = np.where(ok, det, 1.0)
     d = np.stack([du / safe, dv / safe], axis=1)
     d = np.where(np.isfinite(d), d, 0.0)
-    scale = np.min(np.where(np.abs(d) > 2 * h, 2 * h / np.maximum(np.abs(d), 1e-300), 1.0), axis=1)
+    big = np.abs(d) > _REACH * h
+    scale = np.min(np.where(big, _REACH * h / np.maximum(np.abs(d), 1e-300), 1.0), axis=1)
     return np.where(ok[:, None], c + d * scale[:, None], fallback)

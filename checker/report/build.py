@@ -17,6 +17,7 @@ from checker.report.page import render_page
 from checker.report.pictures import JobPainter, trend_picture
 from checker.report.standard import per_region, standard_cutters
 from checker.report.trends import DAY_S, compare, nights
+from checker.results import VERDICTS
 from checker.store import JobRow, ResultsStore
 
 PARALLEL_FROM = 8  # jobs; fewer are drawn in this process (starting workers costs more)
@@ -55,8 +56,8 @@ def _draw(task: tuple) -> tuple[int, list[str], dict, list]:
     if arrays is None:  # recorded before the store kept per-point arrays
         return job_id, [], None, []
     standard = standard_cutters(kind, cutter, cutter_size, diameters)
-    regions = per_region(standard, arrays["allowable"][arrays["kind"]],
-                         arrays["surface"][arrays["kind"]])
+    reach = arrays["kind"] & (arrays["verdict"] != VERDICTS.index("inaccessible"))
+    regions = per_region(standard, arrays["allowable"][reach], arrays["surface"][reach])
     return job_id, *painter.render(arrays, standard, cutter_size), regions
 
 

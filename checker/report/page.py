@@ -22,6 +22,23 @@ def _num(value: float | int | None, fmt: str = "{:.3f}") -> str:
     return "&ndash;" if value is None else escape(fmt.format(value))
 
 
+def _mm(value: float | None) -> str:
+    """A length, mm: 3 decimals, or 2 significant digits when it is below 0.001 but not 0."""
+    if value is not None and 0 < abs(value) < 1e-3:
+        return _num(value, "{:.1e}")
+    return _num(value)
+
+
+def _regions(job: dict) -> str:
+    """'BALL-D8: S0, S2 · none: S3': the surfaces grouped by their largest safe cutter."""
+    groups: dict[str, list[str]] = {}
+    for surface, name in job["regions"]:
+        groups.setdefault(name, []).append(f"S{surface}")
+    text = " &middot; ".join(f"{escape(n)}: {', '.join(s)}" for n, s in groups.items())
+    std = job["largest_safe_standard"]
+    return text or (escape(std) if std else "&ndash;")
+
+
 def _utc(t: float) -> str:
     return time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime(t))
 
@@ -33,24 +50,20 @@ def _img(b64: str, alt: str) -> str:
 def _job_table(jobs: list[dict]) -> str:
     head = (
         "<tr><th>#</th><th>job</th><th>status</th><th>points</th><th>gouges</th>"
-        "<th>interferences</th><th>holder hits</th><th>worst depth, mm</th>"
+        "<th>interferences</th><th>holder hits</th><th>inaccessible</th><th>worst depth, mm</th>"
         "<th>worst margin, mm</th><th>largest safe standard cutter per region</th>"
         "<th>vs previous run</th><th>time, s</th></tr>"
     )
     rows = []
     for j in jobs:
         if j["status"] == "failed":
-            detail = f'<td colspan="8">failed: {escape(j["error"] or "")}</td>'
+            detail = f'<td colspan="9">failed: {escape(j["error"] or "")}</td>'
         else:
-            std = j["largest_safe_standard"]
-            regions = ", ".join(f"S{s}: {escape(n)}" for s, n in j["regions"]) or (
-                escape(std) if std else "&ndash;"
-            )
             detail = (
                 f'<td class="n">{j["points"]}</td><td class="n">{j["gouge"]}</td>'
                 f'<td class="n">{j["interference"]}</td><td class="n">{j["holder"]}</td>'
-                f'<td class="n">{_num(j["worst_depth"])}</td>'
-                f'<td class="n">{_num(j["worst_margin"])}</td><td>{regions}</td>'
+                f'<td class="n">{j["inaccessible"]}</td><td class="n">{_mm(j["worst_depth"])}</td>'
+                f'<td class="n">{_mm(j["worst_margin"])}</td><td>{_regions(j)}</td>'
                 f'<td class="n">{_delta(j)}</td>'
             )
         rows.append(
@@ -77,9 +90,10 @@ def _trend_table(rows: list[tuple]) -> str:
         "<th>mean of earlier nights</th></tr>"
     )
     body = "".join(
-        f'<tr><th>{escape(q)}</th><td class="n">{_num(a, "{:g}")}</td>'
-        f'<td class="n">{_num(b, "{:g}")}</td><td class="n">{_num(c, "{:.2f}")}</td></tr>'
+        f'<tr><th>{escape(q)}</th><td class="n">{fmt(a, "{:g}")}</td>'
+        f'<td class="n">{fmt(b, "{:g}")}</td><td class="n">{fmt(c, "{:.2f}")}</td></tr>'
         for q, a, b, c in rows
+        for fmt in [(lambda v, _: _mm(v)) if q == "worst depth" else _num]
     )
     return f'<table class="trend">{head}{body}</table>'
 

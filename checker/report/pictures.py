@@ -216,7 +216,7 @@ class JobPainter:
     ) -> tuple[list[str], dict]:
         """The four pictures (base64 PNG) of one job from its point arrays (see
         `checker.store.point_arrays`), and facts for their captions: view, extent (mm),
-        min_allowable (mm), findings, has_b."""
+        min_allowable (mm, over the accessible points), findings, has_b."""
         cc, allowable, verdict = arrays["cc"], arrays["allowable"], arrays["verdict"]
         i, j = _projection(cc)
         xy = cc[:, [i, j]]
@@ -242,10 +242,10 @@ class JobPainter:
             self.fig.draw_artist(artist)
         w = img.shape[1] // 4
         extent = np.ptp(xy, axis=0) if len(xy) else np.zeros(2)
+        reach = allowable[verdict != VERDICTS.index("inaccessible")]
         facts = {
             "view": f"{AXES[i]}{AXES[j]}", "extent": [float(extent[0]), float(extent[1])],
-            "min_allowable": float(np.nanmin(allowable)) if np.isfinite(allowable).any()
-            else None,
+            "min_allowable": float(np.nanmin(reach)) if np.isfinite(reach).any() else None,
             "findings": int(np.sum(verdict != 0)), "has_b": scale != "size",
         }
         return [png_base64(img[:, k * w : (k + 1) * w]) for k in range(4)], facts

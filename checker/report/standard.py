@@ -67,8 +67,8 @@ def standard_cutters(
 def per_region(
     standard: StandardCutters, allowable: np.ndarray, surface: np.ndarray
 ) -> list[tuple[int, str]]:
-    """(surface id, name of the largest standard cutter safe on all its CC points) per region;
-    surface -1 (unknown) is reported as region -1."""
+    """(surface id, name of the largest standard cutter safe on all the given CC points of it)
+    per region; surface -1 (unknown) is reported as region -1."""
     ids, inverse = np.unique(surface, return_inverse=True)
     a = np.where(np.isnan(allowable), np.inf, allowable)
     least = np.full(len(ids), np.inf)

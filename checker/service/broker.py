@@ -9,7 +9,8 @@ It is steerable like pyzmq's steerable proxy: `TERMINATE` on its control socket 
 that arrive meanwhile get an `unavailable` error, then the workers exit and `run()` returns.
 A worker that dies is replaced and its request gets a `worker` error reply; a request running
 longer than the per-request timeout kills its worker and gets a `timeout` error reply. Requests
-over the size limit get a `limit` error without reaching a worker. One log line per request.
+over the size limit get a `limit` error without reaching a worker. One log line per request;
+the workers record the requests they answer, the broker those it answers itself.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ import zmq
 from checker.config import Config
 from checker.errors import PathcheckError
 from checker.service import protocol as p
+from checker.service.recorder import NullRecorder, Recorder, open_recorder
 from checker.service.worker import EXIT, READY, REPLY, REQ
 
 log = logging.getLogger("pathcheck.service")
@@ -96,6 +98,7 @@ class Broker:
         self._start_failures = 0
         self._backend_dir = ""
         self.counters = _Counters()
+        self.recorder: Recorder = NullRecorder()
 
     # --- steering (thread- and signal-safe) ------------------------------------------------
 
@@ -157,6 +160,7 @@ class Broker:
             self.address = self.frontend.getsockopt_string(zmq.LAST_ENDPOINT)
             self.backend_addr = self._bind_backend()
             self.control.bind(self._control_addr)
+            self.recorder = open_recorder(self.store)  # the requests no worker answers
             for _ in range(self.n_workers):
                 self._spawn()
             log.info("listening on %s with %d workers", self.address, self.n_workers)
@@ -321,7 +325,9 @@ class Broker:
     def _reject(self, envelope: list[bytes], err: PathcheckError, rid: object = None,
                 op: str | None = None, worker: _Worker | None = None, elapsed: float = 0.0) -> None:
         self.counters.errors += 1
-        self._send(envelope, p.encode(p.error_reply(err, request_id=rid, op=op)))
+        reply = p.error_reply(err, request_id=rid, op=op)
+        self._send(envelope, p.encode(reply))
+        self.recorder.record(op or "?", reply, elapsed)
         self._log(envelope, op, False, err.code, worker, elapsed)
 
     def _send(self, envelope: list[bytes], body: bytes) -> None:

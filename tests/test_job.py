@@ -1,0 +1,86 @@
+"""`check_job` and `pathcheck JOB.apt` on real files: a ball end-mill running along a floor
+towards a wall (known answer: the allowable radius is the distance to the wall, the real
+cutter penetrates by x + r - X beyond it), and the bundled mould sample."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from engine_parts import geomdl_surface
+from geomdl import exchange, multi
+
+from checker.job import check_job
+from checker.results import ResultsDocument
+
+REPO = Path(__file__).resolve().parents[1]
+X_WALL = 8.0
+
+
+def _patch(corner, eu, ev):
+    c, a, b = (np.asarray(t, float) for t in (corner, eu, ev))
+    return geomdl_surface(np.array([[c, c + b], [c + a, c + a + b]]), np.ones((2, 2)), (1, 1),
+                          [0, 0, 1, 1], [0, 0, 1, 1])
+
+
+@pytest.fixture(scope="module")
+def wall_job(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("walljob")
+    floor = _patch([-30, -20, 0], [30 + X_WALL, 0, 0], [0, 40, 0])      # normal +z
+    wall = _patch([X_WALL, -20, 0], [0, 40, 0], [0, 0, 30])             # normal -x
+    exchange.export_json(multi.SurfaceContainer([floor, wall]), str(d / "wall.json"))
+    xs = np.arange(-10.0, 5.01, 0.5)
+    lines = ["PARTNO/WALL", "UNITS/MM", "CUTTER/10,5", "LOADTL/1", "RAPID",
+             "GOTO/-10.0,0.0,20.0", "FEDRAT/500,MMPM"]
+    lines += [f"GOTO/{x:.4f},0.0,0.0" for x in xs]
+    lines += ["RAPID", "GOTO/5.0,0.0,20.0", "FINI"]
+    (d / "wall.apt").write_text("\n".join(lines) + "\n")
+    return d / "wall.apt"
+
+
+def test_check_job_wall(wall_job):
+    doc = check_job(wall_job)
+    ResultsDocument.model_validate_json(doc.model_dump_json())
+    pts = [p for p in doc.points if p.kind == "cc"]
+    x = np.array([p.tip[0] for p in pts])
+    verdict = np.array([p.verdict for p in pts])
+    clear = x <= X_WALL - 5 - 0.5
+    assert (verdict[clear] == "ok").all()
+    allow = np.array([p.allowable for p in pts])[clear]
+    assert np.allclose(allow, X_WALL - x[clear], atol=1e-4)      # r* = distance to the wall
+    assert (verdict[x >= X_WALL - 5 + 0.5] != "ok").all()
+    depth = np.array([p.depth for p in pts])
+    far = x >= X_WALL - 5 + 0.5
+    assert np.allclose(depth[far], x[far] + 5 - X_WALL, atol=1e-3)  # penetration into the wall
+    assert doc.summary.worst and doc.summary.worst[0].line == pts[-1].line
+    assert doc.summary.counts.ok == int((verdict == "ok").sum())
+
+
+def test_cli_exit_codes_and_json(wall_job, tmp_path):
+    out = tmp_path / "r.json"
+    run = subprocess.run([sys.executable, "-m", "checker.cli", str(wall_job), "--json", str(out)],
+                         capture_output=True, text=True, cwd=REPO)
+    assert run.returncode == 1, run.stderr
+    assert "worst findings" in run.stdout and "largest safe" in run.stdout
+    doc = json.loads(out.read_text())
+    assert doc["summary"]["counts"]["ok"] < len(doc["points"])
+    bad = subprocess.run([sys.executable, "-m", "checker.cli", str(wall_job), "--part",
+                          str(tmp_path / "missing.json")], capture_output=True, text=True, cwd=REPO)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert "missing.json" in bad.stderr
+
+
+def test_mould_sample_clean_and_larger_cutter_flagged():
+    apt = REPO / "samples" / "mould" / "mould.apt"
+    if not apt.is_file():
+        pytest.skip("samples/mould not built")
+    doc = check_job(apt)
+    assert doc.summary.counts.ok == doc.summary.points  # the CAM path with D10 ball is clean
+    assert doc.summary.largest_safe_cutter > 5.0
+    big = check_job(apt, cutter=f"CUTTER/{2 * doc.summary.largest_safe_cutter + 2:.3f},"
+                                 f"{doc.summary.largest_safe_cutter + 1:.3f}")
+    assert big.summary.counts.gouge + big.summary.counts.interference > 0
