@@ -76,14 +76,23 @@ def run_one(path: str, job_function: str = DEFAULT_JOB_FUNCTION) -> JobOutcome:
     return JobOutcome(path, None, reason, time.perf_counter() - start)
 
 
+def _outcome(future: object, path: str, where: str) -> JobOutcome:
+    """The outcome a future carries, or a failed one when the process running it died."""
+    try:
+        return future.result()
+    except Exception as err:  # the worker crashed (killed, out of memory): this job failed
+        return JobOutcome(path, None, f"{path}: the {where} died: {type(err).__name__}: {err}",
+                          0.0)
+
+
 def _local(paths: list[str], workers: int, job_function: str) -> Iterator[JobOutcome]:
     if workers <= 1:
         yield from (run_one(p, job_function) for p in paths)
         return
     with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = [pool.submit(run_one, p, job_function) for p in paths]
+        futures = {pool.submit(run_one, p, job_function): p for p in paths}
         for future in as_completed(futures):
-            yield future.result()
+            yield _outcome(future, futures[future], "worker process")
 
 
 def _dask(
@@ -102,8 +111,9 @@ def _dask(
         ) from err
     try:
         futures = client.map(run_one, paths, job_function=job_function, pure=False)
+        path_of = {f.key: p for f, p in zip(futures, paths, strict=True)}
         for future in dask_completed(futures):
-            yield future.result()
+            yield _outcome(future, path_of[future.key], "Dask worker")
     finally:
         if own:
             client.close()

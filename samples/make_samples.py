@@ -346,9 +346,10 @@ def build_mould(folder: Path) -> dict:
     cutter = cutter_from_apt(list(MOULD_CUTTER))
     ps = mould_pass(part, cutter)
     up = np.array([[0.0, 0.0, 1.0]])
-    above = lambda p: np.array([[p[0], p[1], SAFE_Z]])  # noqa: E731
-    blocks = [("rapid", above(ps.tips[0]), up), ("plunge", ps.tips[:1] + [0, 0, 5.0], up),
-              ("feed", ps.tips, ps.axes), ("rapid", above(ps.tips[-1]), up)]
+    first, last = ps.tips[:1].copy(), ps.tips[-1:].copy()
+    first[:, 2] = last[:, 2] = SAFE_Z
+    blocks = [("rapid", first, up), ("plunge", ps.tips[:1] + [0, 0, 5.0], up),
+              ("feed", ps.tips, ps.axes), ("rapid", last, up)]
     header = ["PARTNO/MOULD CAVITY ZIGZAG BALL D10", "UNITS/MM",
               f"CUTTER/{MOULD_CUTTER[0]:g},{MOULD_CUTTER[1]:g}", "LOADTL/1",
               "SPINDL/10000,RPM,CLW"]

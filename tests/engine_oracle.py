@@ -138,10 +138,47 @@ def contour_points(grids: list, z: float):
     return np.concatenate(out), np.concatenate(sids), np.concatenate(uvs)
 
 
+@nb.njit(cache=True)
+def _near_best(ball, r, theta, c, nn, pts, s):
+    """Mask of the points inside the size-s cutter (their size is below s)."""
+    out = np.zeros(pts.shape[0], dtype=np.bool_)
+    for j in range(pts.shape[0]):
+        d = pts[j] - c
+        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= 1e-6:
+            out[j] = _inside(s, ball, r, theta, c, nn, pts[j])
+    return out
+
+
+def _zoom(s, uv0, dense: int, ball, r, th, c, nn, s_max) -> float:
+    """Smallest size on two zoomed grids around uv0 on surface s (41 x 41 over +-1 dense cell,
+    then over +-1/10 cell around that grid's best)."""
+    (u0, u1), (v0, v1) = s.domain
+    du, dv = (u1 - u0) / (dense - 1), (v1 - v0) / (dense - 1)
+    best, centre = np.inf, np.asarray(uv0, dtype=float)
+    for span in (1.0, 0.1):
+        g = np.linspace(-span, span, 41)
+        U, V = np.meshgrid(np.clip(centre[0] + g * du, u0, u1),
+                           np.clip(centre[1] + g * dv, v0, v1), indexing="ij")
+        u, v = U.ravel(), V.ravel()
+        if s.trim is not None:
+            keep = np.asarray(s.trim.contains(u, v), dtype=bool)
+            u, v = u[keep], v[keep]
+        if not u.size:
+            break
+        lp = evaluate(s, u, v).points
+        lb, la = np.empty(1), np.empty(1, dtype=np.int64)
+        _row_min(ball, r, th, c[None], nn[None], lp, s_max, lb, la)
+        if la[0] < 0:
+            break
+        best = min(best, lb[0])
+        centre = np.array([u[la[0]], v[la[0]]])
+    return best
+
+
 def oracle_sizes(part: Part, cutter, cc: np.ndarray, n: np.ndarray, dense: int,
-                 s_max: float = 1000.0) -> np.ndarray:
-    """Allowable size per CC row: bisection over every dense point, then a 41 x 41 local grid
-    (1/20 of a dense cell) around the best point per row, bisected again."""
+                 s_max: float = 1000.0, cc_surface=None, cc_uv=None) -> np.ndarray:
+    """Allowable size per CC row: bisection over every dense point (and, for flat-bottomed
+    cutters, over the contour at the bottom plane), then zoomed local grids (see the loop)."""
     ball = cutter.kind in ("ball", "tapered_ball")
     r, th = float(cutter.r), float(cutter.theta)
     pts, sid, uv = dense_points(part, dense)
@@ -170,21 +207,23 @@ def oracle_sizes(part: Part, cutter, cc: np.ndarray, n: np.ndarray, dense: int,
             if len(fp):
                 _row_min(ball, r, th, cc[i:i + 1], n[i:i + 1], fp, s_max, lb, la)
                 best[i] = min(best[i], lb[0])
-    # local densification around each row's best dense point
+    # local densification: zoomed grids around the best few dense points of each row (distinct
+    # places within 5 % of the best) and around the CC point on its own surface
     out = best.copy()
-    for i in np.flatnonzero(np.isfinite(best)):
-        s = part.surfaces[int(sid[k[i]])]
-        (u0, u1), (v0, v1) = s.domain
-        du, dv = (u1 - u0) / (dense - 1), (v1 - v0) / (dense - 1)
-        g = np.linspace(-1.0, 1.0, 41)
-        U, V = np.meshgrid(np.clip(uv[k[i], 0] + g * du, u0, u1),
-                           np.clip(uv[k[i], 1] + g * dv, v0, v1), indexing="ij")
-        if s.trim is not None:
-            keep = s.trim.contains(U.ravel(), V.ravel())
-        else:
-            keep = np.ones(U.size, bool)
-        lp = evaluate(s, U.ravel()[keep], V.ravel()[keep]).points
-        lb, la = np.empty(1), np.empty(1, dtype=np.int64)
-        _row_min(ball, r, th, cc[i:i + 1], n[i:i + 1], lp, s_max, lb, la)
-        out[i] = min(out[i], lb[0])
+    for i in range(m):
+        centres = []
+        if np.isfinite(best[i]):
+            near = np.flatnonzero(_near_best(ball, r, th, cc[i], n[i], pts, best[i] * 1.05 + 0.05))
+            vals = np.array([_size(ball, r, th, cc[i], n[i], pts[j], s_max) for j in near])
+            for j in near[np.argsort(vals)]:
+                if all(np.linalg.norm(pts[j] - pts[q]) > 1.0 for q, _ in centres):
+                    centres.append((j, None))
+                if len(centres) == 2:
+                    break
+        starts = [(int(sid[j]), uv[j]) for j, _ in centres]
+        if cc_surface is not None and cc_surface[i] >= 0:
+            starts.append((int(cc_surface[i]), cc_uv[i]))
+        for sidx, uv0 in starts:
+            out[i] = min(out[i], _zoom(part.surfaces[sidx], uv0, dense, ball, r, th, cc[i], n[i],
+                                       s_max))
     return out

@@ -123,3 +123,28 @@ def test_batch_command(jobs, tmp_path, monkeypatch, capsys):
     with pytest.raises(SystemExit) as exit_info:
         main(["batch", str(folder / "nothing-*.apt")])
     assert exit_info.value.code == 2
+
+
+def crash_on_seed_2(apt_path: str):
+    """A job function whose process dies on the job with seed 2 (a segfault in an engine)."""
+    import os
+
+    from checker.report.synthetic import synthetic_job
+
+    if Path(apt_path).read_text().split()[0] == "2":
+        os._exit(3)
+    return synthetic_job(apt_path)
+
+
+def test_a_dying_worker_process_fails_its_job_and_the_batch_ends(jobs, tmp_path):
+    _, paths = jobs
+    good = [p for p in paths if p.stem.startswith("job")]
+    with ResultsStore(tmp_path / "s.sqlite") as store:
+        outcomes = run_batch(good, store=store, workers=2,
+                             job_function=f"{__name__}:crash_on_seed_2")
+        recorded = {r.job_path: r.status for r in store.jobs()}
+    by_path = {o.path: o for o in outcomes}
+    died = by_path[str(good[2])]
+    assert died.document is None and "worker process died" in died.error
+    assert len(outcomes) == len(recorded) == 4  # every job has an outcome, recorded
+    assert recorded[str(good[2])] == "failed"

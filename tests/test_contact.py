@@ -68,7 +68,8 @@ def _random_axes(normals: np.ndarray, rng, lo_deg: float, hi_deg: float) -> np.n
     return np.cos(ang) * normals + np.sin(ang) * t
 
 
-CUTTERS = {"ball D6": [6.0, 3.0], "bull-nose D10 R2": [10.0, 2.0]}
+TAPERED = [13.4977, 3.0, 4.0, 3.0, 0.0, 5.0, 50.0]  # tapered bull-nose r 3, 5 deg (thesis ch. 5)
+CUTTERS = {"ball D6": [6.0, 3.0], "bull-nose D10 R2": [10.0, 2.0], "tapered bull-nose": TAPERED}
 
 
 def _check(part, surface_normal_ok, u, v, cutter, rng):
@@ -130,7 +131,7 @@ def test_signed_distance_matches_cutter_model():
     """The core distance equals the cutter model's own signed distance outside the cutter and
     for penetrations shallower than r (checker.cutter, an independent formula)."""
     rng = np.random.default_rng(3)
-    for values in ([6.0, 3.0], [10.0, 2.0], [8.0]):
+    for values in ([6.0, 3.0], [10.0, 2.0], [8.0], TAPERED):
         cutter = cutter_from_apt(values)
         pts = rng.uniform([-12, -12, -4], [12, 12, 20], (4000, 3))
         core = Core.of(cutter)

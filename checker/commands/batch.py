@@ -33,7 +33,7 @@ def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
     from checker.batch import find_jobs, run_batch
-    from checker.store import ResultsStore
+    from checker.store import ResultsStore, job_status
 
     paths = find_jobs(jobs)
     console = Console(stderr=True)
@@ -46,9 +46,7 @@ def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str
 
         def advance(outcome) -> None:
             doc = outcome.results()
-            status = "failed" if doc is None else (
-                "ok" if doc.summary.counts.ok == doc.summary.points else "findings"
-            )
+            status = "failed" if doc is None else job_status(doc)
             counts[status] += 1
             progress.update(task, advance=1, last=f"{os.path.basename(outcome.path)}: {status}")
             if outcome.error:

@@ -21,6 +21,7 @@ from checker.geometry.sampling import TestPoints
 from checker.part import Part
 
 _KNN = 16
+_SNAP = 1e-3  # mm: CC points this close to a surface are moved onto it
 _GRAPH_K = 8
 _RING = np.array([(np.cos(a), np.sin(a)) for a in np.arange(8) * np.pi / 4])
 _GRIDS_MAX = 32
@@ -113,8 +114,7 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
     tw = None if toward is None else _rows3(toward, n_rows, "toward")
     tp = test_points
     if cc_surface is None:
-        _, near = tp.tree.query(cc)
-        own = tp.surface[near].astype(np.int64)
+        cc, own, cc_uv = _snap(tp, part, cc)
     else:
         own = np.asarray(cc_surface, dtype=np.int64).reshape(n_rows)
     size = np.full(n_rows, np.inf)
@@ -156,6 +156,26 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
                        cfg.check.gouge_neighbourhood * 0.5 * float(cutter.d))
     size[faces_away] = 0.0
     return AllowableResult(size, lim_p, lim_s, lim_uv, verdict, size - real, evals)
+
+
+def _snap(tp: TestPoints, part: Part, cc: np.ndarray):
+    """CC points given without their surface: the nearest surface point (from the nearest test
+    point, Gauss-Newton in (u, v)) replaces each one within `_SNAP` mm, so that rounding in the
+    input does not disturb the sizes near the CC point. Returns (cc, surface (N,), uv (N, 2))."""
+    from checker.geometry.inverse import invert_points
+
+    _, near = tp.tree.query(cc)
+    own = tp.surface[near].astype(np.int64)
+    uv = np.full((len(cc), 2), np.nan)
+    out = cc.copy()
+    for s in np.unique(own[own >= 0]):
+        rows = np.flatnonzero(own == s)
+        u, v, dist = invert_points(part.surfaces[int(s)], cc[rows], tp.uv[near[rows], 0],
+                                   tp.uv[near[rows], 1])
+        ok = dist <= _SNAP
+        uv[rows[ok]] = np.column_stack([u, v])[ok]
+        out[rows[ok]] = evaluate_mixed(part, np.full(int(ok.sum()), s), u[ok], v[ok]).points
+    return out, own, uv
 
 
 def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, grid: CellGrid,

@@ -29,6 +29,7 @@ from checker.part import Part
 _CANDIDATES = 64       # test points tried per CL position
 _ITERATIONS = 40       # Newton steps at most
 _TOL = 1e-10           # mm: stop when the step moves the point less than this
+_TIE = 1e-6            # mm: contacts this close in gap are on a shared edge
 
 
 @dataclass(frozen=True)
@@ -172,11 +173,30 @@ def cl_to_cc(part: Part, test_points: TestPoints, cutter, tips: np.ndarray, axes
     uv = _refine(part, core, tips[rows], axes[rows], sid, test_points.uv[start].copy())
     uv = _keep_trimmed(part, sid, uv, test_points.uv[start])
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
-    gap = signed_distance(core, ev.points, tips[rows], axes[rows])
-    # per CL position the refined candidate of least gap (the first where equal)
-    order = np.lexsort((np.arange(len(rows)), gap, rows))
-    pick = order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
+    proj = project_to_core(core, ev.points, tips[rows], axes[rows])
+    gap = proj.dist - core.r
+    pick = _pick(rows, gap, _alignment(ev.points, ev.normals, proj.q, axes[rows]))
     return Contacts(ev.points[pick], ev.normals[pick], sid[pick], uv[pick], gap[pick])
+
+
+def _alignment(p: np.ndarray, n: np.ndarray, q: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """How well each surface normal agrees with the cutter's own contact normal (the direction
+    from the part point to the nearest core point; the axis where they coincide)."""
+    d = q - p
+    dn = np.linalg.norm(d, axis=1)
+    d = np.where(dn[:, None] > 1e-12, d / np.where(dn > 1e-12, dn, 1.0)[:, None], axes)
+    return np.einsum("ij,ij->i", n, d)
+
+
+def _pick(rows: np.ndarray, gap: np.ndarray, align: np.ndarray) -> np.ndarray:
+    """Per CL position the candidate of least gap; among candidates within _TIE mm of it (a
+    contact on an edge shared by two surfaces) the one whose normal agrees best with the
+    cutter's contact normal."""
+    gmin = np.full(rows.max() + 1, np.inf)
+    np.minimum.at(gmin, rows, gap)
+    key = np.where(gap <= gmin[rows] + _TIE, -align, np.inf)
+    order = np.lexsort((np.arange(len(rows)), key, rows))
+    return order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
 
 
 def _start(tp: TestPoints, core: Core, tips, axes, contact) -> tuple[np.ndarray, np.ndarray]:

@@ -31,6 +31,9 @@ CSV_COLUMNS = (
 
 @dataclass(frozen=True)
 class ReportFiles:
+    """What `build_report` wrote: the page, the JSON and CSV summaries, how many jobs and
+    pictures the page holds."""
+
     html: Path
     json: Path
     csv: Path
@@ -43,6 +46,7 @@ _STATE: tuple[ResultsStore, JobPainter, tuple[float, ...]] | None = None
 
 
 def _painter_setup(store_path: str, diameters: tuple[float, ...], dpi: int) -> None:
+    """Open the store and make the painter of this process."""
     global _STATE
     _STATE = (ResultsStore(store_path), JobPainter(dpi), diameters)
 
@@ -62,6 +66,8 @@ def _draw(task: tuple) -> tuple[int, list[str], dict, list]:
 
 
 def _draw_all(store: ResultsStore, rows: list[JobRow], cfg: Config) -> dict[int, tuple]:
+    """job id -> (pictures, facts, regions) of every job that did not fail; in this process for
+    a few jobs, else in `report.render_workers` processes."""
     tasks = [(r.id, r.cutter_kind, r.cutter, r.cutter_size) for r in rows if r.status != "failed"]
     setup = (str(store.path), cfg.report.standard_diameters, cfg.report.picture_dpi)
     workers = min(cfg.report.render_workers, os.cpu_count() or 1, len(tasks))

@@ -89,13 +89,15 @@ def _trend_table(rows: list[tuple]) -> str:
         "<tr><th></th><th>tonight</th><th>previous night</th>"
         "<th>mean of earlier nights</th></tr>"
     )
-    body = "".join(
-        f'<tr><th>{escape(q)}</th><td class="n">{fmt(a, "{:g}")}</td>'
-        f'<td class="n">{fmt(b, "{:g}")}</td><td class="n">{fmt(c, "{:.2f}")}</td></tr>'
-        for q, a, b, c in rows
-        for fmt in [(lambda v, _: _mm(v)) if q == "worst depth" else _num]
-    )
-    return f'<table class="trend">{head}{body}</table>'
+    body = []
+    for quantity, tonight, previous, mean in rows:
+        if quantity == "worst depth":
+            cells = (_mm(tonight), _mm(previous), _mm(mean))
+        else:
+            cells = (_num(tonight, "{:g}"), _num(previous, "{:g}"), _num(mean, "{:.2f}"))
+        tds = "".join(f'<td class="n">{c}</td>' for c in cells)
+        body.append(f"<tr><th>{escape(quantity)}</th>{tds}</tr>")
+    return f'<table class="trend">{head}{"".join(body)}</table>'
 
 
 def _captions(job: dict) -> tuple[str, ...]:

@@ -5,6 +5,7 @@ library lacks falls back to `report.standard_diameters` of the config."""
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from functools import lru_cache
@@ -29,6 +30,8 @@ class StandardCutters:
         """(N,) index into `names` of the largest standard cutter with size <= allowable (mm;
         nan = unbounded), -1 where none fits."""
         a = np.where(np.isnan(allowable), np.inf, allowable)
+        if len(self.sizes) == 0:
+            return np.full(a.shape, -1)
         index = np.searchsorted(self.sizes, a * (1 + 1e-12) + 1e-12, side="right") - 1
         index[self.sizes[np.maximum(index, 0)] <= 0] = -1  # too small to exist in this family
         return index
@@ -46,14 +49,15 @@ def standard_cutters(
     kind: str | None, cutter: str | None, cutter_size: float | None,
     diameters: tuple[float, ...],
 ) -> StandardCutters:
-    """The standard cutters of the family of the real cutter (`kind`, its APT CUTTER/d,r,...
+    """The standard cutters of the family of the real cutter (`kind`, its APT CUTTER/d,r,e,f,a,b
     statement and its size, mm). Library family: same kind (and corner radius r for the R
-    families); otherwise the config diameters D with size D/2 - (d/2 - size of the real
-    cutter), i.e. the real cutter's corner kept."""
+    families, taper angle b for tapered balls); otherwise the config diameters D with size
+    D/2 - (d/2 - size of the real cutter), i.e. the real cutter's corner kept."""
     numbers = [float(x) for x in _NUMBERS.findall((cutter or "").partition("/")[2])]
     if kind:
         r = numbers[1] if len(numbers) > 1 and kind not in BALL_FAMILY else None
-        family = _library().family(kind, r)
+        theta = math.radians(numbers[5]) if kind == "tapered_ball" and len(numbers) > 5 else None
+        family = _library().family(kind, r, theta=theta)
         if family:
             return StandardCutters(
                 tuple(t.name or f"D{t.d:g}" for t in family),

@@ -1,0 +1,98 @@
+"""`pathcheck allowable` and `pathcheck map` through the real console entry point: JSON keys,
+timing, numbers against the closed form (a ball in a concave spherical bowl: r* = rho), PNG
+pictures, and bad input as one line with exit code 2."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from engine_parts import bowl
+from geomdl import exchange
+
+from checker.geometry.evaluate import evaluate
+
+REPO = Path(__file__).resolve().parents[1]
+RHO = 20.0
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "checker.cli", *args], capture_output=True,
+                          text=True, cwd=REPO)
+
+
+@pytest.fixture(scope="module")
+def bowl_files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("bowl")
+    part, g = bowl(RHO)
+    exchange.export_json(g, str(d / "bowl.json"))
+    doc = json.loads((d / "bowl.json").read_text())
+    doc["shape"]["data"][0]["reversed"] = int(part.surfaces[0].flip)  # normal towards the tool
+    (d / "bowl.json").write_text(json.dumps(doc))
+    u, v = np.array([0.1, 0.4, 0.7]), np.array([0.3, 0.5, 0.6])
+    ev = evaluate(part.surfaces[0], u, v)
+    rows = ["x,y,z,nx,ny,nz"] + [",".join(f"{t:.9f}" for t in (*p, *n))
+                                  for p, n in zip(ev.points, ev.normals, strict=True)]
+    (d / "cc.csv").write_text("\n".join(rows) + "\n")
+    return d
+
+
+def test_allowable_json(bowl_files, tmp_path):
+    out = tmp_path / "a.json"
+    run = _cli("allowable", "--part", str(bowl_files / "bowl.json"), "--cc",
+               str(bowl_files / "cc.csv"), "--cutter", "CUTTER/30,15", "--json", str(out))
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(out.read_text())
+    assert set(doc["timing"]) == {"load_s", "sample_s", "search_s"}
+    assert len(doc["points"]) == 3
+    for p in doc["points"]:
+        assert set(p) >= {"index", "cc", "normal", "allowable", "limiting_point",
+                          "limiting_surface", "verdict"}
+        assert abs(p["allowable"] - RHO) < 1e-4
+        assert p["verdict"] == "ok" and p["limiting_surface"] == 0
+    assert "allowable r" in run.stdout
+
+
+def test_allowable_pso_method(bowl_files, tmp_path):
+    out = tmp_path / "p.json"
+    run = _cli("allowable", "--part", str(bowl_files / "bowl.json"), "--cc",
+               str(bowl_files / "cc.csv"), "--cutter", "CUTTER/50,25", "--method", "pso",
+               "--seed", "3", "--json", str(out))
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(out.read_text())
+    assert doc["method"] == "pso"
+    assert all(abs(p["allowable"] - RHO) < 1e-3 and p["verdict"] == "gouge" for p in doc["points"])
+
+
+def test_map_pictures_and_json(bowl_files, tmp_path):
+    run = _cli("map", str(bowl_files / "bowl.json"), "--cutter", "CUTTER/10,5", "--grid", "6x5",
+               "--out", str(tmp_path / "m"))
+    assert run.returncode == 0, run.stderr
+    for name in ("allowable_map.png", "standard_map.png"):
+        assert (tmp_path / "m" / name).read_bytes()[:4] == b"\x89PNG"
+    doc = json.loads((tmp_path / "m" / "map.json").read_text())
+    pts = doc["surfaces"][0]["points"]
+    assert len(pts) == 30
+    inner = [p for p in pts if 0.05 < p["v"] < 0.95]  # below the rim (vertical normal there)
+    assert all(abs(p["allowable"] - RHO) < 1e-3 for p in inner)
+    assert {p["standard"] for p in inner} == {"BALL-1IN"}  # r 12.7 <= 20 < the next size
+    rim = [p for p in pts if p["v"] == 1.0]
+    assert all(p["allowable"] == 0.0 and p["standard"] is None for p in rim)
+
+
+@pytest.mark.parametrize("args, text", [
+    (["--cutter", "CUTTER/10,5"], "cc.csv"),
+    (["--cutter", "CUTTER/10,20"], "CUTTER"),
+    (["--cutter", "CUTTER/10,5", "--axis", "0,0"], "--axis"),
+])
+def test_allowable_bad_input(bowl_files, tmp_path, args, text):
+    bad = tmp_path / "cc.csv"
+    bad.write_text("x,y,z,nx,ny,nz\n1,2,3,0,0\n" if text == "cc.csv" else "x,y,z,nx,ny,nz\n0,0,0,0,0,1\n")
+    run = _cli("allowable", "--part", str(bowl_files / "bowl.json"), "--cc", str(bad), *args)
+    assert run.returncode == 2
+    assert "Traceback" not in run.stderr and text in run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1
