@@ -1,0 +1,1 @@
+"""Sample jobs (APT-CL + geomdl JSON parts) and `make_samples`, the script that builds them."""

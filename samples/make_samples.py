@@ -290,25 +290,32 @@ def compressor_header(title: str, cutter: tuple[float, float]) -> list[str]:
             f"CUTTER/{cutter[0]:g},{cutter[1]:g}", "LOADTL/1", "SPINDL/12000,RPM,CLW"]
 
 
+def blade_passes(part: Part, cutter: Cutter, n_u: int, n_v: int) -> list[Pass]:
+    """Zig-zag passes over an n_u x n_v CC grid on blade 0's pressure side, then its suction
+    side, for `cutter` with the CAM's axes."""
+    us, vs = np.linspace(0.0, 1.0, n_u), np.linspace(COMP_V0, 1.0, n_v)
+    return [grid_pass(part, _surface_id(part, f"blade+0_{side}"), us, vs, cutter, compressor_axes)
+            for side in ("pressure", "suction")]
+
+
 def build_compressor(folder: Path) -> dict:
-    """compressor.json/.apt (2 x 41 x 41 CC points) and compressor_small.json/.apt (9 x 5)."""
+    """compressor.json/.apt (2 x 41 x 41 CC points, ball D6); compressor_small.json/.apt (the
+    same on 2 x 9 x 5 CC points) and compressor_small_d12.json/.apt (those CC points and axes
+    with a ball D12: tips recomputed, the larger cutter to be flagged)."""
     folder.mkdir(parents=True, exist_ok=True)
     part = write_part(compressor_surfaces(), folder / "compressor.json")
     cutter = cutter_from_apt(list(COMP_CUTTER))
-    us = np.linspace(0.0, 1.0, COMP_GRID)
-    vs = np.linspace(COMP_V0, 1.0, COMP_GRID)
-    passes = [grid_pass(part, _surface_id(part, f"blade+0_{side}"), us, vs, cutter, compressor_axes)
-              for side in ("pressure", "suction")]
+    passes = blade_passes(part, cutter, COMP_GRID, COMP_GRID)
     title = "COMPRESSOR BLADE 0 PRESSURE AND SUCTION 41X41"
-    n_main = write_apt(folder / "compressor.apt", compressor_header(title, COMP_CUTTER),
-                       compressor_blocks(passes), multax=True)
-    write_part(compressor_surfaces(), folder / "compressor_small.json")
-    small = [grid_pass(part, _surface_id(part, "blade+0_pressure"), np.linspace(0, 1, 9),
-                       np.linspace(COMP_V0, 1.0, 5), cutter, compressor_axes)]
-    n_small = write_apt(folder / "compressor_small.apt",
-                        compressor_header("COMPRESSOR BLADE 0 PRESSURE 9X5", COMP_CUTTER),
-                        compressor_blocks(small), multax=True)
-    return {"part": part, "passes": passes, "cutter": cutter, "goto": (n_main, n_small)}
+    gotos = [write_apt(folder / "compressor.apt", compressor_header(title, COMP_CUTTER),
+                       compressor_blocks(passes), multax=True)]
+    for stem, size in (("compressor_small", COMP_CUTTER), ("compressor_small_d12", (12.0, 6.0))):
+        write_part(compressor_surfaces(), folder / f"{stem}.json")
+        title = f"COMPRESSOR BLADE 0 PRESSURE AND SUCTION 9X5 BALL D{size[0]:g}"
+        gotos.append(write_apt(folder / f"{stem}.apt", compressor_header(title, size),
+                               compressor_blocks(blade_passes(part, cutter_from_apt(list(size)),
+                                                              9, 5)), multax=True))
+    return {"part": part, "passes": passes, "cutter": cutter, "goto": tuple(gotos)}
 
 
 # ---- mould path -------------------------------------------------------------------------------

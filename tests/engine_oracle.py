@@ -192,21 +192,33 @@ def oracle_sizes(part: Part, cutter, cc: np.ndarray, n: np.ndarray, dense: int,
             cp, cs, cuv = contour_points(grids, zb)
             if not len(cp):
                 continue
-            lb, la = np.empty(1), np.empty(1, dtype=np.int64)
-            _row_min(ball, r, th, cc[i:i + 1], n[i:i + 1], cp, s_max, lb, la)
-            best[i] = min(best[i], lb[0])
-            if la[0] < 0:
-                continue
-            s = part.surfaces[int(cs[la[0]])]  # a fine grid around the best contour point
-            (u0, u1), (v0, v1) = s.domain
-            g = np.linspace(-2.0, 2.0, 81) / (dense - 1)
-            U, V = np.meshgrid(np.clip(cuv[la[0], 0] + g * (u1 - u0), u0, u1),
-                               np.clip(cuv[la[0], 1] + g * (v1 - v0), v0, v1), indexing="ij")
-            fine = [(s, U, V, evaluate(s, U.ravel(), V.ravel()).points[:, 2].reshape(U.shape))]
-            fp = contour_points(fine, zb)[0]
-            if len(fp):
-                _row_min(ball, r, th, cc[i:i + 1], n[i:i + 1], fp, s_max, lb, la)
-                best[i] = min(best[i], lb[0])
+            vals = np.array([_size(ball, r, th, cc[i], n[i], p, s_max) for p in cp])
+            best[i] = min(best[i], vals.min())
+            # fine contour grids around the best three contour points (1 mm apart) and around
+            # the CC point on every surface that passes within 3 mm of it (seams)
+            centres: list[tuple[int, np.ndarray, np.ndarray]] = []
+            for j in np.argsort(vals)[:50]:
+                if np.isfinite(vals[j]) and all(np.linalg.norm(cp[j] - c3) > 1.0
+                                                for _, _, c3 in centres):
+                    centres.append((int(cs[j]), cuv[j], cp[j]))
+                if len(centres) == 3:
+                    break
+            d = np.linalg.norm(pts - cc[i], axis=1)
+            for sidx in np.unique(sid[d < 3.0]):
+                j = np.flatnonzero(sid == sidx)[np.argmin(d[sid == sidx])]
+                centres.append((int(sidx), uv[j], pts[j]))
+            for sidx, uv0, _ in centres:
+                s = part.surfaces[sidx]
+                (u0, u1), (v0, v1) = s.domain
+                g = np.linspace(-2.0, 2.0, 81) / (dense - 1)
+                U, V = np.meshgrid(np.clip(uv0[0] + g * (u1 - u0), u0, u1),
+                                   np.clip(uv0[1] + g * (v1 - v0), v0, v1), indexing="ij")
+                h = evaluate(s, U.ravel(), V.ravel()).points[:, 2].reshape(U.shape)
+                fp = contour_points([(s, U, V, h)], zb)[0]
+                if len(fp):
+                    lb, la = np.empty(1), np.empty(1, dtype=np.int64)
+                    _row_min(ball, r, th, cc[i:i + 1], n[i:i + 1], fp, s_max, lb, la)
+                    best[i] = min(best[i], lb[0])
     # local densification: zoomed grids around the best few dense points of each row (distinct
     # places within 5 % of the best) and around the CC point on its own surface
     out = best.copy()

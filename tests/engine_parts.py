@@ -121,7 +121,8 @@ def jittered_test_points(part: Part, n: int, seed: int):
         gv = np.unique(np.clip(np.concatenate([[0.0], (np.arange(n) + off[1]) / n, [1.0]]), 0, 1))
         U, V = np.meshgrid(u0 + gu * (u1 - u0), v0 + gv * (v1 - v0), indexing="ij")
         ev = evaluate(s, U.ravel(), V.ravel())
-        cell = np.hypot(np.linalg.norm(ev.du, axis=1) * (u1 - u0), np.linalg.norm(ev.dv, axis=1) * (v1 - v0)) / n
+        cell = np.hypot(np.linalg.norm(ev.du, axis=1) * (u1 - u0),
+                        np.linalg.norm(ev.dv, axis=1) * (v1 - v0)) / n
         pts.append(ev.points)
         nrm.append(ev.normals)
         sid.append(np.full(U.size, s.id, dtype=np.int32))

@@ -9,9 +9,17 @@ import numpy as np
 import pytest
 from geomdl import NURBS, exchange, multi
 
+from checker.apt import read_cl
+from checker.apt.read import read_cl_text
 from checker.cutter import cutter_from_apt
 from checker.geometry import load_part
-from checker.geometry.contact import Core, cl_to_cc, project_to_core, signed_distance
+from checker.geometry.contact import (
+    Core,
+    cl_to_cc,
+    contact_from_toolpath,
+    project_to_core,
+    signed_distance,
+)
 from checker.geometry.evaluate import evaluate
 from checker.geometry.sampling import sample_part
 
@@ -114,6 +122,44 @@ def test_cylinder_contact_recovered(cylinder, name):
     _check(part, outward, u, v, cutter_from_apt(CUTTERS[name]), rng)
 
 
+def test_flat_end_mill_touching_and_penetrating(sphere):
+    """A flat end-mill touches with its sharp corner circle: the squared distance between the
+    circle and the sphere grows only to fourth order along the circle (slow Newton), yet the
+    contact is found to 1e-4 mm and the gap to 1e-6 mm. Pushed 0.1 mm along the normal the gap
+    is negative and no deeper than 0.1 mm (the signed distance is 1-Lipschitz in the cutter's
+    position); at a sharp corner the depth is less than the push."""
+    part, c, rad = sphere
+    rng = np.random.default_rng(13)
+    u, v = rng.uniform(0, 1, 100), rng.uniform(0.05, 0.95, 100)
+    cutter = cutter_from_apt([8.0])
+    ev = evaluate(part.surfaces[0], u, v)
+    axes = _random_axes(ev.normals, rng, 5.0, 70.0)
+    tips = cutter.tip_from_contact(ev.points, ev.normals, axes)
+    tp = sample_part(part)
+    got = cl_to_cc(part, tp, cutter, tips, axes)
+    np.testing.assert_allclose(got.cc, ev.points, atol=1e-4)
+    np.testing.assert_allclose(got.gap, 0.0, atol=1e-6)
+    pushed = cl_to_cc(part, tp, cutter, tips - 0.1 * ev.normals, axes)
+    assert (pushed.gap < -1e-3).all() and (pushed.gap >= -0.1 - 1e-9).all()
+    # the gap is the cutter model's own signed distance of the point found (checker.cutter,
+    # in the tool frame), and at least as deep as the deepest of 250,000 sphere points
+    pushed_tips = tips - 0.1 * ev.normals
+    e1 = np.cross(axes, [0.3, 0.5, 0.8])
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
+    e2 = np.cross(axes, e1)
+    rel = pushed.cc - pushed_tips
+    tool = np.stack([np.einsum("ij,ij->i", rel, e) for e in (e1, e2, axes)], axis=1)
+    np.testing.assert_allclose(pushed.gap, cutter.signed_distance(tool), atol=1e-9)
+    t = np.linspace(0, 1, 500)
+    U, V = np.meshgrid(t, np.linspace(0.02, 0.98, 500))
+    dense = evaluate(part.surfaces[0], U.ravel(), V.ravel()).points
+    core = Core.of(cutter)
+    for i in range(10):
+        tip = np.broadcast_to(pushed_tips[i], dense.shape)
+        brute = signed_distance(core, dense, tip, np.broadcast_to(axes[i], dense.shape)).min()
+        assert pushed.gap[i] <= brute + 1e-9
+
+
 def test_contact_data_from_cl_file_is_used(sphere):
     """A CC point given by the CAM starts the search there: the far side of the sphere is never
     reached from the k nearest test points, but is from the given contact."""
@@ -157,3 +203,29 @@ def test_core_hessian_matches_finite_differences():
         col = (gp - gm) / (2 * h)
         ok = proj.dist > 1e-3
         np.testing.assert_allclose(proj.hess[ok, :, k], col[ok], atol=1e-5)
+
+
+def test_contact_comments_read_in_the_part_frame():
+    """`GOTO/... $$ cx,cy,cz` (NX "centerline and contact point") in the frame of the CSYS in
+    force: a 90-degree turn about z plus a shift; moves without the comment give nan."""
+    tp = read_cl_text("PARTNO/T\nUNITS/MM\nCUTTER/6,3\nCSYS/0,-1,0,10,1,0,0,20,0,0,1,30\n"
+                      "FEDRAT/100\nGOTO/1,2,3 $$ 1,2,0\nGOTO/4,5,6\n")
+    m = tp.motion_arrays()
+    got = contact_from_toolpath(tp, m.line)
+    np.testing.assert_allclose(m.tip[0], [8.0, 21.0, 33.0])
+    np.testing.assert_allclose(got[0], [8.0, 21.0, 30.0])
+    assert np.isnan(got[1]).all()
+
+
+def test_nx_contact_points_lie_on_the_ball(realdata):
+    """The real NX CLSF (inches) in "centerline and contact point" mode: every contact point it
+    wrote is r from the ball centre tip + r axis, to the file's 4 decimals of an inch."""
+    tp = read_cl(realdata / "mech491-nx-clsf" / "APT_Project2.txt")
+    m = tp.motion_arrays()
+    cc = contact_from_toolpath(tp, m.line)
+    has = np.isfinite(cc).all(axis=1)
+    assert has.sum() == 2445
+    r = np.array([tp.operations[o].cutter.r for o in m.op[has]])
+    assert np.allclose(r, 0.12 * 25.4)
+    dist = np.linalg.norm(m.tip[has] + r[:, None] * m.axis[has] - cc[has], axis=1)
+    assert np.abs(dist - r).max() < 0.005

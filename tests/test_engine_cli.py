@@ -91,7 +91,8 @@ def test_map_pictures_and_json(bowl_files, tmp_path):
 ])
 def test_allowable_bad_input(bowl_files, tmp_path, args, text):
     bad = tmp_path / "cc.csv"
-    bad.write_text("x,y,z,nx,ny,nz\n1,2,3,0,0\n" if text == "cc.csv" else "x,y,z,nx,ny,nz\n0,0,0,0,0,1\n")
+    body = "1,2,3,0,0" if text == "cc.csv" else "0,0,0,0,0,1"
+    bad.write_text(f"x,y,z,nx,ny,nz\n{body}\n")
     run = _cli("allowable", "--part", str(bowl_files / "bowl.json"), "--cc", str(bad), *args)
     assert run.returncode == 2
     assert "Traceback" not in run.stderr and text in run.stderr

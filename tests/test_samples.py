@@ -36,7 +36,9 @@ def rebuilt(tmp_path_factory):
 
 @pytest.mark.parametrize("name", ["compressor/compressor.json", "compressor/compressor.apt",
                                   "compressor/compressor_small.json",
-                                  "compressor/compressor_small.apt", "mould/mould.json",
+                                  "compressor/compressor_small.apt",
+                                  "compressor/compressor_small_d12.json",
+                                  "compressor/compressor_small_d12.apt", "mould/mould.json",
                                   "mould/mould.apt"])
 def test_committed_files_are_what_the_script_builds(repo, rebuilt, name):
     assert (repo / "samples" / name).read_bytes() == (rebuilt / name).read_bytes()
@@ -150,6 +152,25 @@ def test_mould_cl_points_sit_on_the_cavity(repo):
     got = cl_to_cc(part, sample_part(part), c, ma.tip[cut], ma.axis[cut])
     assert np.abs(got.gap).max() < ROUNDING
     assert np.isin(got.surface, [0, 1, 2, 3, 6, 7]).all()   # cavity, or the rim edge
+
+
+def test_small_jobs_d6_clean_d12_flagged_on_the_hub(repo):
+    """The small jobs (2 x 9 x 5 CC points): the D6 touches everywhere; the D12 on the same CC
+    points and axes has its centre 6 mm off the blade, so on the lowest row (4.8 mm above the
+    hub) of each side it cuts into the hub, and touches elsewhere."""
+    folder = repo / "samples" / "compressor"
+    part = load_part(folder / "compressor_small.json")
+    tp_points = sample_part(part)
+    gaps = {}
+    for stem in ("compressor_small", "compressor_small_d12"):
+        tp, ma, cut = _feed_moves(folder / f"{stem}.apt")
+        assert cut.sum() == 2 * 9 * 5 and find_part_beside(folder / f"{stem}.apt") is not None
+        got = cl_to_cc(part, tp_points, tp.operations[0].cutter, ma.tip[cut], ma.axis[cut])
+        gaps[stem] = got.gap.reshape(2, 5, 9), got.surface.reshape(2, 5, 9)
+    assert np.abs(gaps["compressor_small"][0]).max() < ROUNDING
+    gap, surface = gaps["compressor_small_d12"]
+    assert (gap[:, 0] < -0.5).all() and (surface[:, 0] == 0).all()
+    assert np.abs(gap[:, 1:]).max() < ROUNDING
 
 
 def test_larger_ball_gouges_the_compressor_path(repo):

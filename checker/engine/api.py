@@ -8,7 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.config import Config, default_config
-from checker.engine.candidates import CellGrid, build_grid
+from checker.cutter import BALL_FAMILY
+from checker.engine.candidates import CellGrid, build_grid, disc_candidates
 from checker.engine.family import family_bounds
 from checker.engine.frames import group_axes, tool_rotation
 from checker.engine.refine import refine
@@ -21,7 +22,9 @@ from checker.geometry.sampling import TestPoints
 from checker.part import Part
 
 _KNN = 16
+_CONTOUR_SEEDS = 4
 _SNAP = 1e-3  # mm: CC points this close to a surface are moved onto it
+_SNAP_ANGLE = 1e-6  # rad: given normals this close to the surface normal are replaced by it
 _GRAPH_K = 8
 _RING = np.array([(np.cos(a), np.sin(a)) for a in np.arange(8) * np.pi / 4])
 _GRIDS_MAX = 32
@@ -48,7 +51,8 @@ def _rows3(a, n: int | None, what: str) -> np.ndarray:
     if arr.ndim == 1 and arr.shape == (3,) and n is not None:
         arr = np.broadcast_to(arr, (n, 3))
     if arr.ndim != 2 or arr.shape[1] != 3 or (n is not None and arr.shape[0] != n):
-        raise PathcheckError(f"{what}: expected an (N, 3) array, found shape {arr.shape}", code="input")
+        raise PathcheckError(f"{what}: expected an (N, 3) array, found shape {arr.shape}",
+                             code="input")
     if not np.isfinite(arr).all():
         raise PathcheckError(f"{what}: expected finite numbers, found nan or inf", code="input")
     return np.ascontiguousarray(arr)
@@ -63,14 +67,17 @@ def _unit(a: np.ndarray, what: str) -> np.ndarray:
 
 
 def _neighbours(tp: TestPoints) -> np.ndarray:
-    """(M, 8) nearest other test points of every test point (cached): the sample graph in
-    which the scan looks for local minima."""
+    """(M, 8) nearest other test points of every test point on the same surface (-1 where the
+    neighbour is on another surface; cached): the sample graph in which the scan looks for
+    local minima, so that every surface gets its own seeds."""
     cache = _cache_of(tp)
     hit = cache.get("knn")
     if hit is None:
         k = min(_GRAPH_K + 1, len(tp.points))
         _, nb = tp.tree.query(tp.points, k=k)
-        hit = np.ascontiguousarray(nb.reshape(len(tp.points), k)[:, 1:], dtype=np.int64)
+        nb = nb.reshape(len(tp.points), k)[:, 1:]
+        other = tp.surface[nb] != tp.surface[:, None]  # basins do not reach across seams
+        hit = np.ascontiguousarray(np.where(other, -1, nb), dtype=np.int64)
         cache["knn"] = hit
     return hit
 
@@ -114,7 +121,7 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
     tw = None if toward is None else _rows3(toward, n_rows, "toward")
     tp = test_points
     if cc_surface is None:
-        cc, own, cc_uv = _snap(tp, part, cc)
+        cc, normals, own, cc_uv = _snap(tp, part, cc, normals)
     else:
         own = np.asarray(cc_surface, dtype=np.int64).reshape(n_rows)
     size = np.full(n_rows, np.inf)
@@ -136,8 +143,9 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
         cc_t = cc[rows] @ Q.T
         e_t, degen = horizontal_e(n_t, None if tw is None else tw[rows] @ Q.T)
         fam = family_bounds(cutter, cc_t, n_t, e_t, degen, float(grid.xyz[:, 2].max()))
-        frame = RowFrame(cc_t, n_t, e_t, degen, fam, cfg.engine.exclusion)
-        uv_own = None if cc_uv is None else np.asarray(cc_uv, dtype=np.float64).reshape(n_rows, 2)[rows]
+        frame = RowFrame(cc_t, n_t, e_t, fam, cfg.engine.exclusion)
+        uv_own = None if cc_uv is None else \
+            np.asarray(cc_uv, dtype=np.float64).reshape(n_rows, 2)[rows]
         if method == "pso":
             from checker.engine.pso import pso_search
 
@@ -158,24 +166,30 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
     return AllowableResult(size, lim_p, lim_s, lim_uv, verdict, size - real, evals)
 
 
-def _snap(tp: TestPoints, part: Part, cc: np.ndarray):
+def _snap(tp: TestPoints, part: Part, cc: np.ndarray, normals: np.ndarray):
     """CC points given without their surface: the nearest surface point (from the nearest test
-    point, Gauss-Newton in (u, v)) replaces each one within `_SNAP` mm, so that rounding in the
-    input does not disturb the sizes near the CC point. Returns (cc, surface (N,), uv (N, 2))."""
+    point, Gauss-Newton in (u, v)) replaces each one within `_SNAP` mm, and the surface normal
+    replaces a given normal within `_SNAP_ANGLE` rad of it (either sign), so that rounding in
+    the input does not disturb the sizes near the CC point. Returns (cc, normals, surface (N,),
+    uv (N, 2))."""
     from checker.geometry.inverse import invert_points
 
     _, near = tp.tree.query(cc)
     own = tp.surface[near].astype(np.int64)
     uv = np.full((len(cc), 2), np.nan)
-    out = cc.copy()
+    out, nrm = cc.copy(), normals.copy()
     for s in np.unique(own[own >= 0]):
         rows = np.flatnonzero(own == s)
         u, v, dist = invert_points(part.surfaces[int(s)], cc[rows], tp.uv[near[rows], 0],
                                    tp.uv[near[rows], 1])
         ok = dist <= _SNAP
         uv[rows[ok]] = np.column_stack([u, v])[ok]
-        out[rows[ok]] = evaluate_mixed(part, np.full(int(ok.sum()), s), u[ok], v[ok]).points
-    return out, own, uv
+        ev = evaluate_mixed(part, np.full(int(ok.sum()), s), u[ok], v[ok])
+        out[rows[ok]] = ev.points
+        dot = np.einsum("ij,ij->i", ev.normals, normals[rows[ok]])
+        same = np.abs(dot) >= np.cos(_SNAP_ANGLE)
+        nrm[rows[ok][same]] = np.sign(dot[same])[:, None] * ev.normals[same]
+    return out, nrm, own, uv
 
 
 def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, grid: CellGrid,
@@ -188,7 +202,8 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, g
     k = min(_KNN, len(tp.points))
     _, knn = tp.tree.query(frame.cc @ Q, k=k)
     knn = knn.reshape(n, k)
-    s_ub = pair_sizes(cutter, frame, np.repeat(rows, k), grid.xyz[knn.ravel()]).reshape(n, k).min(axis=1)
+    s_ub = pair_sizes(cutter, frame, np.repeat(rows, k), grid.xyz[knn.ravel()])
+    s_ub = s_ub.reshape(n, k).min(axis=1)
     spacing = float(tp.spacing.max()) if len(tp.spacing) else 0.0
     slack = 0.5 * spacing + cfg.geometry.sag_tolerance
     s0 = max(float(cutter.size), 4.0 * spacing, 1e-3)
@@ -205,11 +220,17 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, g
     if not part.surfaces:
         return size, lim_p, lim_s, lim_uv, evals
     srow, ssid, suv, sstep = _seed_starts(tp, part, sc, spacing)
+    if cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0:
+        extra = _contour_starts(tp, part, cutter, frame, grid, size, slack, _neighbours(tp))
+        srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
+                                  zip((srow, ssid, suv, sstep), extra, strict=True))
     if uv_own is not None:
-        ring = _ring_starts(part, cutter, frame, Q, own, uv_own, eng.ring)
+        ring = _ring_starts(part, cutter, frame, Q, own, uv_own,
+                            [eng.ring, 0.5 * spacing, 1.5 * spacing])
         if ring is not None:
-            srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in zip((srow, ssid, suv, sstep), ring, strict=True))
-            evals += 8 * (own >= 0)
+            srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
+                                      zip((srow, ssid, suv, sstep), ring, strict=True))
+            evals += 24 * (own >= 0)
     if srow.size:
         ref = refine(part, cutter, frame, Q, srow, ssid, suv, sstep, eng.refine_iterations)
         np.add.at(evals, srow, ref.evaluations)
@@ -220,7 +241,8 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, g
         r = srow[pick]
         better = ref.size[pick] < size[r]
         r, pick = r[better], pick[better]
-        size[r], lim_p[r], lim_s[r], lim_uv[r] = ref.size[pick], ref.point[pick], ssid[pick], ref.uv[pick]
+        size[r], lim_p[r] = ref.size[pick], ref.point[pick]
+        lim_s[r], lim_uv[r] = ssid[pick], ref.uv[pick]
     return size, lim_p, lim_s, lim_uv, evals
 
 
@@ -239,23 +261,59 @@ def _seed_starts(tp: TestPoints, part: Part, sc, spacing: float):
     return srow, sid, uv, step
 
 
+def _contour_starts(tp: TestPoints, part: Part, cutter, frame: RowFrame, grid: CellGrid,
+                    size: np.ndarray, slack: float, knn: np.ndarray):
+    """Refinement starts on the bottom-plane contour of flat-bottomed cutters (contour.py),
+    from the test points that could hold a size below each row's sampled minimum."""
+    from checker.engine.contour import contour_seeds
+
+    fam = frame.fam
+    rows = np.flatnonzero(np.isfinite(size))
+    s = size[rows]
+    sub = fam.take(rows)
+    plane = np.column_stack([frame.n[rows], np.einsum("ij,ij->i", frame.n[rows],
+                                                      frame.cc[rows]) - slack])
+    sphere, zeq = sub.lower_ball(s, slack)
+    indptr, idx = disc_candidates(grid, sub.centre(s), sub.radius(s) + slack, sub.z_low(s) - slack,
+                                  sub.z_top + slack, sphere, zeq, plane)
+    r, p, q, f, _ = contour_seeds(cutter, frame.cc[rows], frame.n[rows], frame.e[rows],
+                                  fam.z0[rows], grid.xyz, knn, indptr, idx, _CONTOUR_SEEDS,
+                                  0.5 * float(tp.spacing.max()))
+    sid = tp.surface[p].astype(np.int64)
+    uv = tp.uv[p] + f[:, None] * (tp.uv[q] - tp.uv[p])
+    ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
+    half = 0.25 * tp.spacing[p]
+    step = np.column_stack([half / np.maximum(np.linalg.norm(ev.du, axis=1), 1e-12),
+                            half / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
+    return rows[r], sid, uv, step
+
+
 def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, own: np.ndarray,
-                 uv_own: np.ndarray, ring_mm: float):
-    """Best of 8 points `ring_mm` around each CC point on its own surface (the curvature
-    limit), as a refinement start per row; None when no row has its own surface."""
+                 uv_own: np.ndarray, radii: list[float]):
+    """Around each CC point on its own surface, 8 points on each ring of `radii` (mm): the
+    first ring probes the curvature limit at the CC point, the wider ones the narrow valleys
+    near it that the samples do not resolve. The best point of each ring is a refinement
+    start (stencil half-width: half the ring radius). None when no row has its own surface."""
     rows = np.flatnonzero((own >= 0) & np.isfinite(uv_own).all(axis=1))
     if rows.size == 0:
         return None
     sid = own[rows]
     ev = evaluate_mixed(part, sid, uv_own[rows, 0], uv_own[rows, 1])
-    step = np.column_stack([ring_mm / np.maximum(np.linalg.norm(ev.du, axis=1), 1e-12),
-                            ring_mm / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
+    per_mm = 1.0 / np.maximum(np.column_stack([np.linalg.norm(ev.du, axis=1),
+                                                np.linalg.norm(ev.dv, axis=1)]), 1e-12)
     dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
-    uv = np.clip(uv_own[rows, None, :] + _RING[None] * step[:, None, :], lo[:, None], hi[:, None])
-    r8 = np.repeat(rows, 8)
-    pts = evaluate_mixed(part, np.repeat(sid, 8), uv[..., 0].ravel(), uv[..., 1].ravel()).points
-    f = pair_sizes(cutter, frame, r8, pts @ Q.T).reshape(-1, 8)
-    k = np.argmin(f, axis=1)
-    ok = np.isfinite(f[np.arange(rows.size), k])
-    return rows[ok], sid[ok], uv[np.arange(rows.size), k][ok], step[ok]
+    out = []
+    ar = np.arange(rows.size)
+    for radius in radii:
+        step = radius * per_mm
+        uv = np.clip(uv_own[rows, None, :] + _RING[None] * step[:, None, :], lo[:, None],
+                     hi[:, None])
+        pts = evaluate_mixed(part, np.repeat(sid, 8), uv[..., 0].ravel(),
+                             uv[..., 1].ravel()).points
+        f = pair_sizes(cutter, frame, np.repeat(rows, 8), pts @ Q.T).reshape(-1, 8)
+        k = np.argmin(f, axis=1)
+        ok = np.isfinite(f[ar, k])
+        half = step if radius == radii[0] else 0.5 * step
+        out.append((rows[ok], sid[ok], uv[ar, k][ok], half[ok]))
+    return tuple(np.concatenate([o[t] for o in out]) for t in range(4))

@@ -28,7 +28,8 @@ def allowable_document(res: AllowableResult, cc: np.ndarray, normals: np.ndarray
             "normal": _vec(normals[i], 9),
             "allowable": _num(res.size[i]),
             "limiting_point": _vec(res.limiting_point[i]),
-            "limiting_surface": None if res.limiting_surface[i] < 0 else int(res.limiting_surface[i]),
+            "limiting_surface": (None if res.limiting_surface[i] < 0
+                                 else int(res.limiting_surface[i])),
             "verdict": str(res.verdict[i]),
             "margin": _num(res.margin[i]),
             "evaluations": int(res.evaluations[i]),

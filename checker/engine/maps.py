@@ -60,8 +60,8 @@ def allowable_maps(part: Part, tp: TestPoints, cutter, grid: tuple[int, int], to
         size = np.full(kept.shape, np.nan)
         size[kept] = res.size[at:at + k]
         at += k
-        std = np.where(kept, np.searchsorted(sizes, np.nan_to_num(size, nan=-1.0, posinf=1e300) * (1 + 1e-12),
-                                             side="right") - 1, -1)
+        key = np.nan_to_num(size, nan=-1.0, posinf=1e300) * (1 + 1e-12)
+        std = np.where(kept, np.searchsorted(sizes, key, side="right") - 1, -1)
         out.append(SurfaceMap(s.id, s.name, u, v, kept, cc, nrm, size, std))
     return out
 
@@ -78,7 +78,8 @@ def maps_document(maps: list[SurfaceMap], cutter, tools: list) -> dict:
                         "cc": [round(float(x), 6) for x in m.cc[i, j]],
                         "normal": [round(float(x), 9) for x in m.normal[i, j]],
                         "allowable": round(s, 6) if np.isfinite(s) else None,
-                        "standard": tools[m.standard[i, j]].name if m.standard[i, j] >= 0 else None})
+                        "standard": (tools[m.standard[i, j]].name if m.standard[i, j] >= 0
+                                     else None)})
         surfaces.append({"id": m.id, "name": m.name, "grid": [len(m.u), len(m.v)], "points": pts})
     return {"cutter": cutter.to_apt(), "kind": cutter.kind,
             "tools": [{"name": t.name, "size": t.size} for t in tools], "surfaces": surfaces}

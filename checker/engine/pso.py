@@ -60,7 +60,8 @@ def pso_search(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rng: np.rando
             break
         w = rng.uniform(lo_w, hi_w, size=(a.size, 1, 1))
         r1, r2 = rng.random((a.size, npart, 2)), rng.random((a.size, npart, 2))
-        V[a] = w * V[a] + cfg.pso_c2 * r1 * (pbest[a] - X[a]) + cfg.pso_c3 * r2 * (gbest[a, None] - X[a])
+        V[a] = (w * V[a] + cfg.pso_c2 * r1 * (pbest[a] - X[a])
+                + cfg.pso_c3 * r2 * (gbest[a, None] - X[a]))
         V[a] = np.clip(V[a], -vmax, vmax)
         X[a] = np.clip(X[a] + V[a], 0.0, hi - 1e-12)
         Fa = f_of(X[a].reshape(-1, 2), np.repeat(a, npart)).reshape(a.size, npart)

@@ -19,6 +19,8 @@ _ABOVE = 1e-9  # mm above the bottom plane: on it the kernels already count a po
 _FLOOR_STEPS = 3
 _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125])
 _REACH = 4.0  # longest Newton step, stencil half-widths
+_PRUNE_AFTER = 2  # iterations before starts far above their row's best are dropped
+_PRUNE_REL, _PRUNE_ABS = 0.02, 0.05  # 'far above': more than 2 % + 0.05 mm
 _OFFS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.float64)
 
 
@@ -95,39 +97,50 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
     best_f, best_uv, best_p = f.copy(), cur.copy(), pts.copy()
     h = np.clip(step, hmin, 0.25 * width)
     evals = np.ones(len(rows), dtype=np.int64)
-    s9 = np.repeat(np.arange(len(rows)), 9)
-    for _ in range(iterations):
-        c = np.clip(best_uv, lo + h, hi - h)
-        UV = (c[:, None, :] + _OFFS[None] * h[:, None, :]).reshape(-1, 2)
-        F, P, UV = obj(rows[s9], sid[s9], UV[:, 0], UV[:, 1])
-        F = F.reshape(-1, 9)
-        P = P.reshape(-1, 9, 3)
-        UV = UV.reshape(-1, 9, 2)
-        ar = np.arange(len(rows))
+    active = np.ones(len(rows), dtype=bool)
+    nrow = int(rows.max()) + 1 if rows.size else 0
+    for it in range(iterations):
+        if it >= _PRUNE_AFTER:  # drop starts clearly above the best of their row
+            row_best = np.full(nrow, np.inf)
+            np.minimum.at(row_best, rows, best_f)
+            rb = row_best[rows]
+            active &= ~(best_f > rb * (1.0 + _PRUNE_REL) + _PRUNE_ABS)
+        a = np.flatnonzero(active)
+        if a.size == 0:
+            break
+        ha, la, ua = h[a], lo[a], hi[a]
+        c = np.clip(best_uv[a], la + ha, ua - ha)
+        UV = (c[:, None, :] + _OFFS[None] * ha[:, None, :]).reshape(-1, 2)
+        F, P, UV = obj(np.repeat(rows[a], 9), np.repeat(sid[a], 9), UV[:, 0], UV[:, 1])
+        F, P, UV = F.reshape(-1, 9), P.reshape(-1, 9, 3), UV.reshape(-1, 9, 2)
+        ar = np.arange(a.size)
         k = np.where(F[:, 4] <= F.min(axis=1), 4, np.argmin(F, axis=1))
-        _keep_best(best_f, best_uv, best_p, F[ar, k], UV[ar, k], P[ar, k])
-        g, Hm = _quadratic(F, h)
-        step = _newton(c, g, Hm, h, UV[ar, k], np.isfinite(F).all(axis=1)) - c
+        _keep_best(best_f, best_uv, best_p, a, F[ar, k], UV[ar, k], P[ar, k])
+        g, Hm = _quadratic(F, ha)
+        step = _newton(c, g, Hm, ha, UV[ar, k], np.isfinite(F).all(axis=1)) - c
         # backtracking along the step: fractions 1, 1/2, 1/4, 1/8 evaluated at once
         trial = np.clip(c[:, None, :] + _FRACTIONS[None, :, None] * step[:, None, :],
-                        lo[:, None, :], hi[:, None, :]).reshape(-1, 2)
+                        la[:, None, :], ua[:, None, :]).reshape(-1, 2)
         nt = len(_FRACTIONS)
-        ft, pt, trial = obj(np.repeat(rows, nt), np.repeat(sid, nt), trial[:, 0], trial[:, 1])
-        j = np.argmin(ft.reshape(-1, nt), axis=1)
-        pick = ar * nt + j
+        ft, pt, trial = obj(np.repeat(rows[a], nt), np.repeat(sid[a], nt), trial[:, 0],
+                            trial[:, 1])
+        pick = ar * nt + np.argmin(ft.reshape(-1, nt), axis=1)
         fn, pn, new = ft[pick], pt[pick], trial[pick]
-        newton_won = fn < best_f
-        _keep_best(best_f, best_uv, best_p, fn, new, pn)
-        evals += 9 + nt
-        shrink = np.where(k == 4, 0.25, 0.5)[:, None] * h
-        jump = np.clip(2.0 * np.abs(new - c), 0.125 * h, h)
-        h = np.clip(np.where(newton_won[:, None], jump, shrink), hmin, 0.25 * width)
+        newton_won = fn < best_f[a]
+        _keep_best(best_f, best_uv, best_p, a, fn, new, pn)
+        evals[a] += 9 + nt
+        shrink = np.where(k == 4, 0.25, 0.5)[:, None] * ha
+        jump = np.clip(2.0 * np.abs(new - c), 0.125 * ha, ha)
+        h[a] = np.clip(np.where(newton_won[:, None], jump, shrink), hmin[a], 0.25 * width[a])
+        active[a] &= ~(h[a] <= 4.0 * hmin[a]).all(axis=1)  # converged
     return Refined(best_f, best_uv, best_p, evals)
 
 
-def _keep_best(best_f, best_uv, best_p, f, uv, p) -> None:
-    better = f < best_f
-    best_f[better], best_uv[better], best_p[better] = f[better], uv[better], p[better]
+def _keep_best(best_f, best_uv, best_p, idx, f, uv, p) -> None:
+    """Update the best-so-far of starts `idx` with values f, parameters uv, points p."""
+    better = f < best_f[idx]
+    t = idx[better]
+    best_f[t], best_uv[t], best_p[t] = f[better], uv[better], p[better]
 
 
 def _quadratic(F: np.ndarray, h: np.ndarray):

@@ -82,10 +82,11 @@ def _basins(indptr, indices, values, knn, m, rel, absm, best, arg, seeds, seed_s
 
 def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: float,
          slack: float, m: int, knn: np.ndarray) -> Scan:
-    """Exact sampled minimum per row, from trial sizes `s_start (N,)` (finite). A row with trial size s looks at every test point within
-    `slack` mm (half the sample spacing) of the disc/slab of s; when its minimum is <= s it is
-    the minimum over all test points (any point below s lies there), otherwise s grows by 4
-    up to `s_cap` (beyond it the row is unbounded)."""
+    """Exact sampled minimum per row from finite trial sizes `s_start (N,)`. A row with trial
+    size s looks at every test point within `slack` mm (half the sample spacing) of the disc,
+    slab and ball of s (family.py); when its minimum is <= s it is the minimum over all test
+    points (any point below s lies there), otherwise s grows by 4 up to `s_cap` (beyond it the
+    row is unbounded). Seeds: see `_basins`."""
     n = len(s_start)
     best = np.full(n, np.inf)
     arg = np.full(n, -1, dtype=np.int64)

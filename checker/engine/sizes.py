@@ -10,7 +10,6 @@ import numba as nb
 import numpy as np
 
 from checker import kernels
-
 from checker.cutter import BALL_FAMILY
 from checker.engine.family import FamilyBounds
 
@@ -21,12 +20,11 @@ _EPS_H = 1e-9
 class RowFrame:
     """The CC rows of one tool axis, tool frame, mm: `cc`, unit `n`, unit horizontal `e` (N, 3)
     (zero where undefined: normal along the axis and no tool position, the kernels then take the
-    worst case over directions); `degenerate (N,)` those rows; `fam` the pruning bounds."""
+    worst case over directions); `fam` the pruning bounds."""
 
     cc: np.ndarray
     n: np.ndarray
     e: np.ndarray
-    degenerate: np.ndarray
     fam: FamilyBounds
     exclusion: float
 

@@ -18,7 +18,9 @@ one), then a batched, damped Newton iteration in (u, v) on dist^2 / 2, for all N
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,10 +28,18 @@ from checker.geometry.evaluate import evaluate_mixed
 from checker.geometry.sampling import TestPoints
 from checker.part import Part
 
+if TYPE_CHECKING:
+    from checker.toolpath import ToolPath
+
 _CANDIDATES = 64       # test points tried per CL position
-_ITERATIONS = 40       # Newton steps at most
+_ITERATIONS = 100      # Newton steps at most (a sharp corner converges slowly)
 _TOL = 1e-10           # mm: stop when the step moves the point less than this
 _TIE = 1e-6            # mm: contacts this close in gap are on a shared edge
+_CORNER = 1e-3         # mm: inside the core, both sides count as nearest within this
+_REACHED = 1e-4        # mm: phase 1 ending this near the core goes on to look inside it
+_NUM = r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*"
+_CONTACT_COMMENT = re.compile(f"^{_NUM},{_NUM},{_NUM}$")
+_INCH = 25.4
 
 
 @dataclass(frozen=True)
@@ -57,11 +67,13 @@ class Core:
 class CoreProjection:
     """Nearest core points of N points: `q (N,3)` on the core, `dist (N,)` (0 inside the core),
     `hess (N,3,3)` the Hessian of dist^2/2 with respect to the point (exact for psi = theta = 0,
-    the in-plane part exact and the circumferential part approximate otherwise)."""
+    the in-plane part exact and the circumferential part approximate otherwise), `signed (N,)`
+    the distance, negative inside the core (minus the distance to its boundary)."""
 
     q: np.ndarray
     dist: np.ndarray
     hess: np.ndarray
+    signed: np.ndarray
 
 
 def _frame(points: np.ndarray, tips: np.ndarray, axes: np.ndarray):
@@ -79,8 +91,9 @@ def _frame(points: np.ndarray, tips: np.ndarray, axes: np.ndarray):
 
 
 def _profile_nearest(core: Core, rho: np.ndarray, h: np.ndarray):
-    """Nearest point (rq, hq) of the core's wedge in the profile plane, and which piece holds
-    it: 0 inside, 1 lower side, 2 corner C, 3 outer side."""
+    """Nearest point (rq, hq) of the core's wedge in the profile plane, which piece holds it
+    (0 inside, 1 lower side, 2 corner C, 3 outer side), and for inside points minus their
+    distance to the wedge's boundary (the wedge is convex: the nearer of its two sides)."""
     R, ho = core.R, core.h_o
     # lower side: from C towards the axis, direction t1 = (-cos psi, -sin psi); outer normal
     t1 = np.array([-np.cos(core.psi), -np.sin(core.psi)])
@@ -102,7 +115,8 @@ def _profile_nearest(core: Core, rho: np.ndarray, h: np.ndarray):
     a1c = np.minimum(a1, len1)
     rq = np.where(on1, R + a1c * t1[0], np.where(on3, R + a3 * t3[0], np.where(corner, R, rho)))
     hq = np.where(on1, ho + a1c * t1[1], np.where(on3, ho + a3 * t3[1], np.where(corner, ho, h)))
-    return rq, hq, piece, (n1, n3)
+    depth = np.where(piece == 0, np.maximum(s1, s3), 0.0)   # inside: minus the distance to a side
+    return rq, hq, piece, (n1, n3), depth
 
 
 def project_to_core(
@@ -110,7 +124,7 @@ def project_to_core(
 ) -> CoreProjection:
     """Nearest core point of each point (N,3), its distance and the Hessian of dist^2/2."""
     h, rho, w = _frame(points, tips, axes)
-    rq, hq, piece, (n1, n3) = _profile_nearest(core, rho, h)
+    rq, hq, piece, (n1, n3), depth = _profile_nearest(core, rho, h)
     q = tips + hq[:, None] * axes + rq[:, None] * w
     dist = np.hypot(rho - rq, h - hq)
     aa = np.einsum("ni,nj->nij", axes, axes)
@@ -122,15 +136,15 @@ def project_to_core(
     inplane = np.where((piece == 0)[:, None, None], 0.0, inplane)
     ratio = np.where(rho > 1e-12, 1.0 - rq / np.where(rho > 1e-12, rho, 1.0), 0.0)
     hess = inplane + np.where((piece == 0)[:, None, None], 0.0, ratio[:, None, None] * circ)
-    return CoreProjection(q, dist, hess)
+    return CoreProjection(q, dist, hess, np.where(piece == 0, depth, dist))
 
 
 def signed_distance(
     core: Core, points: np.ndarray, tips: np.ndarray, axes: np.ndarray
 ) -> np.ndarray:
     """Signed distance (N,) mm of each point to the cutter solid (negative inside), via the core:
-    exact outside the cutter and for penetrations shallower than r."""
-    return project_to_core(core, points, tips, axes).dist - core.r
+    exact, inside too (the core is convex, so a point t inside it is t + r inside the cutter)."""
+    return project_to_core(core, points, tips, axes).signed - core.r
 
 
 @dataclass
@@ -138,7 +152,9 @@ class Contacts:
     """Per CL position: `cc (N,3)` the contact point on the part (mm, part frame), `normal (N,3)`
     the unit surface normal there (out of the material), `surface (N,)` its surface id (-1 on a
     mesh part), `uv (N,2)` its parameters (nan on a mesh part), `gap (N,)` mm the signed
-    clearance between the cutter and the part (negative: the cutter penetrates that deep)."""
+    clearance between the cutter and the part (negative: the cutter penetrates that deep; exact
+    for penetrations up to the corner radius r, beyond that (and for r = 0) the depth of a
+    point inside the cutter, not necessarily the deepest: the sign is always right)."""
 
     cc: np.ndarray
     normal: np.ndarray
@@ -174,7 +190,7 @@ def cl_to_cc(part: Part, test_points: TestPoints, cutter, tips: np.ndarray, axes
     uv = _keep_trimmed(part, sid, uv, test_points.uv[start])
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
     proj = project_to_core(core, ev.points, tips[rows], axes[rows])
-    gap = proj.dist - core.r
+    gap = proj.signed - core.r
     pick = _pick(rows, gap, _alignment(ev.points, ev.normals, proj.q, axes[rows]))
     return Contacts(ev.points[pick], ev.normals[pick], sid[pick], uv[pick], gap[pick])
 
@@ -233,36 +249,82 @@ def _keep_trimmed(part: Part, sid: np.ndarray, uv: np.ndarray, uv_start: np.ndar
     return out
 
 
-def _objective(part, core, tips, axes, sid, uv, order):
-    ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1], order=order)
-    proj = project_to_core(core, ev.points, tips, axes)
-    return ev, proj, 0.5 * proj.dist**2
+def _distance_model(core: Core, points, tips, axes, J=None):
+    """Phase 1: f = dist(P, core)^2 / 2, its gradient and Hessian with respect to P."""
+    proj = project_to_core(core, points, tips, axes)
+    return 0.5 * proj.dist**2, points - proj.q, proj.hess
+
+
+def _depth_model(core: Core, points, tips, axes, J=None):
+    """Phase 2, inside the core: f = the signed distance, i.e. minus the depth below the nearer
+    of the core's two sides, and its steepest-descent gradient (no Hessian: f is a max): the
+    nearer side's normal; where both sides are about as near (within _CORNER), the combination
+    of the two normals whose part along the surface (tangent plane spanned by J (K,3,2)) is
+    shortest."""
+    h, rho, w = _frame(points, tips, axes)
+    proj = project_to_core(core, points, tips, axes)
+    if J is None:
+        return proj.signed, None, None
+    dr, dh = rho - core.R, h - core.h_o
+    n1 = np.sin(core.psi) * w - np.cos(core.psi) * axes
+    n3 = np.cos(core.theta) * w - np.sin(core.theta) * axes
+    s1 = dr * np.sin(core.psi) - dh * np.cos(core.psi)
+    s3 = dr * np.cos(core.theta) - dh * np.sin(core.theta)
+    G = np.einsum("kia,kib->kab", J, J)
+    tangential = J @ np.linalg.solve(G, np.swapaxes(J, 1, 2))                # (K,3,3)
+    p1 = np.einsum("kij,kj->ki", tangential, n1)
+    p3 = np.einsum("kij,kj->ki", tangential, n3)
+    diff = p3 - p1
+    lam = np.clip(np.einsum("ki,ki->k", p3, diff) / np.maximum(np.einsum("ki,ki->k", diff, diff),
+                                                                1e-30), 0.0, 1.0)
+    lam = np.where(s1 > s3 + _CORNER, 1.0, np.where(s3 > s1 + _CORNER, 0.0, lam))
+    grad = lam[:, None] * n1 + (1 - lam)[:, None] * n3
+    return proj.signed, grad, None
 
 
 def _refine(part: Part, core: Core, tips, axes, sid, uv) -> np.ndarray:
-    """Damped Newton on f(u, v) = dist(S(u, v), core)^2 / 2 per row, inside each domain
-    (wrapping around where a surface is closed, e.g. at the seam of a revolved surface)."""
+    """Damped Newton in (u, v) per row, inside each domain (wrapping around where a surface is
+    closed, e.g. at the seam of a revolved surface): first on the squared distance to the core;
+    then, where that reaches the core (the cutter penetrates deeper than r, or r = 0), on the
+    signed depth inside it, so that the deepest point is found."""
     dom = np.array([[s.domain[0], s.domain[1]] for s in part.surfaces])       # (S, 2, 2)
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
     closed = _closed(part)[sid]
-    active = np.ones(len(tips), dtype=bool)
+    args = (part, core, tips, axes, sid, lo, hi, closed)
+    rows = np.arange(len(tips))
+    uv = _descend(*args, uv, rows, _distance_model)
+    ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
+    touching = np.flatnonzero(project_to_core(core, ev.points, tips, axes).dist < _REACHED)
+    if touching.size:
+        uv = _descend(*args, uv, touching, _depth_model)
+    return uv
+
+
+def _descend(part, core, tips, axes, sid, lo, hi, closed, uv, rows, model) -> np.ndarray:
+    """Minimise model's f(S(u, v)) for `rows`: Newton or Gauss-Newton steps, kept on the
+    domain, halved until f decreases; a row stops when its step no longer moves it or no
+    halving decreases f."""
+    active = np.zeros(len(tips), dtype=bool)
+    active[rows] = True
     for _ in range(_ITERATIONS):
         a = np.flatnonzero(active)
         if a.size == 0:
             break
-        ev, proj, f = _objective(part, core, tips[a], axes[a], sid[a], uv[a], 2)
-        d = ev.points - proj.q
+        ev = evaluate_mixed(part, sid[a], uv[a, 0], uv[a, 1], order=2)
         J = np.stack([ev.du, ev.dv], axis=2)                                   # (K,3,2)
+        f, d, hp = model(core, ev.points, tips[a], axes[a], J)
         g = np.einsum("kij,ki->kj", J, d)
-        H = np.einsum("kia,kij,kjb->kab", J, proj.hess, J)
-        H[:, 0, 0] += np.einsum("ki,ki->k", d, ev.duu)
-        H[:, 0, 1] += np.einsum("ki,ki->k", d, ev.duv)
-        H[:, 1, 1] += np.einsum("ki,ki->k", d, ev.dvv)
-        H[:, 1, 0] = H[:, 0, 1]
+        if hp is None:          # steepest descent (of a max of two functions)
+            H = np.einsum("kia,kib->kab", J, J)
+        else:
+            H = np.einsum("kia,kij,kjb->kab", J, hp, J)
+            H[:, 0, 0] += np.einsum("ki,ki->k", d, ev.duu)
+            H[:, 0, 1] += np.einsum("ki,ki->k", d, ev.duv)
+            H[:, 1, 1] += np.einsum("ki,ki->k", d, ev.dvv)
+            H[:, 1, 0] = H[:, 0, 1]
         step = _newton_or_gradient(H, g, J)
         step = _on_bounds(step, H, g, J, uv[a], lo[a], hi[a], closed[a])
         small = np.linalg.norm(np.einsum("kij,kj->ki", J, step), axis=1) < _TOL
-        # halve the step until f decreases; rows that never decrease have converged
         t = np.ones(a.size)
         pending = ~small
         improved = np.zeros(a.size, dtype=bool)
@@ -272,7 +334,8 @@ def _refine(part: Part, core: Core, tips, axes, sid, uv) -> np.ndarray:
                 break
             ap = a[p]
             trial = _inside(uv[ap] + t[p, None] * step[p], lo[ap], hi[ap], closed[ap])
-            _, _, f_new = _objective(part, core, tips[ap], axes[ap], sid[ap], trial, 1)
+            pts = evaluate_mixed(part, sid[ap], trial[:, 0], trial[:, 1]).points
+            f_new = model(core, pts, tips[ap], axes[ap])[0]
             ok = f_new <= f[p]
             uv[ap[ok]] = trial[ok]
             improved[p[ok]] = f_new[ok] < f[p[ok]]
@@ -330,3 +393,28 @@ def _newton_or_gradient(H: np.ndarray, g: np.ndarray, J: np.ndarray) -> np.ndarr
     pd = (H[:, 0, 0] > 1e-12 * scale) & (det > 1e-12 * scale**2)
     M = np.where(pd[:, None, None], H, G + 1e-12 * scale[:, None, None] * np.eye(2))
     return -np.linalg.solve(M, g[..., None])[..., 0]
+
+
+def contact_from_toolpath(toolpath: ToolPath, lines: np.ndarray) -> np.ndarray:
+    """CC points (N,3) mm, part frame, that the CAM wrote for the motions on file `lines` (N,),
+    nan rows where it wrote none. Siemens NX in "centerline and contact point" mode writes the
+    contact as an inline comment, `GOTO/x,y,z[,i,j,k] $$ cx,cy,cz`, in the file's units and
+    frame; the frame in force at a line (the last `CSYS/`/`MSYS/` before it) is applied."""
+    lines = np.asarray(lines, dtype=np.int64).ravel()
+    found = {}
+    for rec in toolpath.records:
+        if rec.word == "GOTO" and rec.comment:
+            m = _CONTACT_COMMENT.match(rec.comment)
+            if m:
+                found[rec.line] = [float(x) for x in m.groups()]
+    out = np.full((len(lines), 3), np.nan)
+    if not found:
+        return out
+    raw = np.array([found.get(int(n), [np.nan] * 3) for n in np.unique(lines)])
+    out = raw[np.searchsorted(np.unique(lines), lines)]
+    out *= _INCH if toolpath.units == "inch" else 1.0
+    frames = toolpath.frames
+    mats = np.stack([np.eye(4)] + [f.matrix if f.applied else np.eye(4) for f in frames])
+    which = np.searchsorted(np.array([f.line for f in frames], dtype=np.int64), lines)
+    M = mats[which]                     # 0: before any frame (identity)
+    return np.einsum("nij,nj->ni", M[:, :3, :3], out) + M[:, :3, 3]
