@@ -122,42 +122,52 @@ def test_cylinder_contact_recovered(cylinder, name):
     _check(part, outward, u, v, cutter_from_apt(CUTTERS[name]), rng)
 
 
-def test_flat_end_mill_touching_and_penetrating(sphere):
+def test_flat_end_mill_touches(sphere):
     """A flat end-mill touches with its sharp corner circle: the squared distance between the
     circle and the sphere grows only to fourth order along the circle (slow Newton), yet the
-    contact is found to 1e-4 mm and the gap to 1e-6 mm. Pushed 0.1 mm along the normal the gap
-    is negative and no deeper than 0.1 mm (the signed distance is 1-Lipschitz in the cutter's
-    position); at a sharp corner the depth is less than the push."""
+    contact is found to 1e-4 mm and the gap to 1e-6 mm."""
     part, c, rad = sphere
     rng = np.random.default_rng(13)
     u, v = rng.uniform(0, 1, 100), rng.uniform(0.05, 0.95, 100)
     cutter = cutter_from_apt([8.0])
     ev = evaluate(part.surfaces[0], u, v)
     axes = _random_axes(ev.normals, rng, 5.0, 70.0)
-    tips = cutter.tip_from_contact(ev.points, ev.normals, axes)
-    tp = sample_part(part)
-    got = cl_to_cc(part, tp, cutter, tips, axes)
+    got = cl_to_cc(part, sample_part(part), cutter,
+                   cutter.tip_from_contact(ev.points, ev.normals, axes), axes)
     np.testing.assert_allclose(got.cc, ev.points, atol=1e-4)
     np.testing.assert_allclose(got.gap, 0.0, atol=1e-6)
-    pushed = cl_to_cc(part, tp, cutter, tips - 0.1 * ev.normals, axes)
-    assert (pushed.gap < -1e-3).all() and (pushed.gap >= -0.1 - 1e-9).all()
-    # the gap is the cutter model's own signed distance of the point found (checker.cutter,
-    # in the tool frame), and at least as deep as the deepest of 250,000 sphere points
-    pushed_tips = tips - 0.1 * ev.normals
+
+
+@pytest.mark.parametrize(("values", "push"), [([8.0], 0.1), ([10.0, 2.0], 3.0)])
+def test_deep_penetration(sphere, values, push):
+    """Penetrations the squared-distance phase cannot measure (a flat end-mill's sharp corner;
+    a bull-nose pushed deeper than its corner radius): the gap is negative, no deeper than the
+    push (the signed distance is 1-Lipschitz in the cutter's position), equal to the cutter
+    model's own signed distance at the point found (checker.cutter, in the tool frame), and at
+    least as deep as the deepest of 250,000 sphere points (brute force, 10 positions)."""
+    part, c, rad = sphere
+    rng = np.random.default_rng(17)
+    u, v = rng.uniform(0, 1, 60), rng.uniform(0.05, 0.95, 60)
+    cutter = cutter_from_apt(values)
+    ev = evaluate(part.surfaces[0], u, v)
+    axes = _random_axes(ev.normals, rng, 5.0, 70.0)
+    tips = cutter.tip_from_contact(ev.points, ev.normals, axes) - push * ev.normals
+    got = cl_to_cc(part, sample_part(part), cutter, tips, axes)
+    assert (got.gap < -1e-3).all() and (got.gap >= -push - 1e-9).all()
     e1 = np.cross(axes, [0.3, 0.5, 0.8])
     e1 /= np.linalg.norm(e1, axis=1)[:, None]
     e2 = np.cross(axes, e1)
-    rel = pushed.cc - pushed_tips
+    rel = got.cc - tips
     tool = np.stack([np.einsum("ij,ij->i", rel, e) for e in (e1, e2, axes)], axis=1)
-    np.testing.assert_allclose(pushed.gap, cutter.signed_distance(tool), atol=1e-9)
+    np.testing.assert_allclose(got.gap, cutter.signed_distance(tool), atol=1e-9)
     t = np.linspace(0, 1, 500)
     U, V = np.meshgrid(t, np.linspace(0.02, 0.98, 500))
     dense = evaluate(part.surfaces[0], U.ravel(), V.ravel()).points
     core = Core.of(cutter)
     for i in range(10):
-        tip = np.broadcast_to(pushed_tips[i], dense.shape)
+        tip = np.broadcast_to(tips[i], dense.shape)
         brute = signed_distance(core, dense, tip, np.broadcast_to(axes[i], dense.shape)).min()
-        assert pushed.gap[i] <= brute + 1e-9
+        assert got.gap[i] <= brute + 1e-9
 
 
 def test_contact_data_from_cl_file_is_used(sphere):

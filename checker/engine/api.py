@@ -22,7 +22,7 @@ from checker.geometry.sampling import TestPoints
 from checker.part import Part
 
 _KNN = 16
-_CONTOUR_SEEDS = 4
+_CONTOUR_SEEDS = 6
 _SNAP = 1e-3  # mm: CC points this close to a surface are moved onto it
 _SNAP_ANGLE = 1e-6  # rad: given normals this close to the surface normal are replaced by it
 _GRAPH_K = 8

@@ -83,7 +83,7 @@ def pso_search(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rng: np.rando
         r = np.array([i])
         res = minimize(lambda x, r=r: float(f_of(np.clip(x, 0.0, hi - 1e-12)[None], r)[0]),
                        gbest[i], method="Nelder-Mead",
-                       options={"xatol": 1e-9, "fatol": 1e-9, "maxiter": 400})
+                       options={"xatol": 1e-9, "fatol": 1e-9, "maxiter": 200})
         evals[i] += res.nfev
         if res.fun < size[i]:
             size[i], X_final[i] = res.fun, np.clip(res.x, 0.0, hi - 1e-12)

@@ -13,7 +13,8 @@ tip is sharp, short of it by r (sec(psi) - 1) along the axis).
 All inputs in mm in the part frame: tips (N,3), unit axes (N,3) (tip -> spindle), points (N,3).
 The contact minimises the core distance over the part: start at the best of the k test points
 nearest to the fillet-centre level (or at the CAM's own contact point where the CL file gives
-one), then a batched, damped Newton iteration in (u, v) on dist^2 / 2, for all N at once.
+one), then a batched, damped Newton iteration in (u, v) on dist^2 / 2, for all N at once; where
+that reaches the core (penetration deeper than r), a steepest descent of the depth inside it.
 """
 
 from __future__ import annotations
@@ -153,8 +154,8 @@ class Contacts:
     the unit surface normal there (out of the material), `surface (N,)` its surface id (-1 on a
     mesh part), `uv (N,2)` its parameters (nan on a mesh part), `gap (N,)` mm the signed
     clearance between the cutter and the part (negative: the cutter penetrates that deep; exact
-    for penetrations up to the corner radius r, beyond that (and for r = 0) the depth of a
-    point inside the cutter, not necessarily the deepest: the sign is always right)."""
+    for penetrations up to the corner radius r; deeper, and for sharp corners (r = 0), the
+    deepest point a local descent inside the cutter finds: a lower bound of the depth)."""
 
     cc: np.ndarray
     normal: np.ndarray
@@ -177,6 +178,9 @@ def cl_to_cc(part: Part, test_points: TestPoints, cutter, tips: np.ndarray, axes
     axes = np.ascontiguousarray(axes, dtype=np.float64).reshape(-1, 3)
     axes = axes / np.linalg.norm(axes, axis=1)[:, None]
     core = Core.of(cutter)
+    if len(tips) == 0:
+        z3 = np.zeros((0, 3))
+        return Contacts(z3, z3, np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0))
     first, second = _start(test_points, core, tips, axes, contact)
     if part.mesh is not None or len(part.surfaces) == 0:
         pts = test_points.points[first]
