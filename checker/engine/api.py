@@ -9,7 +9,7 @@ import numpy as np
 
 from checker.config import Config, default_config
 from checker.cutter import BALL_FAMILY
-from checker.engine.candidates import CellGrid, build_grid, disc_candidates
+from checker.engine.candidates import CellGrid, build_grid
 from checker.engine.family import family_bounds
 from checker.engine.frames import group_axes, tool_rotation
 from checker.engine.refine import refine
@@ -208,7 +208,10 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, g
     slack = 0.5 * spacing + cfg.geometry.sag_tolerance
     s0 = max(float(cutter.size), 4.0 * spacing, 1e-3)
     s_start = np.where(np.isfinite(s_ub), s_ub, s0)
-    sc = scan(cutter, frame, grid, s_start, eng.max_size, slack, eng.refine_seeds, _neighbours(tp))
+    flat = cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0
+    cross = (_CONTOUR_SEEDS, 0.5 * spacing) if flat and part.surfaces else None
+    sc = scan(cutter, frame, grid, s_start, eng.max_size, slack, eng.refine_seeds, _neighbours(tp),
+              cross)
     size, arg = sc.best.copy(), sc.arg
     has = arg >= 0
     lim_p = np.full((n, 3), np.nan)
@@ -220,8 +223,8 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, g
     if not part.surfaces:
         return size, lim_p, lim_s, lim_uv, evals
     srow, ssid, suv, sstep = _seed_starts(tp, part, sc, spacing)
-    if cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0:
-        extra = _contour_starts(tp, part, cutter, frame, grid, size, slack, _neighbours(tp))
+    if sc.crossings is not None:
+        extra = _contour_starts(tp, part, sc.crossings)
         srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
                                   zip((srow, ssid, suv, sstep), extra, strict=True))
     if uv_own is not None:
@@ -261,31 +264,17 @@ def _seed_starts(tp: TestPoints, part: Part, sc, spacing: float):
     return srow, sid, uv, step
 
 
-def _contour_starts(tp: TestPoints, part: Part, cutter, frame: RowFrame, grid: CellGrid,
-                    size: np.ndarray, slack: float, knn: np.ndarray):
-    """Refinement starts on the bottom-plane contour of flat-bottomed cutters (contour.py),
-    from the test points that could hold a size below each row's sampled minimum."""
-    from checker.engine.contour import contour_seeds
-
-    fam = frame.fam
-    rows = np.flatnonzero(np.isfinite(size))
-    s = size[rows]
-    sub = fam.take(rows)
-    plane = np.column_stack([frame.n[rows], np.einsum("ij,ij->i", frame.n[rows],
-                                                      frame.cc[rows]) - slack])
-    sphere, zeq = sub.lower_ball(s, slack)
-    indptr, idx = disc_candidates(grid, sub.centre(s), sub.radius(s) + slack, sub.z_low(s) - slack,
-                                  sub.z_top + slack, sphere, zeq, plane)
-    r, p, q, f, _ = contour_seeds(cutter, frame.cc[rows], frame.n[rows], frame.e[rows],
-                                  fam.z0[rows], grid.xyz, knn, indptr, idx, _CONTOUR_SEEDS,
-                                  0.5 * float(tp.spacing.max()))
+def _contour_starts(tp: TestPoints, part: Part, crossings: tuple):
+    """Refinement starts on the bottom-plane contour of flat-bottomed cutters (contour.py):
+    rows, surfaces, uv interpolated along the crossing sample edges, stencil half-widths."""
+    rows, p, q, f = crossings
     sid = tp.surface[p].astype(np.int64)
     uv = tp.uv[p] + f[:, None] * (tp.uv[q] - tp.uv[p])
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
     half = 0.25 * tp.spacing[p]
     step = np.column_stack([half / np.maximum(np.linalg.norm(ev.du, axis=1), 1e-12),
                             half / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
-    return rows[r], sid, uv, step
+    return rows, sid, uv, step
 
 
 def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, own: np.ndarray,

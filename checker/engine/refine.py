@@ -20,7 +20,8 @@ _FLOOR_STEPS = 3
 _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125])
 _REACH = 4.0  # longest Newton step, stencil half-widths
 _PRUNE_AFTER = 2  # iterations before starts far above their row's best are dropped
-_PRUNE_REL, _PRUNE_ABS = 0.02, 0.05  # 'far above': more than 2 % + 0.05 mm
+_PRUNE_REL, _PRUNE_ABS = 0.01, 0.02  # 'far above': more than 1 % + 0.02 mm
+_CONVERGED = 1e-5  # a start stops when its stencil is this fraction of the initial one
 _OFFS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.float64)
 
 
@@ -91,7 +92,7 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
     dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))], dtype=np.float64)
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
     width = hi - lo
-    hmin = 1e-10 * np.maximum(width, 1e-300)
+    hmin = np.maximum(1e-10 * np.maximum(width, 1e-300), _CONVERGED * step)
     cur = np.clip(uv, lo, hi)
     f, pts, cur = obj(rows, sid, cur[:, 0], cur[:, 1])
     best_f, best_uv, best_p = f.copy(), cur.copy(), pts.copy()
@@ -132,7 +133,7 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
         shrink = np.where(k == 4, 0.25, 0.5)[:, None] * ha
         jump = np.clip(2.0 * np.abs(new - c), 0.125 * ha, ha)
         h[a] = np.clip(np.where(newton_won[:, None], jump, shrink), hmin[a], 0.25 * width[a])
-        active[a] &= ~(h[a] <= 4.0 * hmin[a]).all(axis=1)  # converged
+        active[a] &= ~(h[a] <= 2.0 * hmin[a]).all(axis=1)  # converged
     return Refined(best_f, best_uv, best_p, evals)
 
 

@@ -10,6 +10,7 @@ import numba as nb
 import numpy as np
 
 from checker.engine.candidates import CellGrid, disc_candidates
+from checker.engine.contour import contour_seeds
 from checker.engine.sizes import RowFrame, csr_sizes
 
 _GROW = 4.0
@@ -21,13 +22,15 @@ _REL_MARGIN = 0.2
 class Scan:
     """Per row: `best (N,)` smallest sampled size (inf: none below the size cap), `arg (N,)`
     its test point (-1 none), `seeds (N, m)` test points starting the refinement (-1 pad),
-    `seed_size (N, m)` their sizes, `evaluations (N,)` kernel evaluations spent."""
+    `seed_size (N, m)` their sizes, `evaluations (N,)` kernel evaluations spent, `crossings`
+    (rows, p, q, fraction) of the bottom-plane contour seeds or None."""
 
     best: np.ndarray
     arg: np.ndarray
     seeds: np.ndarray
     seed_size: np.ndarray
     evaluations: np.ndarray
+    crossings: tuple | None = None
 
 
 @nb.njit(cache=True)
@@ -81,12 +84,14 @@ def _basins(indptr, indices, values, knn, m, rel, absm, best, arg, seeds, seed_s
 
 
 def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: float,
-         slack: float, m: int, knn: np.ndarray) -> Scan:
+         slack: float, m: int, knn: np.ndarray, crossings: tuple[int, float] | None = None
+         ) -> Scan:
     """Exact sampled minimum per row from finite trial sizes `s_start (N,)`. A row with trial
     size s looks at every test point within `slack` mm (half the sample spacing) of the disc,
     slab and ball of s (family.py); when its minimum is <= s it is the minimum over all test
     points (any point below s lies there), otherwise s grows by 4 up to `s_cap` (beyond it the
-    row is unbounded). Seeds: see `_basins`."""
+    row is unbounded). Seeds: see `_basins`. `crossings` (count, separation mm): also collect
+    that many bottom-plane contour crossings per row (contour.py) from the final candidates."""
     n = len(s_start)
     best = np.full(n, np.inf)
     arg = np.full(n, -1, dtype=np.int64)
@@ -97,6 +102,7 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
     active = np.arange(n)
     fam = frame.fam
     plane = np.column_stack([frame.n, np.einsum("ij,ij->i", frame.n, frame.cc) - slack])
+    cross: list[tuple] = []
     while active.size:
         still = []
         for c0 in range(0, active.size, _CHUNK_ROWS):
@@ -119,7 +125,14 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
             keep = done & (b <= s)
             best[rows[keep]], arg[rows[keep]] = b[keep], a[keep]
             seeds[rows[keep]], seed_size[rows[keep]] = sd[keep], ss[keep]
+            if crossings is not None:
+                r, p, q, f, _ = contour_seeds(cutter, frame.cc[rows], frame.n[rows],
+                                              frame.e[rows], fam.z0[rows], grid.xyz, knn,
+                                              indptr, idx, *crossings)
+                ok = keep[r]
+                cross.append((rows[r[ok]], p[ok], q[ok], f[ok]))
             still.append(rows[~done])
         active = np.concatenate(still) if still else active[:0]
         s_try[active] = np.minimum(s_try[active] * _GROW, s_cap)
-    return Scan(best, arg, seeds, seed_size, evals)
+    found = tuple(np.concatenate([c[t] for c in cross]) for t in range(4)) if cross else None
+    return Scan(best, arg, seeds, seed_size, evals, found)
