@@ -55,6 +55,11 @@ class PointResult(_Model):
         None, description="intervals [lo, hi] of B, degrees, where the real cutter is safe"
     )
     b_chosen: float | None = Field(None, description="B written to the G-code, degrees")
+    verdict_chosen: Verdict | None = Field(
+        None, description="verdict of the real cutter at b_chosen (4-axis); `verdict` is at the "
+        "CAM's orientation"
+    )
+    margin_chosen: float | None = Field(None, description="allowable - real size at b_chosen, mm")
     holder_clearance: float | None = Field(
         None, description="minimum stick-out that clears the holder, mm (holder verdicts)"
     )
@@ -106,6 +111,9 @@ class Summary(_Model):
     cc_points: int
     intermediate_points: int
     counts: VerdictCounts
+    counts_chosen: VerdictCounts | None = Field(
+        None, description="4-axis: CC verdicts at the chosen B (the corrected program)"
+    )
     worst_margin: float | None
     worst_depth: float | None
     largest_safe_cutter: float | None = Field(

@@ -88,3 +88,33 @@ def test_normal_facing_away_is_inaccessible():
     tp = sample_part(part)
     res = allowable(tp, part, parse_cutter("CUTTER/10,5"), [[0, 0, 0]], [[0, 0, -1.0]])
     assert res.verdict[0] == "inaccessible" and res.size[0] == 0.0
+
+
+def test_any_tool_axis_rotated_bowl():
+    """The same bowl and CC points turned by a rotation, with the tool axis turned alike, give
+    the same sizes (rows with several distinct axes in one call)."""
+    from checker.part import Part, Surface
+
+    rho = 20.0
+    part, _ = bowl(rho)
+    s = part.surfaces[0]
+    tp0 = sample_part(part)
+    rng = np.random.default_rng(11)
+    u, v = rng.uniform(0, 1, 6), rng.uniform(0.2, 0.7, 6)
+    cc, n = _cc(part, u, v)
+    c = parse_cutter("CUTTER/12,2")
+    ref = allowable(tp0, part, c, cc, n, cc_surface=np.zeros(6, int), cc_uv=np.column_stack([u, v]))
+    a = np.radians(35.0)
+    R = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+    turned = Surface(id=0, name="bowl", kind="nurbs", degree_u=2, degree_v=2, knots_u=s.knots_u,
+                     knots_v=s.knots_v, ctrlpts=s.ctrlpts @ R.T, weights=s.weights, flip=s.flip)
+    part2 = Part([turned])
+    tp2 = sample_part(part2)
+    axes = np.vstack([np.tile(R @ [0, 0, 1.0], (6, 1)), np.tile([0, 0, 1.0], (6, 1))])
+    uv2 = np.tile(np.column_stack([u, v]), (2, 1))
+    res = allowable(tp2, part2, c, np.vstack([cc @ R.T] * 2), np.vstack([n @ R.T] * 2), axes,
+                    cc_surface=np.zeros(12, int), cc_uv=uv2)
+    assert np.abs(res.size[:6] - ref.size).max() < TOL
+    # the limiting set is a whole circle of the sphere; any of its points will do
+    assert np.allclose(np.linalg.norm(res.limiting_point[:6] @ R - [0, 0, rho], axis=1), rho,
+                       atol=1e-6)
