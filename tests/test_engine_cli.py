@@ -4,25 +4,32 @@ pictures, and bad input as one line with exit code 2."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 from engine_parts import bowl
 from geomdl import exchange
 
+from checker.cli import main
 from checker.geometry.evaluate import evaluate
 
-REPO = Path(__file__).resolve().parents[1]
 RHO = 20.0
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "checker.cli", *args], capture_output=True,
-                          text=True, cwd=REPO)
+    """Run the console entry point in this process (as `pathcheck ARGS`)."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            main(list(args))
+            code = 0
+        except SystemExit as exc:
+            code = int(exc.code or 0)
+    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 @pytest.fixture(scope="module")

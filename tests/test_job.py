@@ -61,6 +61,8 @@ def test_check_job_wall(wall_job):
 
 
 def test_cli_exit_codes_and_json(wall_job, tmp_path):
+    """`pathcheck JOB.apt` as a real process: exit 1 with findings, JSON written; exit 2 and one
+    line naming the file for a missing part."""
     out = tmp_path / "r.json"
     run = subprocess.run([sys.executable, "-m", "checker.cli", str(wall_job), "--json", str(out)],
                          capture_output=True, text=True, cwd=REPO)
@@ -71,7 +73,7 @@ def test_cli_exit_codes_and_json(wall_job, tmp_path):
     bad = subprocess.run([sys.executable, "-m", "checker.cli", str(wall_job), "--part",
                           str(tmp_path / "missing.json")], capture_output=True, text=True, cwd=REPO)
     assert bad.returncode == 2 and "Traceback" not in bad.stderr
-    assert "missing.json" in bad.stderr
+    assert "missing.json" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
 
 
 def test_mould_sample_clean_and_larger_cutter_flagged():

@@ -9,11 +9,11 @@ import numpy as np
 
 from checker.config import Config, default_config
 from checker.cutter import BALL_FAMILY
-from checker.engine.candidates import CellGrid, build_grid
+from checker.engine.bins import binned_scan, part_tops
 from checker.engine.family import family_bounds
-from checker.engine.frames import group_axes, tool_rotation
+from checker.engine.frames import group_axes, rotate_rows, tool_rotations
 from checker.engine.refine import refine
-from checker.engine.search import scan
+from checker.engine.search import seed_limit
 from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes
 from checker.engine.verdict import verdicts
 from checker.errors import PathcheckError
@@ -26,8 +26,8 @@ _CONTOUR_SEEDS = 6
 _SNAP = 1e-3  # mm: CC points this close to a surface are moved onto it
 _SNAP_ANGLE = 1e-6  # rad: given normals this close to the surface normal are replaced by it
 _GRAPH_K = 8
+_START_CAP = 4.0  # first trial size at most this many times the default start s0
 _RING = np.array([(np.cos(a), np.sin(a)) for a in np.arange(8) * np.pi / 4])
-_GRIDS_MAX = 32
 
 
 @dataclass
@@ -87,20 +87,6 @@ def _cache_of(tp: TestPoints) -> dict:
     return tp.__dict__.setdefault("_engine_cache", {})
 
 
-def _tool_grid(tp: TestPoints, axis: np.ndarray) -> tuple[np.ndarray, CellGrid]:
-    """Test points rotated into the tool frame of `axis` and their cell grid (cached)."""
-    grids = _cache_of(tp).setdefault("grids", {})
-    key = tuple(np.round(axis, 12).tolist())
-    hit = grids.get(key)
-    if hit is None:
-        Q = tool_rotation(axis)
-        hit = (Q, build_grid(tp.points @ Q.T))
-        if len(grids) >= _GRIDS_MAX:
-            grids.pop(next(iter(grids)))
-        grids[key] = hit
-    return hit
-
-
 def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.0, 0.0, 1.0), *,
               cc_surface=None, cc_uv=None, toward=None, method: str = "exact",
               seed: int | None = None, config: Config | None = None) -> AllowableResult:
@@ -129,20 +115,17 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
     lim_s = np.full(n_rows, -1, dtype=np.int64)
     lim_uv = np.full((n_rows, 2), np.nan)
     evals = np.zeros(n_rows, dtype=np.int64)
-    faces_away = np.zeros(n_rows, dtype=bool)
     keys, group = group_axes(axes)
-    for g, axis in enumerate(keys):
-        rows = np.flatnonzero(group == g)
-        Q, grid = _tool_grid(tp, axis)
-        n_t = normals[rows] @ Q.T
-        away = n_t[:, 2] <= 1e-12
-        faces_away[rows[away]] = True
-        rows, n_t = rows[~away], n_t[~away]
-        if rows.size == 0:
-            continue
-        cc_t = cc[rows] @ Q.T
-        e_t, degen = horizontal_e(n_t, None if tw is None else tw[rows] @ Q.T)
-        fam = family_bounds(cutter, cc_t, n_t, e_t, degen, float(grid.xyz[:, 2].max()))
+    axes = keys[group]  # axes equal to 12 decimals are one axis
+    Q = tool_rotations(axes)  # each row's own tool frame
+    n_t = rotate_rows(Q, normals)
+    faces_away = n_t[:, 2] <= 1e-12
+    rows = np.flatnonzero(~faces_away)
+    if rows.size:
+        Q, n_t = Q[rows], n_t[rows]
+        cc_t = rotate_rows(Q, cc[rows])
+        e_t, degen = horizontal_e(n_t, None if tw is None else rotate_rows(Q, tw[rows]))
+        fam = family_bounds(cutter, cc_t, n_t, e_t, degen, part_tops(tp, Q))
         frame = RowFrame(cc_t, n_t, e_t, fam, cfg.engine.exclusion)
         uv_own = None if cc_uv is None else \
             np.asarray(cc_uv, dtype=np.float64).reshape(n_rows, 2)[rows]
@@ -151,7 +134,7 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
 
             found = pso_search(part, cutter, frame, Q, np.random.default_rng(seed), cfg.engine)
         else:
-            found = _exact(tp, part, cutter, frame, Q, grid, own[rows], uv_own, cfg)
+            found = _exact(tp, part, cutter, frame, Q, axes[rows], own[rows], uv_own, cfg)
         s, p, sid, uv, ev = found
         size[rows], lim_p[rows], lim_s[rows], lim_uv[rows], evals[rows] = s, p, sid, uv, ev
     size = np.where(size > cfg.engine.max_size, np.inf, size)
@@ -192,26 +175,28 @@ def _snap(tp: TestPoints, part: Part, cc: np.ndarray, normals: np.ndarray):
     return out, nrm, own, uv
 
 
-def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, grid: CellGrid,
+def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, axes: np.ndarray,
            own: np.ndarray, uv_own: np.ndarray | None, cfg: Config):
-    """Scan + refinement for the rows of one tool axis; returns per row (size, limiting point
-    (part frame), surface, uv, evaluations)."""
+    """Scan + refinement for rows of any tool axes `axes (N, 3)` (part frame) with tool frames
+    `Q (N, 3, 3)`; returns per row (size, limiting point (part frame), surface, uv,
+    evaluations)."""
     eng = cfg.engine
     n = len(frame.cc)
     rows = np.arange(n)
     k = min(_KNN, len(tp.points))
-    _, knn = tp.tree.query(frame.cc @ Q, k=k)
+    _, knn = tp.tree.query(rotate_rows(Q.transpose(0, 2, 1), frame.cc), k=k)
     knn = knn.reshape(n, k)
-    s_ub = pair_sizes(cutter, frame, np.repeat(rows, k), grid.xyz[knn.ravel()])
+    s_ub = pair_sizes(cutter, frame, np.repeat(rows, k),
+                      rotate_rows(np.repeat(Q, k, axis=0), tp.points[knn.ravel()]))
     s_ub = s_ub.reshape(n, k).min(axis=1)
     spacing = float(tp.spacing.max()) if len(tp.spacing) else 0.0
     slack = 0.5 * spacing + cfg.geometry.sag_tolerance
     s0 = max(float(cutter.size), 4.0 * spacing, 1e-3)
-    s_start = np.where(np.isfinite(s_ub), s_ub, s0)
+    s_start = np.minimum(seed_limit(s_ub, slack), _START_CAP * s0)
     flat = cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0
     cross = (_CONTOUR_SEEDS, 0.5 * spacing) if flat and part.surfaces else None
-    sc = scan(cutter, frame, grid, s_start, eng.max_size, slack, eng.refine_seeds, _neighbours(tp),
-              cross)
+    sc = binned_scan(tp, cutter, frame, Q, axes, s_start, eng.max_size, slack, eng.refine_seeds,
+                     _neighbours(tp), cross)
     size, arg = sc.best.copy(), sc.arg
     has = arg >= 0
     lim_p = np.full((n, 3), np.nan)
@@ -234,6 +219,9 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, g
             srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
                                       zip((srow, ssid, suv, sstep), ring, strict=True))
             evals += 24 * (own >= 0)
+    seam = _seam_starts(tp, part, knn, own, spacing)
+    srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
+                              zip((srow, ssid, suv, sstep), seam, strict=True))
     if srow.size:
         ref = refine(part, cutter, frame, Q, srow, ssid, suv, sstep, eng.refine_iterations)
         np.add.at(evals, srow, ref.evaluations)
@@ -277,6 +265,26 @@ def _contour_starts(tp: TestPoints, part: Part, crossings: tuple):
     return rows, sid, uv, step
 
 
+def _seam_starts(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray, spacing: float):
+    """Where the CC point lies on or near a seam: among its nearest test points, the nearest one
+    on each other surface within one spacing starts a refinement (the rings stay on the CC
+    point's own surface)."""
+    n, k = knn.shape
+    sid = tp.surface[knn]
+    rows = np.repeat(np.arange(n), k)
+    d = np.linalg.norm(tp.points[knn] - tp.points[knn[:, :1]], axis=2)  # from the nearest one
+    first = np.ones((n, k), dtype=bool)  # nearest of its surface in the row (knn is sorted)
+    for j in range(1, k):
+        first[:, j] = (sid[:, :j] != sid[:, j:j + 1]).all(axis=1)
+    pick = (first & (sid != own[:, None]) & (sid >= 0) & (d <= spacing)).ravel()
+    idx = knn.ravel()[pick]
+    ev = evaluate_mixed(part, tp.surface[idx].astype(np.int64), tp.uv[idx, 0], tp.uv[idx, 1])
+    half = 0.25 * tp.spacing[idx]
+    step = np.column_stack([half / np.maximum(np.linalg.norm(ev.du, axis=1), 1e-12),
+                            half / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
+    return rows[pick], tp.surface[idx].astype(np.int64), tp.uv[idx], step
+
+
 def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, own: np.ndarray,
                  uv_own: np.ndarray, radii: list[float]):
     """Around each CC point on its own surface, 8 points on each ring of `radii` (mm): the
@@ -300,7 +308,8 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, own: np.nda
                      hi[:, None])
         pts = evaluate_mixed(part, np.repeat(sid, 8), uv[..., 0].ravel(),
                              uv[..., 1].ravel()).points
-        f = pair_sizes(cutter, frame, np.repeat(rows, 8), pts @ Q.T).reshape(-1, 8)
+        f = pair_sizes(cutter, frame, np.repeat(rows, 8),
+                       rotate_rows(Q[np.repeat(rows, 8)], pts)).reshape(-1, 8)
         k = np.argmin(f, axis=1)
         ok = np.isfinite(f[ar, k])
         half = step if radius == radii[0] else 0.5 * step

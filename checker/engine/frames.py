@@ -1,7 +1,9 @@
-"""Tool frames: the rotation that takes a tool axis to +z, and grouping of rows by axis."""
+"""Tool frames: the rotation that takes a tool axis to +z (one or one per row), grouping of rows
+by axis, and the rotation of grid points into a row's own frame inside the kernels."""
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 
 
@@ -28,3 +30,40 @@ def group_axes(axes: np.ndarray, decimals: int = 12) -> tuple[np.ndarray, np.nda
     unit = axes / np.linalg.norm(axes, axis=1)[:, None]
     keys, inverse = np.unique(np.round(unit, decimals), axis=0, return_inverse=True)
     return keys / np.linalg.norm(keys, axis=1)[:, None], inverse.ravel()
+
+
+def tool_rotations(axes: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) rotations Q_i with Q_i @ axes[i] = +z for unit tool axes (N, 3) (part frame),
+    the rows of `tool_rotation` computed at once."""
+    a = np.asarray(axes, dtype=np.float64)
+    a = a / np.linalg.norm(a, axis=1)[:, None]
+    c = a[:, 2]
+    k = np.zeros_like(a)
+    k[:, 0], k[:, 1] = a[:, 1], -a[:, 0]
+    s = np.linalg.norm(k, axis=1)
+    k /= np.where(s > 0.0, s, 1.0)[:, None]
+    K = np.zeros((len(a), 3, 3))
+    K[:, 0, 2], K[:, 1, 2], K[:, 2, 0], K[:, 2, 1] = k[:, 1], -k[:, 0], -k[:, 1], k[:, 0]
+    Q = np.eye(3) + s[:, None, None] * K + (1.0 - c)[:, None, None] * (K @ K)
+    Q[c > 1.0 - 1e-15] = np.eye(3)
+    Q[c < -1.0 + 1e-15] = np.diag([1.0, -1.0, -1.0])
+    return Q
+
+
+def rotate_rows(Q: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Points p (K, 3) through their own rotations Q (K, 3, 3): Q_k @ p_k."""
+    return np.einsum("kij,kj->ki", Q, p)
+
+
+def identity_rows(n: int) -> np.ndarray:
+    """(n, 3, 3) identity rotations (rows that share the grid's frame)."""
+    return np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+
+
+@nb.njit(cache=True, inline="always")
+def rotated(rot, i, xyz, p):
+    """Point `xyz[p]` (grid frame) in the frame of row i: rot[i] @ xyz[p] as (x, y, z)."""
+    x, y, z = xyz[p, 0], xyz[p, 1], xyz[p, 2]
+    return (rot[i, 0, 0] * x + rot[i, 0, 1] * y + rot[i, 0, 2] * z,
+            rot[i, 1, 0] * x + rot[i, 1, 1] * y + rot[i, 1, 2] * z,
+            rot[i, 2, 0] * x + rot[i, 2, 1] * y + rot[i, 2, 2] * z)

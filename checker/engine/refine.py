@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.cutter import BALL_FAMILY
+from checker.engine.frames import rotate_rows
 from checker.engine.sizes import RowFrame, pair_sizes
 from checker.geometry.evaluate import evaluate_mixed
 from checker.part import Part
@@ -41,7 +42,8 @@ class _Objective:
     Flat-bottomed cutters (R family, psi = 0) cut nothing below their bottom plane, so the
     size jumps to inf there and the minimum often lies on the contour line of the part at that
     height. Points below it are moved onto the contour (Newton steps on the height in (u, v)),
-    which turns that jump into a smooth boundary the local steps can follow."""
+    which turns that jump into a smooth boundary the local steps can follow. `Q (N, 3, 3)`: the
+    rotation part frame -> tool frame of every row of `frame`."""
 
     def __init__(self, part: Part, cutter, frame: RowFrame, Q: np.ndarray) -> None:
         self.part, self.cutter, self.frame, self.Q = part, cutter, frame, Q
@@ -56,7 +58,7 @@ class _Objective:
         ev = evaluate_mixed(self.part, sid, u, v)
         if self.floor is not None:
             self._onto_floor(rows, sid, u, v, ev)
-        f = pair_sizes(self.cutter, self.frame, rows, ev.points @ self.Q.T)
+        f = pair_sizes(self.cutter, self.frame, rows, rotate_rows(self.Q[rows], ev.points))
         for s in self.trimmed:
             sel = np.flatnonzero(sid == s)
             if sel.size:
@@ -66,13 +68,13 @@ class _Objective:
 
     def _onto_floor(self, rows, sid, u, v, ev) -> None:
         """Move points below their row's bottom plane onto it (in place: u, v, ev)."""
-        qz = self.Q[2]
         for _ in range(_FLOOR_STEPS):
-            z = ev.points @ qz
+            z = np.einsum("kj,kj->k", ev.points, self.Q[rows, 2])
             low = np.flatnonzero(z < self.floor[rows])
             if low.size == 0:
                 return
-            gu, gv = ev.du[low] @ qz, ev.dv[low] @ qz
+            qz = self.Q[rows[low], 2]
+            gu, gv = np.einsum("kj,kj->k", ev.du[low], qz), np.einsum("kj,kj->k", ev.dv[low], qz)
             g2 = gu * gu + gv * gv
             ok = g2 > 1e-24
             low, gu, gv, g2 = low[ok], gu[ok], gv[ok], g2[ok]
@@ -86,8 +88,9 @@ class _Objective:
 
 def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray, sid: np.ndarray,
            uv: np.ndarray, step: np.ndarray, iterations: int = 8) -> Refined:
-    """Refine S starts: `rows (S,)` CC rows of `frame`, `sid (S,)` surfaces, `uv (S, 2)` start
-    parameters, `step (S, 2)` initial stencil half-widths in parameter units."""
+    """Refine S starts: `rows (S,)` CC rows of `frame` (tool frames `Q (N, 3, 3)`, one per row),
+    `sid (S,)` surfaces, `uv (S, 2)` start parameters, `step (S, 2)` initial stencil half-widths
+    in parameter units."""
     obj = _Objective(part, cutter, frame, Q)
     dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))], dtype=np.float64)
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]

@@ -83,15 +83,21 @@ def _basins(indptr, indices, values, knn, m, rel, absm, best, arg, seeds, seed_s
                     seed_size[i, worst] = v
 
 
+def seed_limit(b: np.ndarray, slack: float) -> np.ndarray:
+    """Largest size (mm) of a seed of a row whose smallest sampled size is `b`."""
+    return b * (1.0 + _REL_MARGIN) + slack
+
+
 def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: float,
-         slack: float, m: int, knn: np.ndarray, crossings: tuple[int, float] | None = None
-         ) -> Scan:
+         slack: float, m: int, knn: np.ndarray, crossings: tuple[int, float] | None = None,
+         rot: np.ndarray | None = None) -> Scan:
     """Exact sampled minimum per row from finite trial sizes `s_start (N,)`. A row with trial
     size s looks at every test point within `slack` mm (half the sample spacing) of the disc,
     slab and ball of s (family.py); when its minimum is <= s it is the minimum over all test
     points (any point below s lies there), otherwise s grows by 4 up to `s_cap` (beyond it the
     row is unbounded). Seeds: see `_basins`. `crossings` (count, separation mm): also collect
-    that many bottom-plane contour crossings per row (contour.py) from the final candidates."""
+    that many bottom-plane contour crossings per row (contour.py) from the final candidates.
+    `rot (N, 3, 3)`: each row's tool frame seen from the grid's (default: the grid's frame)."""
     n = len(s_start)
     best = np.full(n, np.inf)
     arg = np.full(n, -1, dtype=np.int64)
@@ -109,30 +115,33 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
             rows = active[c0:c0 + _CHUNK_ROWS]
             s = s_try[rows]
             sub = fam.take(rows)
+            rot_rows = None if rot is None else rot[rows]
             sphere, zeq = sub.lower_ball(s, slack)
             indptr, idx = disc_candidates(grid, sub.centre(s), sub.radius(s) + slack,
                                           sub.z_low(s) - slack, sub.z_top + slack, sphere, zeq,
-                                          plane[rows])
+                                          plane[rows], rot_rows)
             counts = np.diff(indptr)
-            vals = csr_sizes(cutter, frame, rows, grid.xyz, indptr, idx)
+            vals = csr_sizes(cutter, frame, rows, grid.xyz, indptr, idx, rot_rows)
             evals[rows] += counts
             b = np.full(len(rows), np.inf)
             a = np.full(len(rows), -1, dtype=np.int64)
             sd = np.full((len(rows), m), -1, dtype=np.int64)
             ss = np.full((len(rows), m), np.inf)
             _basins(indptr, idx, vals, knn, m, _REL_MARGIN, slack, b, a, sd, ss)
-            done = (b <= s) | (s >= s_cap)
+            limit = seed_limit(b, slack)
+            done = (limit <= s) | (s >= s_cap)
             keep = done & (b <= s)
+            grow = np.where(b <= s, limit, np.minimum(limit, s * _GROW))  # inf b: grow by 4
+            s_try[rows] = np.minimum(grow, s_cap)
             best[rows[keep]], arg[rows[keep]] = b[keep], a[keep]
             seeds[rows[keep]], seed_size[rows[keep]] = sd[keep], ss[keep]
             if crossings is not None:
                 r, p, q, f, _ = contour_seeds(cutter, frame.cc[rows], frame.n[rows],
                                               frame.e[rows], fam.z0[rows], grid.xyz, knn,
-                                              indptr, idx, *crossings)
+                                              indptr, idx, *crossings, rot=rot_rows)
                 ok = keep[r]
                 cross.append((rows[r[ok]], p[ok], q[ok], f[ok]))
             still.append(rows[~done])
         active = np.concatenate(still) if still else active[:0]
-        s_try[active] = np.minimum(s_try[active] * _GROW, s_cap)
     found = tuple(np.concatenate([c[t] for c in cross]) for t in range(4)) if cross else None
     return Scan(best, arg, seeds, seed_size, evals, found)

@@ -11,7 +11,9 @@ import numpy as np
 
 from checker import kernels
 from checker.cutter import BALL_FAMILY
+from checker.engine.candidates import SERIAL_ROWS
 from checker.engine.family import FamilyBounds
+from checker.engine.frames import identity_rows, rotated
 
 _EPS_H = 1e-9
 
@@ -57,35 +59,50 @@ def pair_sizes(cutter, frame: RowFrame, rows: np.ndarray, p: np.ndarray) -> np.n
     return np.where(near | too_high, np.inf, size)
 
 
+@nb.njit(cache=True)
+def _csr_row(i, p, rot, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out):
+    """Sizes of row i against its candidates, each grid point seen in the row's frame."""
+    for k in range(indptr[i], indptr[i + 1]):
+        x, y, z = rotated(rot, i, p, indices[k])
+        qx = x - cc[i, 0]
+        qy = y - cc[i, 1]
+        qz = z - cc[i, 2]
+        if qx * qx + qy * qy + qz * qz < excl2:
+            out[k] = np.inf
+            continue
+        if ball:
+            s = kernels.ball_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], prm)
+        else:
+            s = kernels.apt_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], e[i, 0], e[i, 1], True,
+                                 prm)
+        if s < np.inf and z - (z0[i] - t[i] * s) > length:
+            s = np.inf
+        out[k] = s
+
+
 @nb.njit(cache=True, parallel=True)
-def _csr(p, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out):
+def _csr_par(p, rot, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out):
     for i in nb.prange(indptr.shape[0] - 1):
-        for k in range(indptr[i], indptr[i + 1]):
-            j = indices[k]
-            qx = p[j, 0] - cc[i, 0]
-            qy = p[j, 1] - cc[i, 1]
-            qz = p[j, 2] - cc[i, 2]
-            if qx * qx + qy * qy + qz * qz < excl2:
-                out[k] = np.inf
-                continue
-            if ball:
-                s = kernels.ball_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], prm)
-            else:
-                s = kernels.apt_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], e[i, 0], e[i, 1],
-                                     True, prm)
-            if s < np.inf and p[j, 2] - (z0[i] - t[i] * s) > length:
-                s = np.inf
-            out[k] = s
+        _csr_row(i, p, rot, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out)
+
+
+@nb.njit(cache=True)
+def _csr_ser(p, rot, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out):
+    for i in range(indptr.shape[0] - 1):
+        _csr_row(i, p, rot, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out)
 
 
 def csr_sizes(cutter, frame: RowFrame, rows: np.ndarray, p: np.ndarray, indptr: np.ndarray,
-              indices: np.ndarray) -> np.ndarray:
+              indices: np.ndarray, rot: np.ndarray | None = None) -> np.ndarray:
     """Sizes (K,) for rows `rows (N,)` of `frame` against their candidate points
-    `p[indices[indptr[i]:indptr[i + 1]]]` (tool frame, mm); the rules of `pair_sizes`."""
+    `p[indices[indptr[i]:indptr[i + 1]]]` (grid frame, mm; row i sees a point as `rot[i] @ p`,
+    default the grid's frame is the tool frame); the rules of `pair_sizes`."""
     out = np.empty(len(indices))
     fam = frame.fam
-    _csr(p, np.ascontiguousarray(frame.cc[rows]), np.ascontiguousarray(frame.n[rows]),
-         np.ascontiguousarray(frame.e[rows]), cutter.kind in BALL_FAMILY, cutter.kernel_params(),
-         np.ascontiguousarray(fam.z0[rows]), np.ascontiguousarray(fam.t[rows]), float(fam.length),
-         frame.exclusion ** 2, indptr, indices, out)
+    rot = identity_rows(len(rows)) if rot is None else np.ascontiguousarray(rot)
+    kernel = _csr_ser if len(rows) < SERIAL_ROWS else _csr_par
+    kernel(p, rot, np.ascontiguousarray(frame.cc[rows]), np.ascontiguousarray(frame.n[rows]),
+           np.ascontiguousarray(frame.e[rows]), cutter.kind in BALL_FAMILY, cutter.kernel_params(),
+           np.ascontiguousarray(fam.z0[rows]), np.ascontiguousarray(fam.t[rows]),
+           float(fam.length), frame.exclusion ** 2, indptr, indices, out)
     return out

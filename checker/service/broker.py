@@ -293,6 +293,7 @@ class Broker:
                 if not worker.ready:
                     self._start_failures += 1
             self._remove(worker)
+            shutil.rmtree(Path(self._backend_dir) / worker.identity.decode(), ignore_errors=True)
             if worker.job is not None:
                 self._reject(worker.job.envelope, err, worker=worker,
                              elapsed=now - worker.job.started)
@@ -311,7 +312,9 @@ class Broker:
                identity.decode(), "--config-json", self.config.model_dump_json()]
         if self.store:
             cmd += ["--store", str(self.store)]
-        env = dict(os.environ)
+        scratch = Path(self._backend_dir) / identity.decode()  # its TMPDIR, removed with it
+        scratch.mkdir()
+        env = dict(os.environ, TMPDIR=str(scratch))
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO_ROOT),
                                                           env.get("PYTHONPATH")]))
         proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, env=env)

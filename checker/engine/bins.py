@@ -1,0 +1,128 @@
+"""Rows with many distinct tool axes (4-axis jobs, the best-B search): bins of nearby axes share
+one cell grid, each row keeps its own tool frame.
+
+An axis shared by at least `_OWN_GRID_ROWS` rows gets a grid of its own (exactly the frame of
+those rows). The other rows fall into the cells of a fixed lattice on the unit sphere (polar
+angle steps of `_BIN_DEG` degrees, azimuth steps of about as much), so that repeated calls reuse
+the cached grids; a cell holding a single distinct axis uses that axis. In a bin, row i sees a
+grid point p as `D_i @ p` with `D_i = Q_i Q_bin^T`; candidates are found in the grid's frame with
+the search disc widened by the largest sideways move such a rotation causes over the candidate
+slab (candidates.py) and then tested exactly in the row's frame, so the candidate sets, and the
+results, are those of a grid built for the row's own axis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import ConvexHull, QhullError
+
+from checker.engine.candidates import CellGrid, build_grid
+from checker.engine.frames import group_axes, tool_rotation
+from checker.engine.search import Scan, scan
+from checker.engine.sizes import RowFrame
+from checker.geometry.sampling import TestPoints
+
+_BIN_DEG = 2.0  # lattice step on the unit sphere, degrees
+_OWN_GRID_ROWS = 64  # rows that share an axis exactly and get a grid of their own
+_GRIDS_MAX = 48  # cached grids per set of test points
+
+
+def _cache_of(tp: TestPoints) -> dict:
+    """Per-TestPoints cache of this module (lives and dies with the object)."""
+    return tp.__dict__.setdefault("_engine_bins_cache", {})
+
+
+def tool_grid(tp: TestPoints, axis: np.ndarray, Q: np.ndarray | None = None) -> CellGrid:
+    """Cell grid of the test points rotated by `Q` (default `tool_rotation(axis)`) into the tool
+    frame of the unit `axis` (part frame); cached per axis."""
+    grids = _cache_of(tp).setdefault("grids", {})
+    key = tuple(np.round(axis, 12).tolist())
+    hit = grids.get(key)
+    if hit is None:
+        Q = tool_rotation(axis) if Q is None else Q
+        hit = build_grid(tp.points @ Q.T)
+        if len(grids) >= _GRIDS_MAX:
+            grids.pop(next(iter(grids)))
+        grids[key] = hit
+    return hit
+
+
+def part_tops(tp: TestPoints, Q: np.ndarray) -> np.ndarray:
+    """(N,) height of the highest test point in each row's tool frame `Q (N, 3, 3)`, mm: the
+    maximum over the vertices of the points' convex hull (cached; all points when the hull is
+    flat)."""
+    cache = _cache_of(tp)
+    ext = cache.get("extreme")
+    if ext is None:
+        try:
+            ext = tp.points[ConvexHull(tp.points).vertices]
+        except (QhullError, ValueError):
+            ext = tp.points
+        cache["extreme"] = ext = np.ascontiguousarray(ext)
+    if len(ext) == 0:
+        return np.full(len(Q), -np.inf)
+    return (Q[:, 2, :] @ ext.T).max(axis=1)
+
+
+def _lattice(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Lattice cell id (N,) and cell axis (N, 3) of unit axes (N, 3)."""
+    h = np.radians(_BIN_DEG)
+    theta = np.arccos(np.clip(axes[:, 2], -1.0, 1.0))
+    k = np.rint(theta / h)
+    tk = k * h
+    per_ring = np.maximum(1, 4 * np.ceil(np.pi * np.sin(tk) / (2.0 * h)))
+    step = 2.0 * np.pi / per_ring
+    j = np.mod(np.rint(np.arctan2(axes[:, 1], axes[:, 0]) / step), per_ring)
+    phi = j * step
+    rep = np.column_stack([np.sin(tk) * np.cos(phi), np.sin(tk) * np.sin(phi), np.cos(tk)])
+    most = 4 * np.ceil(np.pi / (2.0 * h)) + 1
+    return (k * most + j).astype(np.int64), rep
+
+
+def axis_bins(axes: np.ndarray, Q: np.ndarray):
+    """Bins of rows with unit `axes (N, 3)` and their tool frames `Q (N, 3, 3)`: a list of
+    (rows (B,), bin axis (3,), bin rotation (3, 3), D (B, 3, 3) or None when every row of the
+    bin has the bin's own frame)."""
+    keys, group = group_axes(axes)
+    counts = np.bincount(group, minlength=len(keys))
+    cell, rep = _lattice(axes)
+    own = counts[group] >= _OWN_GRID_ROWS
+    bin_id = np.where(own, group, len(keys) + cell)
+    order = np.argsort(bin_id, kind="stable")
+    cuts = np.flatnonzero(np.diff(bin_id[order])) + 1
+    out = []
+    for rows in np.split(order, cuts):
+        if rows.size == 0:
+            continue
+        if (group[rows] == group[rows[0]]).all():
+            out.append((rows, axes[rows[0]], Q[rows[0]], None))
+        else:
+            Qb = tool_rotation(rep[rows[0]])
+            out.append((rows, rep[rows[0]], Qb, Q[rows] @ Qb.T))
+    return out
+
+
+def binned_scan(tp: TestPoints, cutter, frame: RowFrame, Q: np.ndarray, axes: np.ndarray,
+                s_start: np.ndarray, s_cap: float, slack: float, m: int, knn: np.ndarray,
+                crossings: tuple[int, float] | None = None) -> Scan:
+    """`search.scan` for rows of any tool axes `axes (N, 3)` (part frame, unit) with tool frames
+    `Q (N, 3, 3)`, one scan per bin of nearby axes; the merged result."""
+    n = len(s_start)
+    best = np.full(n, np.inf)
+    arg = np.full(n, -1, dtype=np.int64)
+    seeds = np.full((n, m), -1, dtype=np.int64)
+    seed_size = np.full((n, m), np.inf)
+    evals = np.zeros(n, dtype=np.int64)
+    cross: list[tuple] = []
+    for rows, axis, Qb, D in axis_bins(axes, Q):
+        sub = RowFrame(frame.cc[rows], frame.n[rows], frame.e[rows], frame.fam.take(rows),
+                       frame.exclusion)
+        sc = scan(cutter, sub, tool_grid(tp, axis, Qb), s_start[rows], s_cap, slack, m, knn,
+                  crossings, rot=D)
+        best[rows], arg[rows], evals[rows] = sc.best, sc.arg, sc.evaluations
+        seeds[rows], seed_size[rows] = sc.seeds, sc.seed_size
+        if sc.crossings is not None:
+            r, p, q, f = sc.crossings
+            cross.append((rows[r], p, q, f))
+    found = tuple(np.concatenate([c[t] for c in cross]) for t in range(4)) if cross else None
+    return Scan(best, arg, seeds, seed_size, evals, found)

@@ -1,0 +1,174 @@
+"""Rows with their own tool axes (engine bins, checker/engine/bins.py): candidates found through a
+grid built for a nearby axis equal a brute-force filter in each row's own frame, and allowable
+sizes of many distinct axes at once equal those of one axis at a time (a grid for each row's own
+axis), also for 4-axis rows close in B that fall into different bins."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from checker.cutter import parse_cutter
+from checker.engine import allowable
+from checker.engine.bins import _BIN_DEG, _OWN_GRID_ROWS, axis_bins, part_tops
+from checker.engine.candidates import SERIAL_ROWS, build_grid, disc_candidates
+from checker.engine.frames import tool_rotation, tool_rotations
+from checker.four_axis.axes import axis_for_b
+
+SAMPLE = "samples/compressor/compressor"
+SAME = 1e-9  # mm
+
+
+def _tilted(rng, axis, n, max_deg):
+    """n unit axes within max_deg degrees of `axis`."""
+    a = axis + np.tan(np.radians(max_deg)) * rng.uniform(-0.7, 0.7, (n, 3))
+    return a / np.linalg.norm(a, axis=1)[:, None]
+
+
+def test_tool_rotations_are_the_rows_of_tool_rotation():
+    rng = np.random.default_rng(5)
+    a = rng.normal(size=(40, 3))
+    a[:3] = [[0, 0, 1.0], [0, 0, -1.0], [1.0, 0, 0]]
+    a /= np.linalg.norm(a, axis=1)[:, None]
+    Q = tool_rotations(a)
+    single = np.array([tool_rotation(x) for x in a])
+    assert np.abs(Q - single).max() < 1e-15
+    assert np.abs(np.einsum("nij,nj->ni", Q, a) - [0, 0, 1.0]).max() < 1e-14
+    assert np.abs(Q @ Q.transpose(0, 2, 1) - np.eye(3)).max() < 1e-14
+
+
+@pytest.mark.parametrize("n_rows", [SERIAL_ROWS // 2, 3 * SERIAL_ROWS])  # serial and parallel
+def test_candidates_through_a_tilted_grid_equal_brute_force(n_rows):
+    """Points 70-120 mm above the origin (like the compressor), rows up to 3 degrees off the
+    grid's axis: the CSR lists equal a numpy filter of all points in each row's own frame."""
+    rng = np.random.default_rng(7)
+    pts = rng.uniform([-50, -30, 70], [50, 30, 120], (20000, 3))
+    axis_b = np.array([np.sin(0.3), 0.0, np.cos(0.3)])
+    Qb = tool_rotation(axis_b)
+    grid = build_grid(pts @ Qb.T)
+    Qr = tool_rotations(_tilted(rng, axis_b, n_rows, 3.0))
+    D = Qr @ Qb.T
+    row_pts = np.einsum("nij,mj->nmi", Qr, pts)  # every point in every row's frame
+    pick = rng.integers(0, len(pts), n_rows)
+    anchor = row_pts[np.arange(n_rows), pick]
+    centre = anchor[:, :2] + rng.uniform(-2, 2, (n_rows, 2))
+    radius = rng.uniform(2.0, 9.0, n_rows)
+    zlo = anchor[:, 2] - rng.uniform(0.0, 5.0, n_rows)
+    zhi = anchor[:, 2] + rng.uniform(5.0, 60.0, n_rows)
+    sphere = np.column_stack([anchor + [0, 0, 4.0], np.full(n_rows, 6.0)])
+    zeq = np.where(rng.random(n_rows) < 0.5, anchor[:, 2] + 4.0, -np.inf)
+    nrm = _tilted(rng, np.array([0, 0, 1.0]), n_rows, 40.0)
+    plane = np.column_stack([nrm, np.einsum("ij,ij->i", nrm, anchor) - 0.5])
+    indptr, idx = disc_candidates(grid, centre, radius, zlo, zhi, sphere, zeq, plane, D)
+    widened = 0
+    for i in range(n_rows):
+        p = row_pts[i]
+        ok = ((np.hypot(p[:, 0] - centre[i, 0], p[:, 1] - centre[i, 1]) <= radius[i])
+              & (p[:, 2] >= zlo[i]) & (p[:, 2] <= zhi[i]) & (p @ plane[i, :3] >= plane[i, 3])
+              & ((p[:, 2] >= zeq[i]) | (np.linalg.norm(p - sphere[i, :3], axis=1)
+                                         <= sphere[i, 3])))
+        got = np.sort(idx[indptr[i]:indptr[i + 1]])
+        np.testing.assert_array_equal(got, np.flatnonzero(ok))
+        # candidates outside the row's disc seen from the grid: the widening was needed
+        c_b = Qb @ (Qr[i].T @ [centre[i, 0], centre[i, 1], 0.5 * (zlo[i] + zhi[i])])
+        gp = grid.xyz[got]
+        widened += int((np.hypot(gp[:, 0] - c_b[0], gp[:, 1] - c_b[1]) > radius[i]).sum())
+    assert indptr[-1] > 20 * n_rows and widened > 0
+
+
+def test_axis_bins_cover_rows_within_the_lattice_step():
+    rng = np.random.default_rng(3)
+    b = rng.uniform(-40, 40, 500)
+    shared = np.full(_OWN_GRID_ROWS, 12.5)
+    axes = axis_for_b(np.concatenate([b, shared, [7.0, 7.0]]))
+    Q = tool_rotations(axes)
+    seen = np.zeros(len(axes), dtype=int)
+    for rows, axis, Qb, D in axis_bins(axes, Q):
+        seen[rows] += 1
+        assert np.degrees(np.arccos(np.clip(axes[rows] @ axis, -1, 1))).max() <= _BIN_DEG
+        assert np.abs(Qb @ axis - [0, 0, 1.0]).max() < 1e-14
+        if D is None:
+            assert np.abs(Q[rows] - Qb).max() == 0.0  # rows of the grid's own frame
+        else:
+            assert np.abs(D - Q[rows] @ Qb.T).max() == 0.0
+    assert (seen == 1).all()
+    own = [rows for rows, _, _, D in axis_bins(axes, Q) if D is None and rows.size > 2]
+    assert any(set(r) == set(range(500, 500 + _OWN_GRID_ROWS)) for r in own)
+
+
+@pytest.fixture(scope="module")
+def compressor():
+    from checker.apt import read_cl
+    from checker.geometry import load_part
+    from checker.geometry.contact import cl_to_cc
+    from checker.geometry.sampling import sample_part
+
+    part = load_part(f"{SAMPLE}.json")
+    tp = sample_part(part)
+    m = read_cl(f"{SAMPLE}.apt").motion_arrays()
+    cut = np.flatnonzero(~m.rapid)[::40][:48]
+    con = cl_to_cc(part, tp, parse_cutter("CUTTER/6,3"), m.tip[cut], m.axis[cut])
+    return part, tp, con, m.axis[cut]
+
+
+def _one_at_a_time(part, tp, cutter, con, axes, rows):
+    return [allowable(tp, part, cutter, con.cc[[i]], con.normal[[i]], axes[[i]],
+                      cc_surface=con.surface[[i]], cc_uv=con.uv[[i]]) for i in rows]
+
+
+def _assert_same(res, singles, rows):
+    size = np.array([r.size[0] for r in singles])
+    np.testing.assert_allclose(res.size[rows], size, atol=SAME, rtol=0)
+    point = np.array([r.limiting_point[0] for r in singles])
+    np.testing.assert_allclose(res.limiting_point[rows], point, atol=1e-6, rtol=0)
+    assert list(res.verdict[rows]) == [r.verdict[0] for r in singles]
+
+
+def test_part_tops_equal_the_highest_point(compressor):
+    _, tp, _, axes = compressor
+    Q = tool_rotations(axes)
+    np.testing.assert_allclose(part_tops(tp, Q), (tp.points @ Q[:, 2].T).max(axis=0), atol=1e-9)
+
+
+@pytest.mark.parametrize("cut", ["CUTTER/6,3", "CUTTER/6,1", "CUTTER/6,0"])
+def test_distinct_axes_at_once_equal_one_axis_at_a_time(compressor, cut):
+    """The CAM's own 4-axis axes (all different): sizes, limiting points and verdicts of one
+    call with every axis equal those of a call per row (a grid built for that row's axis)."""
+    part, tp, con, axes = compressor
+    cutter = parse_cutter(cut)
+    assert len(np.unique(np.round(axes, 12), axis=0)) == len(axes)
+    res = allowable(tp, part, cutter, con.cc, con.normal, axes, cc_surface=con.surface,
+                    cc_uv=con.uv)
+    bins = axis_bins(axes, tool_rotations(axes))
+    assert len(bins) < len(axes) // 3 and sum(D is not None for *_, D in bins) >= 2
+    rows = np.arange(0, len(axes), 3)
+    _assert_same(res, _one_at_a_time(part, tp, cutter, con, axes, rows), rows)
+    assert np.isfinite(res.size).sum() > len(axes) // 2
+
+
+def test_four_axis_rows_close_in_b_across_bins_agree_with_direct(compressor):
+    """Each CC point at B just below and just above a lattice boundary (odd degrees), in one
+    call with many other B values, against the direct evaluation of each (row, B)."""
+    part, tp, con, _ = compressor
+    cutter = parse_cutter("CUTTER/6,3")
+    n = len(con.cc)
+    edge = _BIN_DEG * (np.arange(n) % 9 - 4) + 0.5 * _BIN_DEG
+    b = np.concatenate([edge - 1e-3, edge + 1e-3, np.linspace(-20, 20, n)])
+    idx = np.tile(np.arange(n), 3)
+    axes = axis_for_b(b)
+    res = allowable(tp, part, cutter, con.cc[idx], con.normal[idx], axes,
+                    cc_surface=con.surface[idx], cc_uv=con.uv[idx])
+    Q = tool_rotations(axes)
+    bin_of = np.empty(len(b), dtype=int)
+    for k, (rows, *_) in enumerate(axis_bins(axes, Q)):
+        bin_of[rows] = k
+    assert (bin_of[:n] != bin_of[n:2 * n]).all()  # the two sides of each pair: different bins
+    rows = np.concatenate([np.arange(0, n, 4), n + np.arange(0, n, 4)])
+    singles = [allowable(tp, part, cutter, con.cc[[idx[i]]], con.normal[[idx[i]]], axes[[i]],
+                         cc_surface=con.surface[[idx[i]]], cc_uv=con.uv[[idx[i]]])
+               for i in rows]
+    _assert_same(res, singles, rows)
+    # 0.002 degrees apart: the allowable size barely moves across the boundary
+    both = np.isfinite(res.size[:n]) & np.isfinite(res.size[n:2 * n])
+    assert both.sum() > n // 2
+    assert np.abs(res.size[:n] - res.size[n:2 * n])[both].max() < 0.05
