@@ -31,6 +31,7 @@ class CheckConfig(_Section):
     tolerance: float = Field(0.001, ge=0)
     gouge_neighbourhood: PositiveFloat = 2.0
     arc_chord_tolerance: PositiveFloat = 0.01
+    depth_tolerance: float = Field(0.02, ge=0)
 
 
 class FourAxisConfig(_Section):

@@ -107,6 +107,7 @@ def moves_from_toolpath(
     *,
     arc_chord_tol: float | None = None,
     comments: list[str] | None = None,
+    tip=None,
 ) -> PostMoves:
     """PostMoves from a `checker.toolpath.ToolPath`: the rows of
     ``toolpath.motion_arrays(arc_chord_tol)`` (arcs cut into chords of that sagitta, mm; None:
@@ -116,7 +117,8 @@ def moves_from_toolpath(
     b)``, else B follows from the CL axis; with ``cc (N,3)``, ``normals (N,3)`` (part frame,
     out of the material) and ``cutter`` the tip is recomputed from the contact by
     ``cutter.tip_from_contact(cc, n, axis)`` at the new axis. ``comments`` (one per row, ''
-    none) are written before the blocks (flags)."""
+    none) are written before the blocks (flags). ``tip (N,3)`` (part frame, mm) replaces the
+    CL tips outright (the checker's recomputed tips at the chosen B)."""
     if arc_chord_tol is None:
         arc_chord_tol = default_config().check.arc_chord_tolerance
     arrays = toolpath.motion_arrays(arc_chord_tol)
@@ -130,7 +132,7 @@ def moves_from_toolpath(
         )
     else:
         b = np.asarray(b_deg, dtype=float)
-    tip = np.asarray(arrays.tip, dtype=float)
+    tip = np.asarray(arrays.tip if tip is None else tip, dtype=float)
     if cc is not None and normals is not None and cutter is not None:
         axis = axis_from_rotation(np.radians(b))
         tip = np.asarray(
@@ -529,12 +531,14 @@ def post_toolpath(
     cutter=None,
     comments: list[str] | None = None,
     arc_chord_tol: float | None = None,
+    tip=None,
 ) -> Path:
     """The job's corrected G-code in one call (what `pathcheck JOB.apt -o JOB.nc [--machine
     NAME]` needs): the machine by `machine_for_toolpath`, the moves by `moves_from_toolpath`
     (same arguments), posted and written atomically to ``out``; returns the path written."""
     moves = moves_from_toolpath(
-        toolpath, b_deg, cc, normals, cutter, arc_chord_tol=arc_chord_tol, comments=comments
+        toolpath, b_deg, cc, normals, cutter, arc_chord_tol=arc_chord_tol, comments=comments,
+        tip=tip,
     )
     name = Path(str(toolpath.path)).stem.upper() or "PATHCHECK"
     text = post_program(moves, machine_for_toolpath(toolpath, machine), program_name=name)

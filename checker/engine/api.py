@@ -192,7 +192,7 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     spacing = float(tp.spacing.max()) if len(tp.spacing) else 0.0
     slack = 0.5 * spacing + cfg.geometry.sag_tolerance
     s0 = max(float(cutter.size), 4.0 * spacing, 1e-3)
-    s_start = np.minimum(seed_limit(s_ub, slack), _START_CAP * s0)
+    s_start = np.minimum(s_ub, _START_CAP * s0)
     flat = cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0
     cross = (_CONTOUR_SEEDS, 0.5 * spacing) if flat and part.surfaces else None
     sc = binned_scan(tp, cutter, frame, Q, axes, s_start, eng.max_size, slack, eng.refine_seeds,

@@ -129,10 +129,9 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
             ss = np.full((len(rows), m), np.inf)
             _basins(indptr, idx, vals, knn, m, _REL_MARGIN, slack, b, a, sd, ss)
             limit = seed_limit(b, slack)
-            done = (limit <= s) | (s >= s_cap)
+            done = (b <= s) | (s >= s_cap)
             keep = done & (b <= s)
-            grow = np.where(b <= s, limit, np.minimum(limit, s * _GROW))  # inf b: grow by 4
-            s_try[rows] = np.minimum(grow, s_cap)
+            s_try[rows] = np.minimum(np.minimum(limit, s * _GROW), s_cap)  # inf b: grow by 4
             best[rows[keep]], arg[rows[keep]] = b[keep], a[keep]
             seeds[rows[keep]], seed_size[rows[keep]] = sd[keep], ss[keep]
             if crossings is not None:

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.config import Config
-from checker.four_axis.axes import axis_for_b, check_b_range, check_four_axis
+from checker.four_axis.axes import axis_for_b, check_b_range, check_four_axis, rotate_about_y
 from checker.four_axis.plan import (
     Orientations,
     PoseCheck,
@@ -48,6 +48,15 @@ def segments_of(cut: np.ndarray, ops: np.ndarray) -> np.ndarray:
     return np.flatnonzero((np.diff(cut) == 1) & (np.diff(ops) == 0))
 
 
+def moved_tips(cutter, contacts, tips, b_old: np.ndarray, b_new: np.ndarray) -> np.ndarray:
+    """Tool tips at the new table angles: the tip that touches the same contact point at the new
+    axis, plus the CL point's offset from the old touching tip turned with the axis (a plunge or
+    retract along the axis stays one). (N, 3) part frame, mm."""
+    old = cutter.tip_from_contact(contacts.cc, contacts.normal, axis_for_b(b_old))
+    new = cutter.tip_from_contact(contacts.cc, contacts.normal, axis_for_b(b_new))
+    return new + rotate_about_y(tips - old, b_old - b_new, np.zeros(3))
+
+
 def check_path(
     *,
     test_points,
@@ -82,7 +91,7 @@ def check_path(
                                          cfg, (lo, hi))
         b_chosen = orientations.chosen.b
         chosen_axes = axis_for_b(b_chosen)
-        tips_chosen = cutter.tip_from_contact(contacts.cc, contacts.normal, chosen_axes)
+        tips_chosen = moved_tips(cutter, contacts, tips, b_original, b_chosen)
         res = allowable(test_points, part, cutter, contacts.cc, contacts.normal, chosen_axes,
                         cc_surface=contacts.surface, cc_uv=contacts.uv, config=cfg)
         size_c, verdict_c, margin_c = res.size, res.verdict.astype(object), res.margin
@@ -103,9 +112,9 @@ def check_path(
         b_path = pose_b if pose_b is not None else np.zeros(len(tips))
         poses = check_poses(test_points, part, cutter, tips_chosen, b_path, segments, cfg,
                             table_center)
-        pose_clearance = np.full(len(poses.t), np.nan)
+        pose_clearance = np.full(len(poses.depth), np.nan)
         held = holder_check(test_points, cutter, poses.poses.tip, poses.poses.axis)
-        if held is not None and len(poses.t):
+        if held is not None and len(poses.depth):
             pose_clearance[held.hit] = held.required_stickout[held.hit]
             poses.verdict[held.hit] = "holder"
     return PathChecks(orientations, b_chosen, tips_chosen, size_c, verdict_c, margin_c,

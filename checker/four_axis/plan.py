@@ -122,7 +122,7 @@ def check_poses(test_points, part, cutter, tips, b_deg, segments, cfg: Config, c
                     cc_surface=con.surface, cc_uv=con.uv, toward=poses.tip - con.cc, config=cfg)
     depth = np.maximum(-con.gap, 0.0)
     verdict = res.verdict.astype(object)
-    verdict[(depth > cfg.check.tolerance) & (verdict != "interference")] = "gouge"
+    verdict[(depth > cfg.check.depth_tolerance) & (verdict != "interference")] = "gouge"
     return PoseCheck(poses, con, depth, res.size, verdict, res.margin, res.limiting_point,
                      res.limiting_surface)
 
