@@ -130,6 +130,17 @@ def test_part_tops_equal_the_highest_point(compressor):
     np.testing.assert_allclose(part_tops(tp, Q), (tp.points @ Q[:, 2].T).max(axis=0), atol=1e-9)
 
 
+def test_part_tops_of_a_flat_point_set():
+    """Coplanar test points have no 3-D hull: every point counts."""
+    from types import SimpleNamespace
+
+    rng = np.random.default_rng(2)
+    pts = np.column_stack([rng.uniform(-5, 5, (300, 2)), np.full(300, 1.5)])
+    Q = tool_rotations(_tilted(rng, np.array([0, 0, 1.0]), 20, 30.0))
+    tops = part_tops(SimpleNamespace(points=pts), Q)
+    np.testing.assert_allclose(tops, (pts @ Q[:, 2].T).max(axis=0), atol=1e-12)
+
+
 @pytest.mark.parametrize("cut", ["CUTTER/6,3", "CUTTER/6,1", "CUTTER/6,0"])
 def test_distinct_axes_at_once_equal_one_axis_at_a_time(compressor, cut):
     """The CAM's own 4-axis axes (all different): sizes, limiting points and verdicts of one

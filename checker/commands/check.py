@@ -24,6 +24,20 @@ def summary_view(doc):
     safe = ("largest safe cutter: " + ("unbounded" if s.largest_safe_cutter is None
                                        else f"{var} = {s.largest_safe_cutter:.4f} mm")
             + f"; largest safe standard cutter: {s.largest_safe_standard_cutter or 'none'}")
+    if s.intermediate_points:
+        head += f"\n{s.intermediate_points} intermediate poses checked"
+    if s.counts_chosen is not None:
+        k = s.counts_chosen
+        head += (f"\nat the chosen B (corrected program, with its intermediate poses): ok {k.ok}"
+                 f"  gouge {k.gouge}  interference {k.interference}  holder {k.holder}  "
+                 f"inaccessible {k.inaccessible}")
+    if doc.orientation is not None:
+        o = doc.orientation
+        head += (f"\nrotary motion: chosen {o.dp_total_rotation:.1f} deg (shortest path), "
+                 f"greedy {o.greedy_total_rotation:.1f} deg, CAM {o.original_total_rotation:.1f}"
+                 f" deg; {o.infeasible_points} points with no feasible B")
+    if doc.gcode:
+        head += f"\ncorrected G-code: {doc.gcode}"
     out = [head]
     if s.worst:
         t = Table(title="worst findings")
@@ -38,6 +52,33 @@ def summary_view(doc):
     return out
 
 
+def parse_b_range(text: str | None) -> tuple[float, float] | None:
+    """"LO:HI" in degrees -> (lo, hi); None stays None."""
+    from checker.errors import PathcheckError
+
+    if text is None:
+        return None
+    parts = text.split(":")
+    try:
+        lo, hi = (float(p) for p in parts)
+    except ValueError:
+        raise PathcheckError(f"--b-range '{text}': expected LO:HI in degrees, e.g. -30:60",
+                             code="usage") from None
+    return lo, hi
+
+
+def record(doc, console) -> None:
+    """Record the check in the results store; a store problem is a note, not a failure."""
+    from checker.errors import PathcheckError
+    from checker.store import ResultsStore
+
+    try:
+        with ResultsStore() as store:
+            store.record_job(doc, elapsed_s=doc.summary.time_s, source="cli")
+    except PathcheckError as err:
+        console.print(f"note: not recorded in the results store: {err}", style="yellow")
+
+
 @click.command()
 @click.argument("job", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--part", "part_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -48,8 +89,17 @@ def summary_view(doc):
 @click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="write the results document (JSON) here")
 @click.option("-o", "gcode_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="corrected G-code (4-axis jobs)")
-def check(job, part_path, cutter_text, config_path, json_out, gcode_out) -> None:
+              help="write the corrected 4-axis G-code here (atomically)")
+@click.option("--machine", default=None,
+              help="machine name in config/machines or a TOML file (default: the CL file's "
+                   "PPRINT/MACHINE, else fanuc-hmc)")
+@click.option("--b-range", "b_range", default=None, metavar="LO:HI",
+              help="B range searched for the best table angle, degrees (default from config)")
+@click.option("--reorient", is_flag=True,
+              help="plan the table angle B for a 3-axis path (run it on the 4-axis machine)")
+@click.option("--no-store", is_flag=True, help="do not record this check in the results store")
+def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine, b_range,
+          reorient, no_store) -> None:
     """Check JOB (APT-CL or NX CLSF) against its part: allowable cutter, verdict and margin at
     every CC point.
 
@@ -65,16 +115,16 @@ def check(job, part_path, cutter_text, config_path, json_out, gcode_out) -> None
     if not job.is_file():
         raise PathcheckError("job file not found: expected an existing CL file", path=job)
     doc = check_job(job, part_path=part_path, cutter=cutter_text, config=config_path,
-                    output=gcode_out)
+                    output=gcode_out, machine=machine, b_range=parse_b_range(b_range),
+                    reorient=reorient)
     console = Console()
     for item in summary_view(doc):
         console.print(item)
-    if gcode_out is not None and doc.gcode is None:
-        click.echo(f"note: no G-code written to {gcode_out}: {doc.job.axis_class} jobs are "
-                   "checked, not posted", err=True)
     if json_out is not None:
         json_out.parent.mkdir(parents=True, exist_ok=True)
         json_out.write_text(doc.model_dump_json(indent=1), encoding="utf-8")
+    if not no_store:
+        record(doc, console)
     c = doc.summary.counts
     if c.gouge + c.interference + c.holder:
         sys.exit(1)

@@ -13,7 +13,6 @@ from checker.engine.bins import binned_scan, part_tops
 from checker.engine.family import family_bounds
 from checker.engine.frames import group_axes, rotate_rows, tool_rotations
 from checker.engine.refine import refine
-from checker.engine.search import seed_limit
 from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes
 from checker.engine.verdict import verdicts
 from checker.errors import PathcheckError
@@ -26,7 +25,6 @@ _CONTOUR_SEEDS = 6
 _SNAP = 1e-3  # mm: CC points this close to a surface are moved onto it
 _SNAP_ANGLE = 1e-6  # rad: given normals this close to the surface normal are replaced by it
 _GRAPH_K = 8
-_START_CAP = 4.0  # first trial size at most this many times the default start s0
 _RING = np.array([(np.cos(a), np.sin(a)) for a in np.arange(8) * np.pi / 4])
 
 
@@ -192,7 +190,7 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     spacing = float(tp.spacing.max()) if len(tp.spacing) else 0.0
     slack = 0.5 * spacing + cfg.geometry.sag_tolerance
     s0 = max(float(cutter.size), 4.0 * spacing, 1e-3)
-    s_start = np.minimum(s_ub, _START_CAP * s0)
+    s_start = np.where(np.isfinite(s_ub), s_ub, s0)
     flat = cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0
     cross = (_CONTOUR_SEEDS, 0.5 * spacing) if flat and part.surfaces else None
     sc = binned_scan(tp, cutter, frame, Q, axes, s_start, eng.max_size, slack, eng.refine_seeds,

@@ -24,7 +24,8 @@ from checker.geometry.sampling import TestPoints
 
 _BIN_DEG = 2.0  # lattice step on the unit sphere, degrees
 _OWN_GRID_ROWS = 64  # rows that share an axis exactly and get a grid of their own
-_GRIDS_MAX = 48  # cached grids per set of test points
+_GRIDS_MAX = 32  # cached grids per set of test points
+_TOP_CHUNK = 1 << 21  # (row, hull vertex) products per block in `part_tops`
 
 
 def _cache_of(tp: TestPoints) -> dict:
@@ -59,9 +60,12 @@ def part_tops(tp: TestPoints, Q: np.ndarray) -> np.ndarray:
         except (QhullError, ValueError):
             ext = tp.points
         cache["extreme"] = ext = np.ascontiguousarray(ext)
-    if len(ext) == 0:
-        return np.full(len(Q), -np.inf)
-    return (Q[:, 2, :] @ ext.T).max(axis=1)
+    top = np.full(len(Q), -np.inf)
+    if len(ext):
+        step = max(1, _TOP_CHUNK // len(ext))
+        for a in range(0, len(Q), step):  # bounded memory: about _TOP_CHUNK products at a time
+            top[a:a + step] = (Q[a:a + step, 2, :] @ ext.T).max(axis=1)
+    return top
 
 
 def _lattice(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -87,9 +87,10 @@ def cutter_length(cutter) -> float:
 
 
 def family_bounds(cutter, cc: np.ndarray, n: np.ndarray, e: np.ndarray, degenerate: np.ndarray,
-                  part_top: float) -> FamilyBounds:
+                  part_top: float | np.ndarray) -> FamilyBounds:
     """Bounds for N rows: `cc`, unit `n` (N, 3) and unit horizontal `e` (N, 3), tool frame;
-    `degenerate (N,)` rows without a direction e; `part_top` the highest test point (mm)."""
+    `degenerate (N,)` rows without a direction e; `part_top` the highest test point (mm), one
+    or (N,) per row in its own tool frame."""
     r, th = float(cutter.r), float(cutter.theta)
     tpos = max(np.tan(th), 0.0)
     length = cutter_length(cutter)

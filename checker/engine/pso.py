@@ -31,8 +31,9 @@ def _to_surface(part: Part, X: np.ndarray):
 
 def pso_search(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rng: np.random.Generator,
                cfg: EngineConfig):
-    """PSO + Nelder-Mead for every row of `frame`; returns per row (size, limiting point (part
-    frame), surface, uv, evaluations) like the exact engine."""
+    """PSO + Nelder-Mead for every row of `frame` (tool frames `Q (N, 3, 3)`, one per row);
+    returns per row (size, limiting point (part frame), surface, uv, evaluations) like the exact
+    engine."""
     obj = _Objective(part, cutter, frame, Q)
     n, npart = len(frame.cc), cfg.pso_particles
     ns = len(part.surfaces)

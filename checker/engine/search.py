@@ -83,11 +83,6 @@ def _basins(indptr, indices, values, knn, m, rel, absm, best, arg, seeds, seed_s
                     seed_size[i, worst] = v
 
 
-def seed_limit(b: np.ndarray, slack: float) -> np.ndarray:
-    """Largest size (mm) of a seed of a row whose smallest sampled size is `b`."""
-    return b * (1.0 + _REL_MARGIN) + slack
-
-
 def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: float,
          slack: float, m: int, knn: np.ndarray, crossings: tuple[int, float] | None = None,
          rot: np.ndarray | None = None) -> Scan:
@@ -128,10 +123,8 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
             sd = np.full((len(rows), m), -1, dtype=np.int64)
             ss = np.full((len(rows), m), np.inf)
             _basins(indptr, idx, vals, knn, m, _REL_MARGIN, slack, b, a, sd, ss)
-            limit = seed_limit(b, slack)
             done = (b <= s) | (s >= s_cap)
             keep = done & (b <= s)
-            s_try[rows] = np.minimum(np.minimum(limit, s * _GROW), s_cap)  # inf b: grow by 4
             best[rows[keep]], arg[rows[keep]] = b[keep], a[keep]
             seeds[rows[keep]], seed_size[rows[keep]] = sd[keep], ss[keep]
             if crossings is not None:
@@ -142,5 +135,6 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
                 cross.append((rows[r[ok]], p[ok], q[ok], f[ok]))
             still.append(rows[~done])
         active = np.concatenate(still) if still else active[:0]
+        s_try[active] = np.minimum(s_try[active] * _GROW, s_cap)
     found = tuple(np.concatenate([c[t] for c in cross]) for t in range(4)) if cross else None
     return Scan(best, arg, seeds, seed_size, evals, found)

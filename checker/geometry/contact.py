@@ -36,6 +36,7 @@ _CANDIDATES = 64       # test points tried per CL position
 _ITERATIONS = 100      # Newton steps at most (a sharp corner converges slowly)
 _TOL = 1e-10           # mm: stop when the step moves the point less than this
 _TIE = 1e-6            # mm: contacts this close in gap are on a shared edge
+_TOUCH = 2e-3  # mm: a candidate this close to the cutter surface is touched by it
 _CORNER = 1e-3         # mm: inside the core, both sides count as nearest within this
 _REACHED = 1e-4        # mm: phase 1 ending this near the core goes on to look inside it
 _NUM = r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*"
@@ -172,8 +173,9 @@ def cl_to_cc(part: Part, test_points: TestPoints, cutter, tips: np.ndarray, axes
 
     Each position is refined from its best starting test point and, where the candidates
     include another surface, from the best one on that surface too (a contact near a surface
-    edge may belong to the neighbour); the nearer result wins. A refined point that leaves a
-    surface's trim falls back to its starting test point."""
+    edge may belong to the neighbour). The contact is the candidate the cutter touches (|gap| <=
+    _TOUCH mm), else the deepest; `gap` is always the deepest candidate's. A refined point that
+    leaves a surface's trim falls back to its starting test point."""
     tips = np.ascontiguousarray(tips, dtype=np.float64).reshape(-1, 3)
     axes = np.ascontiguousarray(axes, dtype=np.float64).reshape(-1, 3)
     axes = axes / np.linalg.norm(axes, axis=1)[:, None]
@@ -195,8 +197,12 @@ def cl_to_cc(part: Part, test_points: TestPoints, cutter, tips: np.ndarray, axes
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
     proj = project_to_core(core, ev.points, tips[rows], axes[rows])
     gap = proj.signed - core.r
-    pick = _pick(rows, gap, _alignment(ev.points, ev.normals, proj.q, axes[rows]))
-    return Contacts(ev.points[pick], ev.normals[pick], sid[pick], uv[pick], gap[pick])
+    align = _alignment(ev.points, ev.normals, proj.q, axes[rows])
+    deepest = _pick(rows, gap, align)
+    # the contact is the surface the cutter touches; where it also cuts into another one, that
+    # penetration is the gap (a CL point on a blade that digs into the hub touches the blade)
+    touch = _pick(rows, np.where(np.abs(gap) <= _TOUCH, np.abs(gap), 1e9 + gap), align)
+    return Contacts(ev.points[touch], ev.normals[touch], sid[touch], uv[touch], gap[deepest])
 
 
 def _alignment(p: np.ndarray, n: np.ndarray, q: np.ndarray, axes: np.ndarray) -> np.ndarray:
