@@ -55,7 +55,7 @@ class ServiceConfig(_Section):
     bind: str = "tcp://127.0.0.1:5555"
     workers: PositiveInt = 2
     max_message_bytes: PositiveInt = 16 * 1024 * 1024
-    request_timeout_s: PositiveFloat = 60.0
+    request_timeout_s: PositiveFloat = 600.0
     max_points: PositiveInt = 200_000
     part_cache_bytes: PositiveInt = 512 * 1024 * 1024
     debug_ops: bool = False

@@ -72,13 +72,13 @@ def test_allowable_matches_the_library_and_caches_the_part(state, mould_rows):
     points = [AllowablePoint.model_validate(p) for p in first["points"]]
     assert [p.index for p in points] == [0, 1, 2, 3]
     got = np.array([np.inf if p.allowable is None else p.allowable for p in points])
-    np.testing.assert_allclose(got, direct.size, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(got, direct.size, atol=1e-6)  # the document rounds to 1e-6
     assert [p.verdict for p in points] == [str(v) for v in direct.verdict]
-    np.testing.assert_allclose([p.cc for p in points], mould_rows[:, :3], atol=1e-12)
+    np.testing.assert_allclose([p.cc for p in points], mould_rows[:, :3], atol=1e-6)
     finite = np.isfinite(direct.size)
     np.testing.assert_allclose(
         [p.limiting_point for p, f in zip(points, finite, strict=True) if f],
-        direct.limiting_point[finite], atol=1e-9)
+        direct.limiting_point[finite], atol=1e-6)
 
     second = _call(state, **request)
     assert second["cached"] is True and second["part_hash"] == first["part_hash"]
@@ -96,7 +96,7 @@ def test_inline_geomdl_part_gives_the_same_answer(state, mould_rows):
     assert inline["ok"], inline
     assert inline["part_hash"] != by_path["part_hash"]
     np.testing.assert_allclose([p["allowable"] for p in inline["points"]],
-                               [p["allowable"] for p in by_path["points"]], rtol=1e-9)
+                               [p["allowable"] for p in by_path["points"]], atol=1e-6)
 
 
 def _plane() -> dict:
@@ -144,7 +144,7 @@ def test_best_b_is_at_least_the_size_at_every_b_of_the_scan(state, mould_rows):
     sizes = engine.allowable(entry.test_points, entry.part, cutter, np.repeat(row[:, :3], 5, 0),
                              np.repeat(row[:, 3:], 5, 0), axis_for_b(grid)).size
     assert point["allowable_at_best"] >= sizes.max() - 1e-6
-    assert point["allowable"] == pytest.approx(sizes[2], rel=1e-9)  # axis (0, 0, 1) is B = 0
+    assert point["allowable"] == pytest.approx(sizes[2], abs=1e-6)  # axis (0, 0, 1) is B = 0
     need = cutter.size + default_config().check.tolerance
     for lo, hi in point["b_feasible"]:
         assert -4.0 <= lo <= hi <= 4.0
@@ -167,13 +167,23 @@ def test_library_errors_become_error_replies(state):
         outside["error"]["message"]
 
 
-def test_check_returns_the_results_document_and_records_it(state, tmp_path):
+@pytest.fixture(scope="module")
+def tiny_job(tmp_path_factory) -> Path:
+    """The approach and first 5 feed moves of the small compressor job (4-axis, ball D6)."""
+    lines = SMALL.with_suffix(".apt").read_text().splitlines()[:16]
+    assert sum(text.startswith("GOTO/") for text in lines) == 6  # a rapid, then 5 feeds
+    path = tmp_path_factory.mktemp("tiny") / "tiny.apt"
+    path.write_text("\n".join([*lines, "END", "FINI", ""]))
+    return path
+
+
+def test_check_returns_the_results_document_and_records_it(state, tiny_job, tmp_path):
     job_module = pytest.importorskip("checker.job", reason="checker.job not present yet")
     from checker.results import ResultsDocument
     from checker.service.recorder import open_recorder
     from checker.store import ResultsStore
 
-    job, part = SMALL.with_suffix(".apt"), SMALL.with_suffix(".json")
+    job, part = tiny_job, SMALL.with_suffix(".json")
     recorder = open_recorder(tmp_path / "store.sqlite")
     reply = _call(state, recorder, op="check", apt=job.read_text(), part={"path": str(part)})
     assert reply["ok"], reply
@@ -191,7 +201,7 @@ def test_check_returns_the_results_document_and_records_it(state, tmp_path):
     assert doc.summary.counts == direct.summary.counts
 
 
-def test_check_errors_name_the_line_and_the_option(state):
+def test_check_errors_name_the_line_the_option_and_the_b_range(state, tiny_job):
     pytest.importorskip("checker.job", reason="checker.job not present yet")
     part = {"path": str(SMALL.with_suffix(".json"))}
     lines = SMALL.with_suffix(".apt").read_text().splitlines()
@@ -206,6 +216,9 @@ def test_check_errors_name_the_line_and_the_option(state):
     value = _call(state, op="check", apt="X", part=part, options={"check.tolerance": -1})
     assert value["error"]["code"] == "request" and "options.check.tolerance" in \
         value["error"]["message"]
+    b_range = _call(state, op="check", apt_path=str(tiny_job), part=part, b_range=[-500, 0])
+    assert b_range["ok"] is False and "outside the machine's limits" in \
+        b_range["error"]["message"]
 
 
 @pytest.fixture(scope="module")
@@ -232,7 +245,7 @@ def test_allowable_over_a_socket_hits_the_cache_the_second_time(served, mould_ro
     assert second["points"] == first["points"]
 
 
-def test_post_hook_writes_the_gcode_the_service_returns(served, tmp_path, capsys):
+def test_post_hook_writes_the_gcode_the_service_returns(served, tiny_job, tmp_path, capsys):
     pytest.importorskip("checker.job", reason="checker.job (check_job) not present yet")
     import importlib.util
 
@@ -241,12 +254,10 @@ def test_post_hook_writes_the_gcode_the_service_returns(served, tmp_path, capsys
     spec = importlib.util.spec_from_file_location("post_hook", REPO / "samples" / "post_hook.py")
     hook = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(hook)
-    job, part = SMALL.with_suffix(".apt"), SMALL.with_suffix(".json")
-    out = tmp_path / "small.nc"
+    job, part = tiny_job, SMALL.with_suffix(".json")
+    out = tmp_path / "tiny.nc"
     code = hook.main([str(job), "--part", str(part), "-o", str(out), "--address", served])
     printed = capsys.readouterr()
-    if code == 2 and "wrote no G-code" in printed.err:
-        pytest.skip(f"posting not present yet: {printed.err.strip()}")
     assert code in (0, 1), printed.err
     findings = [int(n) for n in re.findall(r"(\d+) (?:gouge|interference|holder)", printed.out)]
     assert code == (1 if sum(findings) else 0)

@@ -75,7 +75,11 @@ def parse_axis(text: str) -> np.ndarray:
 @click.option("--seed", type=int, default=None, help="random seed of the PSO baseline")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="write the result document to this file")
-def allowable(part_path, cc_path, cutter_text, axis_text, method, seed, json_out) -> None:
+@click.option("--b-range", "b_range", default=None, metavar="LO:HI",
+              help="also find the best table angle B in LO:HI degrees (4-axis, rotary about Y): "
+                   "adds b_best, allowable_at_best and b_feasible for --cutter")
+def allowable(part_path, cc_path, cutter_text, axis_text, method, seed, json_out,
+              b_range) -> None:
     """The largest gouge- and interference-free cutter of the family of --cutter at each CC
     point (R for flat, bull-nose and APT cutters; r for ball and tapered ball).
 
@@ -105,6 +109,14 @@ def allowable(part_path, cc_path, cutter_text, axis_text, method, seed, json_out
     t3 = time.perf_counter()
     doc = allowable_document(res, cc, normals, cutter, method,
                              {"load_s": t1 - t0, "sample_s": t2 - t1, "search_s": t3 - t2})
+    if b_range is not None:
+        from checker.commands.check import parse_b_range
+        from checker.four_axis.job import best_b_points
+
+        lo, hi = parse_b_range(b_range)
+        t4 = time.perf_counter()
+        best_b_points(doc, tp, part, cutter, cc, normals, (lo, hi), default_config())
+        doc["timing"]["b_search_s"] = round(time.perf_counter() - t4, 6)
     Console().print(allowable_table(doc))
     click.echo(f"{len(cc)} CC points; load {t1 - t0:.3f} s, sample {t2 - t1:.3f} s, "
                f"search {t3 - t2:.3f} s")

@@ -17,7 +17,8 @@ from checker.errors import PathcheckError
 @click.argument("fields", nargs=-1)
 @click.option("--address", default=None, help="service address [config: service.bind]")
 @click.option("--timeout", "timeout_s", type=click.FloatRange(min=0, min_open=True),
-              default=60.0, show_default=True, help="seconds to wait for each attempt")
+              default=None, help="seconds to wait for each attempt [10 for ping and stats, "
+              "600 for allowable and check]")
 @click.option("--retries", type=click.IntRange(min=0), default=2, show_default=True)
 @click.option("--dealer", is_flag=True, help="use a DEALER socket instead of REQ")
 @click.option("--request", "request_file", type=click.File("r"), default=None,
@@ -28,8 +29,8 @@ from checker.errors import PathcheckError
               help="write the reply JSON here instead of stdout")
 @click.option("--gcode-out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="write the reply's `gcode` (check with post=true) to this file")
-def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float, retries: int,
-         dealer: bool, request_file: Any, cc_csv: Path | None, out: Path | None,
+def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float | None,
+         retries: int, dealer: bool, request_file: Any, cc_csv: Path | None, out: Path | None,
          gcode_out: Path | None) -> None:
     """Call the pathcheck service: OP is ping, stats, allowable or check; each FIELD=VALUE sets
     a request field (VALUE is JSON, else a string; @FILE reads the file's text; dotted names
@@ -51,6 +52,8 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     if cc_csv is not None:
         message["cc"] = _read_cc(cc_csv)
     message["op"] = op
+    if timeout_s is None:
+        timeout_s = 10.0 if op in ("ping", "stats") else 600.0
     with Client(address or default_config().service.bind, timeout_s=timeout_s, retries=retries,
                 kind="dealer" if dealer else "req") as client:
         reply = raise_for_error(client.call(**message))

@@ -17,7 +17,8 @@ _EPS_MM = 1e-9  # mm added to a tilted search disc against rounding
 @dataclass
 class CellGrid:
     """Test points (tool frame, mm) binned by (x, y) into square cells of side `cell` mm:
-    points of cell c are `order[start[c]:start[c + 1]]`; cell (i, j) is `c = i * ny + j`."""
+    points of cell c are `order[start[c]:start[c + 1]]`; cell (i, j) is `c = i * ny + j`;
+    `xyz_cells = xyz[order]` (the points in cell order)."""
 
     xyz: np.ndarray
     origin: np.ndarray
@@ -26,6 +27,7 @@ class CellGrid:
     ny: int
     start: np.ndarray
     order: np.ndarray
+    xyz_cells: np.ndarray
 
 
 def build_grid(xyz: np.ndarray, per_cell: float = 6.0) -> CellGrid:
@@ -39,14 +41,16 @@ def build_grid(xyz: np.ndarray, per_cell: float = 6.0) -> CellGrid:
     c = ij[:, 0] * ny + ij[:, 1]
     order = np.argsort(c, kind="stable")
     start = np.searchsorted(c[order], np.arange(nx * ny + 1))
-    return CellGrid(np.ascontiguousarray(xyz), lo, cell, nx, ny, start, order)
+    return CellGrid(np.ascontiguousarray(xyz), lo, cell, nx, ny, start, order,
+                    np.ascontiguousarray(xyz[order]))
 
 
 @nb.njit(cache=True)
 def _collect_row(i, xyz, lo0, lo1, cell, nx, ny, start, order, bx, by, brad, rot, cx, cy, rad, zlo,
                  zhi, sph, zeq, plane, indptr, out, fill):
     """Candidates of row i: the cells within `brad[i]` of (bx, by)[i] (grid frame), each point
-    tested in the row's own frame (`rot[i]` @ grid point)."""
+    tested in the row's own frame (`rot[i]` @ grid point). `xyz` in cell order; the cells of a
+    grid column form one range of it."""
     i0 = int(min(max(np.floor((bx[i] - brad[i] - lo0) / cell), 0.0), nx - 1.0))
     i1 = int(min(max(np.floor((bx[i] + brad[i] - lo0) / cell), -1.0), nx - 1.0))
     j0 = int(min(max(np.floor((by[i] - brad[i] - lo1) / cell), 0.0), ny - 1.0))
@@ -55,27 +59,24 @@ def _collect_row(i, xyz, lo0, lo1, cell, nx, ny, start, order, bx, by, brad, rot
     k = indptr[i]
     cnt = 0
     for a in range(i0, i1 + 1):
-        for b in range(j0, j1 + 1):
-            c = a * ny + b
-            for t in range(start[c], start[c + 1]):
-                p = order[t]
-                x, y, z = rotated(rot, i, xyz, p)
-                if z < zlo[i] or z > zhi[i]:
+        for t in range(start[a * ny + j0], start[a * ny + max(j1, j0 - 1) + 1]):
+            x, y, z = rotated(rot, i, xyz, t)
+            if z < zlo[i] or z > zhi[i]:
+                continue
+            if plane[i, 0] * x + plane[i, 1] * y + plane[i, 2] * z < plane[i, 3]:
+                continue  # below the tangent plane: no cutter of the family reaches it
+            if z < zeq[i]:  # below the equator: inside the sphere or nothing
+                sx = x - sph[i, 0]
+                sy = y - sph[i, 1]
+                sz = z - sph[i, 2]
+                if sx * sx + sy * sy + sz * sz > sph[i, 3] * sph[i, 3]:
                     continue
-                if plane[i, 0] * x + plane[i, 1] * y + plane[i, 2] * z < plane[i, 3]:
-                    continue  # below the tangent plane: no cutter of the family reaches it
-                if z < zeq[i]:  # below the equator: inside the sphere or nothing
-                    sx = x - sph[i, 0]
-                    sy = y - sph[i, 1]
-                    sz = z - sph[i, 2]
-                    if sx * sx + sy * sy + sz * sz > sph[i, 3] * sph[i, 3]:
-                        continue
-                dx = x - cx[i]
-                dy = y - cy[i]
-                if dx * dx + dy * dy <= r2:
-                    if fill:
-                        out[k + cnt] = p
-                    cnt += 1
+            dx = x - cx[i]
+            dy = y - cy[i]
+            if dx * dx + dy * dy <= r2:
+                if fill:
+                    out[k + cnt] = order[t]
+                cnt += 1
     if not fill:
         out[i] = cnt
 
@@ -130,8 +131,8 @@ def disc_candidates(grid: CellGrid, centre: np.ndarray, radius: np.ndarray, zlo:
     rad = np.where(np.isfinite(radius), radius, 1e300)
     rot = identity_rows(n) if rot is None else np.ascontiguousarray(rot)
     bx, by, brad = _search_disc(grid, rot, centre, rad, zlo, zhi)
-    args = (grid.xyz, float(grid.origin[0]), float(grid.origin[1]), grid.cell, grid.nx, grid.ny,
-            grid.start, grid.order, bx, by, brad, rot, np.ascontiguousarray(centre[:, 0]),
+    args = (grid.xyz_cells, float(grid.origin[0]), float(grid.origin[1]), grid.cell, grid.nx,
+            grid.ny, grid.start, grid.order, bx, by, brad, rot, np.ascontiguousarray(centre[:, 0]),
             np.ascontiguousarray(centre[:, 1]), rad, zlo, zhi, np.ascontiguousarray(sphere),
             np.ascontiguousarray(zeq), np.ascontiguousarray(plane))
     collect = _collect_ser if n < SERIAL_ROWS else _collect_par

@@ -51,11 +51,20 @@ def allowable_table(doc: dict, limit: int = 60):
 
     var = doc["cutter"]["variable"]
     t = Table(title=f"allowable {var} for {doc['cutter']['apt']} ({doc['method']})")
-    for col in ("#", "cc (mm)", f"allowable {var}", "limiting point", "surf", "verdict"):
+    four = bool(doc["points"]) and "b_best" in doc["points"][0]
+    cols = ["#", "cc (mm)", f"allowable {var}", "limiting point", "surf", "verdict"]
+    if four:
+        cols += ["best B (deg)", f"{var} at best", "feasible B (deg)"]
+    for col in cols:
         t.add_column(col, justify="right" if col in ("#", "surf") else "left")
     fmt = lambda v: "-" if v is None else ", ".join(f"{x:.3f}" for x in v)  # noqa: E731
+    size = lambda v: "unbounded" if v is None else f"{v:.4f}"  # noqa: E731
     for p in doc["points"][:limit]:
-        a = "unbounded" if p["allowable"] is None else f"{p['allowable']:.4f}"
         s = "-" if p["limiting_surface"] is None else str(p["limiting_surface"])
-        t.add_row(str(p["index"]), fmt(p["cc"]), a, fmt(p["limiting_point"]), s, p["verdict"])
+        row = [str(p["index"]), fmt(p["cc"]), size(p["allowable"]), fmt(p["limiting_point"]), s,
+               p["verdict"]]
+        if four:
+            feasible = " ".join(f"[{lo:.2f}, {hi:.2f}]" for lo, hi in p["b_feasible"]) or "none"
+            row += [f"{p['b_best']:.2f}", size(p["allowable_at_best"]), feasible]
+        t.add_row(*row)
     return t

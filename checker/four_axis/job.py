@@ -12,6 +12,7 @@ import numpy as np
 
 from checker.config import Config
 from checker.four_axis.axes import axis_for_b, check_b_range, check_four_axis, rotate_about_y
+from checker.four_axis.best_b import best_b
 from checker.four_axis.plan import (
     Orientations,
     PoseCheck,
@@ -119,3 +120,22 @@ def check_path(
             poses.verdict[held.hit] = "holder"
     return PathChecks(orientations, b_chosen, tips_chosen, size_c, verdict_c, margin_c,
                       holder_clearance, poses, pose_clearance)
+
+
+def best_b_points(doc: dict, test_points, part, cutter, cc: np.ndarray, normals: np.ndarray,
+                  b_range: tuple[float, float], cfg: Config) -> None:
+    """Add `b_best`, `allowable_at_best` and `b_feasible` (for `cutter`) to every point of a
+    `pathcheck allowable` document, searching B in `b_range` degrees."""
+    from types import SimpleNamespace
+
+    check_b_range(*b_range, -360.0, 360.0)
+    contacts = SimpleNamespace(cc=cc, normal=normals, surface=None, uv=None)
+    fn = allowable_over_b(test_points, part, cutter, contacts, cfg)
+    best = best_b(fn, len(cc), b_min=b_range[0], b_max=b_range[1],
+                  coarse_step=cfg.four_axis.b_coarse_step, tolerance=cfg.four_axis.b_tolerance,
+                  required=cutter.size + cfg.check.tolerance)
+    for i, point in enumerate(doc["points"]):
+        point["b_best"] = round(float(best.b_best[i]), 6)
+        at = best.allowable_at_best[i]
+        point["allowable_at_best"] = round(float(at), 6) if np.isfinite(at) else None
+        point["b_feasible"] = [[round(lo, 6), round(hi, 6)] for lo, hi in best.feasible[i]]

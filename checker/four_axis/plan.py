@@ -39,9 +39,14 @@ class Orientations:
         return total_rotation(self.original)
 
 
+def _take(a: np.ndarray | None, rows: np.ndarray) -> np.ndarray | None:
+    return None if a is None else a[rows]
+
+
 def allowable_over_b(test_points, part, cutter, contacts, cfg: Config):
     """`fn(rows, b_deg) -> sizes` for the best-B search: the engine's allowable size of CC
-    point `rows` at table angle `b_deg`; 0 where the point faces away from that axis."""
+    point `rows` at table angle `b_deg`; 0 where the point faces away from that axis.
+    `contacts` has `cc`, `normal` (N, 3) and `surface`, `uv` (None when unknown)."""
     from checker.engine import allowable
 
     def fn(rows: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
@@ -51,8 +56,8 @@ def allowable_over_b(test_points, part, cutter, contacts, cfg: Config):
         if facing.any():
             r = rows[facing]
             res = allowable(test_points, part, cutter, contacts.cc[r], contacts.normal[r],
-                            axes[facing], cc_surface=contacts.surface[r], cc_uv=contacts.uv[r],
-                            config=cfg)
+                            axes[facing], cc_surface=_take(contacts.surface, r),
+                            cc_uv=_take(contacts.uv, r), config=cfg)
             sizes[facing] = res.size
         return sizes
 

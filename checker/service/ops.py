@@ -61,33 +61,35 @@ def sleep(req: p.SleepRequest, state: WorkerState) -> dict:
 
 
 def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
-    """Allowable cutter size at every CC row, as `pathcheck allowable --json` writes it."""
+    """Allowable cutter size at every CC row: the `pathcheck allowable --json` document
+    (`cutter`, `method`, `points`, `timing`), plus `part_hash` and `cached`."""
     rows = np.asarray(req.cc, dtype=np.float64).reshape(-1, 6)
     cc, normals = rows[:, :3], _unit_rows(rows[:, 3:], "cc", "normal")
     axis = np.asarray(req.axis, dtype=np.float64)
-    axes = np.broadcast_to(axis / np.linalg.norm(axis), cc.shape)
     if isinstance(req.part, p.PartPath):
         _existing(req.part.path)
     parse_cutter = _library("checker.cutter", "parse_cutter", "allowable")
     engine_allowable = _library("checker.engine", "allowable", "allowable")
+    document = _library("checker.engine.document", "allowable_document", "allowable")
     cutter = parse_cutter(req.cutter)
+    if req.b_range is not None:
+        check_b_range = _library("checker.four_axis.axes", "check_b_range", "allowable")
+        check_b_range(*req.b_range, state.config.four_axis.b_min, state.config.four_axis.b_max)
     entry, cached, key = cached_part(req.part, state)
     t0 = time.perf_counter()
-    result = engine_allowable(entry.test_points, entry.part, cutter, cc, normals, axes,
-                              config=state.config)
-    extra = {} if req.b_range is None else _best_b(req, entry, cutter, cc, normals, state.config)
-    search_s = time.perf_counter() - t0
-    points = _points(cc, normals, result, extra)
-    return {
-        "points": points,
-        "part_hash": key,
-        "cached": cached,
-        "timing": {
-            "load_s": 0.0 if cached else entry.load_s,
-            "sample_s": 0.0 if cached else entry.sample_s,
-            "search_s": search_s,
-        },
-    }
+    result = engine_allowable(entry.test_points, entry.part, cutter, cc, normals,
+                              axis / np.linalg.norm(axis), config=state.config)
+    timing = {"load_s": 0.0 if cached else entry.load_s,
+              "sample_s": 0.0 if cached else entry.sample_s,
+              "search_s": time.perf_counter() - t0}
+    doc = document(result, cc, normals, cutter, "exact", timing)
+    if req.b_range is not None:
+        best_b_points = _library("checker.four_axis.job", "best_b_points", "allowable")
+        t1 = time.perf_counter()
+        best_b_points(doc, entry.test_points, entry.part, cutter, cc, normals, req.b_range,
+                      state.config)
+        doc["timing"]["b_search_s"] = round(time.perf_counter() - t1, 6)
+    return {**doc, "part_hash": key, "cached": cached}
 
 
 def check(req: p.CheckRequest, state: WorkerState) -> dict:
@@ -107,7 +109,8 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
         gcode_path = Path(tmp) / "job.nc" if req.post else None
         try:
             doc = check_job(apt_path, part_path=part_path, cutter=req.cutter,
-                            machine=req.machine, config=config, output=gcode_path)
+                            machine=req.machine, config=config, output=gcode_path,
+                            b_range=req.b_range, reorient=req.reorient)
         except PathcheckError as err:
             if req.apt is None or err.path != str(apt_path):
                 raise
@@ -115,9 +118,6 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
                                  code=err.code) from None
         if req.apt is not None:
             doc.job.path = INLINE_APT
-        if gcode_path is not None and not gcode_path.is_file():
-            raise PathcheckError("post: true, but this build's check_job wrote no G-code",
-                                 code="unavailable")
         state.last_document, state.last_job_path = doc, doc.job.path
         out: dict[str, Any] = {"results": doc.model_dump(mode="json")}
         if gcode_path is not None:
@@ -241,59 +241,3 @@ def _unit_rows(v: np.ndarray, field_name: str, what: str) -> np.ndarray:
         raise PathcheckError(f"field '{field_name}.{bad[0]}': expected a non-zero {what} "
                              f"(columns 4-6), found {v[bad[0]].tolist()}", code="request")
     return v / norm[:, None]
-
-
-def _best_b(req: p.AllowableRequest, entry: CachedPart, cutter: Any, cc: np.ndarray,
-            normals: np.ndarray, config: Config) -> dict[str, Any]:
-    """b_best, allowable_at_best and b_feasible per point over `req.b_range` (degrees, mm):
-    the engine evaluated at the tool axis of each trial B (DESIGN.md: (-sin B, 0, cos B))."""
-    engine_allowable = _library("checker.engine", "allowable", "allowable")
-    best_b = _library("checker.four_axis.best_b", "best_b", "allowable with b_range")
-    axes_mod = "checker.four_axis.axes"
-    axis_for_b = _library(axes_mod, "axis_for_b", "allowable with b_range")
-    b_for_axis = _library(axes_mod, "b_for_axis", "allowable with b_range")
-    check_b_range = _library(axes_mod, "check_b_range", "allowable with b_range")
-    fa = config.four_axis
-    lo, hi = req.b_range
-    check_b_range(lo, hi, fa.b_min, fa.b_max)
-
-    def sizes(rows: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
-        return engine_allowable(entry.test_points, entry.part, cutter, cc[rows], normals[rows],
-                                axis_for_b(b_deg), config=config).size
-
-    reference = np.full(len(cc), float(b_for_axis(np.asarray(req.axis, dtype=float))))
-    out = best_b(sizes, len(cc), b_min=lo, b_max=hi, coarse_step=fa.b_coarse_step,
-                 tolerance=fa.b_tolerance, required=cutter.size + config.check.tolerance,
-                 reference=reference)
-    return {"b_best": out.b_best, "allowable_at_best": out.allowable_at_best,
-            "b_feasible": out.feasible}
-
-
-def _opt(values: np.ndarray) -> list[float | None]:
-    """Floats with nan/inf as None (JSON null: unbounded or not applicable)."""
-    arr = np.asarray(values, dtype=float)
-    return [float(x) if np.isfinite(x) else None for x in arr]
-
-
-def _points(cc: np.ndarray, normals: np.ndarray, result: Any, extra: dict[str, Any]) -> list[dict]:
-    """The `points` list of the allowable reply, one `protocol.AllowablePoint` dict per row."""
-    n = len(cc)
-    size = _opt(result.size)
-    lp = np.asarray(result.limiting_point, dtype=float).reshape(n, 3)
-    surf = np.asarray(result.limiting_surface).reshape(n).tolist()
-    has_lp = (np.all(np.isfinite(lp), axis=1) & np.isfinite(result.size)).tolist()
-    verdict = [str(v) for v in np.asarray(result.verdict).reshape(n)]
-    none = [None] * n
-    b_best = _opt(extra["b_best"]) if extra else none
-    at_best = _opt(extra["allowable_at_best"]) if extra else none
-    feasible = [[[float(a), float(b)] for a, b in iv] for iv in extra["b_feasible"]] \
-        if extra else none
-    cc_l, n_l, lp_l = cc.tolist(), normals.tolist(), lp.tolist()
-    return [
-        {"index": i, "cc": cc_l[i], "normal": n_l[i], "allowable": size[i],
-         "limiting_point": lp_l[i] if has_lp[i] else None,
-         "limiting_surface": surf[i] if has_lp[i] and surf[i] >= 0 else None,
-         "verdict": verdict[i], "b_best": b_best[i], "allowable_at_best": at_best[i],
-         "b_feasible": feasible[i]}
-        for i in range(n)
-    ]

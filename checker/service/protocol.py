@@ -97,7 +97,8 @@ class AllowableRequest(_Request):
 
 class CheckRequest(_Request):
     """Check a job: the CL file as text (`apt`) or as a path on the service's machine
-    (`apt_path`), with optional part, cutter override (`CUTTER/...`), machine name and options;
+    (`apt_path`), with optional part, cutter override (`CUTTER/...`), machine name, config
+    options, the B range searched (degrees) and `reorient` (plan B for a 3-axis path too);
     `post: true` also returns the corrected G-code."""
 
     op: Literal["check"]
@@ -107,12 +108,16 @@ class CheckRequest(_Request):
     cutter: str | None = Field(None, min_length=1, max_length=1000)
     machine: str | None = Field(None, min_length=1, max_length=200)
     options: dict[str, float | int | str | bool] = Field(default_factory=dict)
+    b_range: tuple[float, float] | None = None
+    reorient: bool = False
     post: bool = False
 
     @model_validator(mode="after")
     def _one_source(self) -> CheckRequest:
         if (self.apt is None) == (self.apt_path is None):
             raise ValueError("give exactly one of 'apt' (CL text) and 'apt_path'")
+        if self.b_range is not None and self.b_range[0] >= self.b_range[1]:
+            raise ValueError(f"b_range must be [lo, hi] with lo < hi, found {list(self.b_range)}")
         return self
 
 
@@ -151,6 +156,8 @@ class AllowablePoint(BaseModel):
     limiting_point: Vec3 | None = None
     limiting_surface: int | None = None
     verdict: str
+    margin: float | None = Field(None, description="allowable - real size, mm")
+    evaluations: int | None = None
     b_best: float | None = None
     allowable_at_best: float | None = None
     b_feasible: list[tuple[float, float]] | None = None

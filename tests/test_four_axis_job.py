@@ -1,0 +1,131 @@
+"""Issue 5 on real jobs: the compressor sample at its CAM orientation and re-oriented, the
+orientation totals, intermediate poses between clean end points, and bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from geomdl import BSpline, exchange
+
+from checker.cli import cli
+from checker.job import check_job
+
+COMPRESSOR = "samples/compressor/compressor_small.apt"
+COMPRESSOR_D12 = "samples/compressor/compressor_small_d12.apt"
+FINDINGS = ("gouge", "interference", "holder")
+
+
+@pytest.fixture(scope="module")
+def small(repo):
+    return check_job(repo / COMPRESSOR)
+
+
+@pytest.fixture(scope="module")
+def small_d12(repo):
+    return check_job(repo / COMPRESSOR_D12)
+
+
+def _cc(doc):
+    return [p for p in doc.points if p.kind == "cc"]
+
+
+def test_safe_path_is_clean_at_its_cam_orientation(small):
+    assert small.job.axis_class == "4-axis-Y"
+    c = small.summary.counts
+    assert c.gouge == c.interference == c.holder == c.inaccessible == 0
+    for p in _cc(small):
+        assert p.b_original is not None and p.b_chosen is not None
+        assert p.b_feasible, f"point {p.index} has no feasible B for the cutter it was made for"
+        assert any(lo - 1e-6 <= p.b_original <= hi + 1e-6 for lo, hi in p.b_feasible)
+
+
+def test_larger_cutter_is_flagged_where_the_hub_or_the_next_blade_is_in_the_way(small_d12):
+    points = _cc(small_d12)
+    radius = np.array([np.hypot(p.cc[0], p.cc[2]) for p in points])
+    lowest = radius < 86.0  # the first span row, 4.8 mm above the hub (radius 80)
+    flagged = np.array([p.verdict in FINDINGS for p in points])
+    infeasible = np.array([not p.b_feasible for p in points])
+    assert lowest.sum() == 18
+    # the lowest rows reach the hub at any B: flagged and without a feasible B
+    assert flagged[lowest].all() and infeasible[lowest].all()
+    # elsewhere only the few points where the shank meets the neighbouring blade at the CAM's B
+    others = np.flatnonzero(flagged & ~lowest)
+    assert 1 <= len(others) <= 6
+    assert not infeasible[~lowest].any()
+
+
+def test_chosen_b_is_clean_wherever_a_feasible_b_exists(small_d12):
+    for p in _cc(small_d12):
+        if p.b_feasible:
+            assert any(lo - 1e-6 <= p.b_chosen <= hi + 1e-6 for lo, hi in p.b_feasible)
+            assert p.verdict_chosen == "ok", (p.index, p.b_chosen, p.b_feasible, p.margin_chosen)
+        assert p.allowable_at_best is None or p.allowable is None or \
+            p.allowable_at_best >= p.allowable - 1e-6
+
+
+def test_shortest_path_never_moves_more_than_the_greedy_smoothing(small, small_d12):
+    for doc in (small, small_d12):
+        o = doc.orientation
+        assert o.dp_total_rotation <= o.greedy_total_rotation
+        chosen = np.array([p.b_chosen for p in _cc(doc)])
+        assert o.dp_total_rotation == pytest.approx(np.abs(np.diff(chosen)).sum(), abs=1e-6)
+    assert small_d12.orientation.infeasible_points == 18
+
+
+def _bump_job(tmp_path):
+    """A floor 30 x 10 mm with a smooth ridge 0.533 mm high across x = 15, and a ball D6 moving
+    on the floor from x = 5 to x = 25: both ends clean, the middle of the move gouges."""
+    surf = BSpline.Surface()
+    surf.degree_u, surf.degree_v = 3, 1
+    xs = [0, 5, 10, 13, 15, 17, 20, 25, 30]
+    zs = [0, 0, 0, 0, 0.8, 0, 0, 0, 0]
+    surf.ctrlpts_size_u, surf.ctrlpts_size_v = len(xs), 2
+    surf.ctrlpts = [[x, y, z] for x, z in zip(xs, zs, strict=True) for y in (-5.0, 5.0)]
+    surf.knotvector_u = [0, 0, 0, 0, 1, 2, 3, 4, 5, 6, 6, 6, 6]
+    surf.knotvector_v = [0, 0, 1, 1]
+    exchange.export_json(surf, str(tmp_path / "bump.json"))
+    (tmp_path / "bump.apt").write_text(
+        "PARTNO/BUMP\nUNITS/MM\nCUTTER/6,3\nLOADTL/1\nFEDRAT/500,MMPM\n"
+        "GOTO/5,0,0\nGOTO/25,0,0\nEND\nFINI\n")
+    return tmp_path / "bump.apt"
+
+
+def test_gouge_between_two_clean_end_points_is_caught(tmp_path):
+    doc = check_job(_bump_job(tmp_path))
+    cc = _cc(doc)
+    assert [p.verdict for p in cc] == ["ok", "ok"]
+    poses = [p for p in doc.points if p.kind == "intermediate"]
+    assert len(poses) >= 39  # 20 mm at 0.5 mm steps
+    bad = [p for p in poses if p.verdict == "gouge"]
+    assert bad and all(10.0 < p.tip[0] < 20.0 for p in bad)
+    deepest = max(bad, key=lambda p: p.depth)
+    assert deepest.tip[0] == pytest.approx(15.0, abs=0.5)
+    # the ridge top is the cubic B-spline's peak: 2/3 of its middle pole's height
+    assert deepest.depth == pytest.approx(0.8 * 2.0 / 3.0, abs=1e-3)
+    assert doc.summary.counts.gouge == len(bad)
+
+
+def test_bad_four_axis_input_is_one_line_and_exit_2(tmp_path, repo):
+    runner = CliRunner()
+    job = tmp_path / "tilted.apt"
+    job.write_text("PARTNO/T\nUNITS/MM\nMULTAX\nCUTTER/6,3\nLOADTL/1\nFEDRAT/500,MMPM\n"
+                   "GOTO/5,0,3,0,0,1\nGOTO/6,0,3,0,0.2,0.98\nEND\nFINI\n")
+    (tmp_path / "tilted.json").write_text((repo / "samples/mould/mould.json").read_text())
+    from checker.cli import main
+
+    def run(args):
+        with pytest.raises(SystemExit) as ex:
+            main(args)
+        return ex.value.code
+
+    assert run([str(job), "--b-range", "-30:30", "--no-store"]) == 2
+    result = runner.invoke(cli, [str(job), "--b-range", "-30:30", "--no-store"],
+                           standalone_mode=False)
+    assert "tilted.apt:8:" in str(result.exception) and "not a 4-axis path" in str(result.exception)
+    assert run([str(repo / COMPRESSOR), "--b-range", "-400:30", "--no-store"]) == 2
+    assert run([str(repo / COMPRESSOR), "--b-range", "30:-30", "--no-store"]) == 2
+    assert run([str(repo / COMPRESSOR), "--part", str(tmp_path / "nope.json"), "--no-store"]) == 2
+    empty = tmp_path / "empty.apt"
+    empty.write_text("PARTNO/E\nUNITS/MM\nCUTTER/6,3\nEND\nFINI\n")
+    assert run([str(empty), "--no-store"]) == 2
