@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -28,6 +29,11 @@ def part_field(part: Path) -> dict:
     if part.suffix.lower() == ".json":
         return {"geomdl": json.loads(part.read_text())}
     return {"path": str(part.resolve())}
+
+
+def _name(stem: str) -> str:
+    """The job's file stem as a service job name (letters, digits, '_' and '-')."""
+    return re.sub(r"[^A-Za-z0-9_-]", "_", stem)[:64] or "job"
 
 
 def write_atomically(path: Path, text: str) -> None:
@@ -45,7 +51,7 @@ def write_atomically(path: Path, text: str) -> None:
 def post(job: Path, part: Path | None, machine: str | None, out: Path, address: str,
          timeout_s: float) -> dict:
     """Check and post `job` through the service; writes `out`; returns the results summary."""
-    request: dict = {"apt": job.read_text(), "post": True}
+    request: dict = {"apt": job.read_text(), "name": _name(job.stem), "post": True}
     if part is not None:
         request["part"] = part_field(part)
     if machine:

@@ -144,7 +144,8 @@ def test_a_dying_worker_process_fails_its_job_and_the_batch_ends(jobs, tmp_path)
                              job_function=f"{__name__}:crash_on_seed_2")
         recorded = {r.job_path: r.status for r in store.jobs()}
     by_path = {o.path: o for o in outcomes}
-    died = by_path[str(good[2])]
+    seed_2 = str(next(p for p in good if p.stem == "job2"))
+    died = by_path[seed_2]
     assert died.document is None and "worker process died" in died.error
     assert len(outcomes) == len(recorded) == 4  # every job has an outcome, recorded
-    assert recorded[str(good[2])] == "failed"
+    assert recorded[seed_2] == "failed"

@@ -210,6 +210,11 @@ def test_check_errors_name_the_line_the_option_and_the_b_range(state, tiny_job):
     bad = _call(state, op="check", apt=broken, part=part)
     assert bad["ok"] is False and bad["error"]["line"] == goto + 1
     assert bad["error"]["message"].startswith(f"<apt>:{goto + 1}: ")
+    named = _call(state, op="check", apt=broken, name="blade-7", part=part)
+    assert named["error"]["message"].startswith(f"blade-7.apt:{goto + 1}: ")
+    bad_name = _call(state, op="check", apt=broken, name="../x", part=part)
+    assert bad_name["error"]["code"] == "request" and "field 'name'" in \
+        bad_name["error"]["message"]
     option = _call(state, op="check", apt="X", part=part, options={"service.debug_ops": True})
     assert option["error"]["code"] == "request" and "options.service.debug_ops" in \
         option["error"]["message"]
@@ -263,5 +268,6 @@ def test_post_hook_writes_the_gcode_the_service_returns(served, tiny_job, tmp_pa
     assert code == (1 if sum(findings) else 0)
     blocks = [Line(text) for text in out.read_text().splitlines() if text.strip("% ")]
     assert any("B" in {w.letter for w in line.block.words} for line in blocks)
+    assert "(TINY)" in out.read_text()  # the hook sends the job's name
     assert hook.main([str(tmp_path / "none.apt"), "--address", served]) == 2
     assert not (tmp_path / "none.nc").exists() and list(tmp_path.glob("*.tmp")) == []

@@ -94,7 +94,7 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
 
 def check(req: p.CheckRequest, state: WorkerState) -> dict:
     """Check a job with `checker.job.check_job`; `post` also returns the G-code text. Inline
-    CL text is named `<apt>` in errors and in the results document."""
+    CL text is named `NAME.apt` (`<apt>` without a name) in errors and in the document."""
     if isinstance(req.part, p.PartPath):
         _existing(req.part.path)
     if req.apt_path is not None:
@@ -102,7 +102,8 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
     config = _with_options(state.config, req.options)
     check_job = _library("checker.job", "check_job", "check")
     with tempfile.TemporaryDirectory(prefix="pathcheck-service-") as tmp:
-        apt_path = Path(req.apt_path) if req.apt_path else Path(tmp) / "job.apt"
+        label = f"{req.name}.apt" if req.name else INLINE_APT
+        apt_path = Path(req.apt_path) if req.apt_path else Path(tmp) / f"{req.name or 'job'}.apt"
         if req.apt is not None:
             apt_path.write_text(req.apt)
         part_path = _part_file(req.part, Path(tmp)) if req.part is not None else None
@@ -114,10 +115,9 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
         except PathcheckError as err:
             if req.apt is None or err.path != str(apt_path):
                 raise
-            raise PathcheckError(err.message, path=INLINE_APT, line=err.line,
-                                 code=err.code) from None
+            raise PathcheckError(err.message, path=label, line=err.line, code=err.code) from None
         if req.apt is not None:
-            doc.job.path = INLINE_APT
+            doc.job.path = label
         state.last_document, state.last_job_path = doc, doc.job.path
         out: dict[str, Any] = {"results": doc.model_dump(mode="json")}
         if gcode_path is not None:

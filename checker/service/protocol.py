@@ -104,6 +104,8 @@ class CheckRequest(_Request):
     op: Literal["check"]
     apt: str | None = Field(None, min_length=1)
     apt_path: str | None = Field(None, min_length=1, max_length=4096)
+    name: str | None = Field(None, pattern=r"^[A-Za-z0-9_-]{1,64}$",
+                             description="job name for inline `apt` (errors, program name)")
     part: PartSpec | None = None
     cutter: str | None = Field(None, min_length=1, max_length=1000)
     machine: str | None = Field(None, min_length=1, max_length=200)
