@@ -120,14 +120,26 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
     intervals and the chosen B (verdicts there too); the intermediate poses between cutting
     blocks are checked, and the shank and holder where the cutter carries them."""
     from checker.apt import read_cl
+
+    t0 = time.perf_counter()
+    toolpath = read_cl(Path(apt_path), require_cutter=cutter is None)
+    return check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=machine,
+                          config=config, output=output, b_range=b_range, reorient=reorient,
+                          started=t0)
+
+
+def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=None,
+                   output=None, *, b_range: tuple[float, float] | None = None,
+                   reorient: bool = False, started: float | None = None) -> ResultsDocument:
+    """`check_job` on a tool path already in memory (read from a CL file, or from a G-code
+    program by `pathcheck check-gcode`); `toolpath.path` names the job."""
     from checker.apt.info import axis_class
     from checker.geometry import load_part
     from checker.geometry.sampling import sample_part
 
-    t0 = time.perf_counter()
+    t0 = time.perf_counter() if started is None else started
     cfg = _config(config)
-    apt_path = Path(apt_path)
-    toolpath = read_cl(apt_path, require_cutter=cutter is None)
+    apt_path = Path(toolpath.path)
     m = toolpath.motion_arrays(arc_chord_tol=cfg.check.arc_chord_tolerance)
     cut = np.flatnonzero(~np.asarray(m.rapid, bool))
     if cut.size == 0:

@@ -234,7 +234,7 @@ class ToolPath:
     """A CL file read into memory; see the module docstring for units and frames."""
 
     path: str
-    dialect: Literal["apt", "clsf"]
+    dialect: Literal["apt", "clsf", "gcode"]
     units: Literal["mm", "inch"]
     records: list[Record]
     operations: list[Operation]

@@ -5,10 +5,12 @@ from F (G94 by the dialect's feed-distance rule, G93 as inverse time, G95 per re
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from checker.errors import PathcheckError
+from checker.toolpath import MotionArrays, Operation, ToolPath
 from postproc.dialects import get_dialect
 from postproc.kinematics import machine_to_part, tip_path_length
 from postproc.machine import Machine
@@ -140,3 +142,25 @@ def part_motions(
         tool=moves.tool[src],
         known=known,
     )
+
+
+def toolpath_of(motions: PartMotions, *, path: str | Path, units: str, cutter) -> ToolPath:
+    """The program's moves as an in-memory tool path (one operation with `cutter`), so that
+    `checker.job.check_toolpath` checks a G-code program like a CL file. Positions the program
+    leaves undefined (before the first full X Y Z) are dropped."""
+    keep = np.flatnonzero(motions.known)
+    n = keep.size
+    arrays = MotionArrays(
+        tip=motions.tip[keep],
+        axis=motions.axis[keep],
+        rapid=motions.rapid[keep],
+        feed=motions.feed[keep],
+        spindle=np.full(n, np.nan),
+        line=motions.line[keep],
+        op=np.zeros(n, dtype=np.int64),
+        cycle=np.zeros(n, dtype=bool),
+        arc=np.full(n, -1, dtype=np.int64),
+    )
+    operation = Operation(name=Path(path).stem, cutter=cutter, end_motion=n)
+    return ToolPath(path=str(path), dialect="gcode", units=units, records=[],
+                    operations=[operation], motions=arrays)

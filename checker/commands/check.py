@@ -107,8 +107,6 @@ def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine
     pathcheck samples/mould/mould.apt
     pathcheck samples/mould/mould.apt --json out/mould.json
     """
-    from rich.console import Console
-
     from checker.errors import PathcheckError
     from checker.job import check_job
 
@@ -117,13 +115,20 @@ def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine
     doc = check_job(job, part_path=part_path, cutter=cutter_text, config=config_path,
                     output=gcode_out, machine=machine, b_range=parse_b_range(b_range),
                     reorient=reorient)
+    finish(doc, json_out, store=not no_store)
+
+
+def finish(doc, json_out: Path | None, *, store: bool) -> None:
+    """Print the summary, write the JSON, record the check; exit 1 when there are findings."""
+    from rich.console import Console
+
     console = Console()
     for item in summary_view(doc):
         console.print(item)
     if json_out is not None:
         json_out.parent.mkdir(parents=True, exist_ok=True)
         json_out.write_text(doc.model_dump_json(indent=1), encoding="utf-8")
-    if not no_store:
+    if store:
         record(doc, console)
     c = doc.summary.counts
     if c.gouge + c.interference + c.holder:

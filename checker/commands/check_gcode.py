@@ -30,8 +30,12 @@ import click
     default=None,
     help="write the summary as JSON to this file",
 )
-def check_gcode(program: Path, machine_name, dialect, units, part, cutter_text, json_out) -> None:
-    """Read PROGRAM (G-code) for a machine and report its moves in the part frame.
+@click.option("--no-store", is_flag=True, help="do not record this check in the results store")
+def check_gcode(
+    program: Path, machine_name, dialect, units, part, cutter_text, json_out, no_store
+) -> None:
+    """Read PROGRAM (G-code) for a machine, bring its moves back into the part frame and, with
+    --part and --cutter, check them like `pathcheck JOB.apt` (exit 1 on findings).
 
     \b
     pathcheck check-gcode prog.nc --machine fanuc-hmc
@@ -44,18 +48,30 @@ def check_gcode(program: Path, machine_name, dialect, units, part, cutter_text, 
     from postproc.replay import part_motions
 
     machine = load_machine(machine_name)
+    cutter = None
     if cutter_text is not None:
         from checker.cutter import parse_cutter
 
-        parse_cutter(cutter_text)
+        cutter = parse_cutter(cutter_text)
     if part is not None and not part.is_file():
         raise PathcheckError(
             "part file not found: expected an existing file", path=part, code="part"
         )
     moves = read_gcode(program, dialect or machine.dialect, units=units or machine.units)
-    doc = describe_program(moves, part_motions(moves, machine), machine)
-    click.echo(format_program_summary(doc))
-    if json_out is not None:
-        from postproc.writer import write_program
+    motions = part_motions(moves, machine)
+    if part is None or cutter is None:
+        doc = describe_program(moves, motions, machine)
+        click.echo(format_program_summary(doc))
+        click.echo("give --part and --cutter to check the program for gouges and interference")
+        if json_out is not None:
+            from postproc.writer import write_program
 
-        write_program(json.dumps(doc, indent=2) + "\n", json_out)
+            write_program(json.dumps(doc, indent=2) + "\n", json_out)
+        return
+    from checker.commands.check import finish
+    from checker.job import check_toolpath
+    from postproc.replay import toolpath_of
+
+    toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)
+    result = check_toolpath(toolpath, part_path=part, cutter=cutter, machine=machine_name)
+    finish(result, json_out, store=not no_store)
