@@ -108,7 +108,8 @@ def _read_toml(path: Path) -> dict:
         with path.open("rb") as fh:
             return tomllib.load(fh)
     except OSError as err:
-        raise PathcheckError(f"cannot read config: {err.strerror}", path=path, code="config") from err
+        raise PathcheckError(f"cannot read config: {err.strerror}", path=path,
+                             code="config") from err
     except tomllib.TOMLDecodeError as err:
         raise PathcheckError(f"not valid TOML: {err}", path=path, code="config") from err
 
@@ -116,7 +117,8 @@ def _read_toml(path: Path) -> dict:
 def _merge(base: dict, over: dict) -> dict:
     out = dict(base)
     for key, value in over.items():
-        out[key] = _merge(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) else value
+        both = isinstance(value, dict) and isinstance(out.get(key), dict)
+        out[key] = _merge(out[key], value) if both else value
     return out
 
 
@@ -132,7 +134,8 @@ def load_config(user_file: str | Path | None = None) -> Config:
     except ValidationError as err:
         first = err.errors()[0]
         field = ".".join(str(p) for p in first["loc"])
-        raise PathcheckError(f"config field '{field}': {first['msg']}", path=source, code="config") from err
+        raise PathcheckError(f"config field '{field}': {first['msg']}", path=source,
+                             code="config") from err
 
 
 @lru_cache(maxsize=1)
