@@ -183,3 +183,34 @@ def test_four_axis_rows_close_in_b_across_bins_agree_with_direct(compressor):
     both = np.isfinite(res.size[:n]) & np.isfinite(res.size[n:2 * n])
     assert both.sum() > n // 2
     assert np.abs(res.size[:n] - res.size[n:2 * n])[both].max() < 0.05
+
+
+def test_small_first_trial_gives_the_same_answer_from_fewer_candidates(compressor, monkeypatch):
+    """(CC point, B) rows far from the CAM's B: the scan's small first trial (search.scan
+    `first`) finds the same seeds (refinement starts) and bit-identical sizes, limiting points
+    and verdicts as a start at the nearest points' upper bound, with fewer kernel evaluations."""
+    import checker.engine.api as api
+
+    part, tp, con, _ = compressor
+    cutter = parse_cutter("CUTTER/6,3")
+    idx = np.tile(np.arange(len(con.cc)), 2)
+    axes = axis_for_b(np.linspace(-60, 60, idx.size))
+    kw = dict(cc_surface=con.surface[idx], cc_uv=con.uv[idx])
+    starts = []  # the refinement starts (from the scan's seeds) of each call
+
+    def spy(part, cutter, frame, Q, rows, sid, uv, *rest):
+        starts.append((rows.copy(), sid.copy(), uv.copy()))
+        return refine(part, cutter, frame, Q, rows, sid, uv, *rest)
+
+    refine = api.refine
+    monkeypatch.setattr(api, "refine", spy)
+    res = allowable(tp, part, cutter, con.cc[idx], con.normal[idx], axes, **kw)
+    monkeypatch.setattr(api, "_FIRST_TRIAL", np.inf)  # first trial = the upper bound
+    ref = allowable(tp, part, cutter, con.cc[idx], con.normal[idx], axes, **kw)
+    for a, b in zip(*starts, strict=True):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(res.size, ref.size)
+    np.testing.assert_array_equal(res.limiting_point, ref.limiting_point)
+    np.testing.assert_array_equal(res.verdict, ref.verdict)
+    assert np.isfinite(res.size).sum() > len(idx) // 2
+    assert res.evaluations.sum() < 0.8 * ref.evaluations.sum()

@@ -7,7 +7,7 @@ import pytest
 
 from checker.errors import PathcheckError
 from checker.four_axis.axes import axis_for_b, b_for_axis, check_b_range, check_four_axis
-from checker.four_axis.best_b import best_b
+from checker.four_axis.best_b import END_TOLERANCE, best_b
 
 
 def _two_peaks(rows: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -32,7 +32,8 @@ def test_best_b_matches_a_dense_scan():
         ok = values[row] >= 5.0
         edges = np.flatnonzero(np.diff(ok.astype(int)))
         got = [v for iv in result.feasible[row] for v in iv if -90 < v < 90]
-        np.testing.assert_allclose(sorted(got), dense[edges + 1 * (~ok[edges])], atol=0.02)
+        np.testing.assert_allclose(sorted(got), dense[edges + 1 * (~ok[edges])],
+                                   atol=END_TOLERANCE)
 
 
 def test_unbounded_plateau_keeps_the_reference_angle():

@@ -25,6 +25,7 @@ _CONTOUR_SEEDS = 6
 _SNAP = 1e-3  # mm: CC points this close to a surface are moved onto it
 _SNAP_ANGLE = 1e-6  # rad: given normals this close to the surface normal are replaced by it
 _GRAPH_K = 8
+_FIRST_TRIAL = 4.0  # first trial size of the scan at most this many times s0
 _RING = np.array([(np.cos(a), np.sin(a)) for a in np.arange(8) * np.pi / 4])
 
 
@@ -193,8 +194,11 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     s_start = np.where(np.isfinite(s_ub), s_ub, s0)
     flat = cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0
     cross = (_CONTOUR_SEEDS, 0.5 * spacing) if flat and part.surfaces else None
+    # s_start can be far above the minimum (a convex spot); a small first trial finds the same
+    # answer from fewer candidates (scan: `first`). Contour crossings need the full disc.
+    first = None if cross is not None else np.minimum(s_start, _FIRST_TRIAL * s0)
     sc = binned_scan(tp, cutter, frame, Q, axes, s_start, eng.max_size, slack, eng.refine_seeds,
-                     _neighbours(tp), cross)
+                     _neighbours(tp), cross, first)
     size, arg = sc.best.copy(), sc.arg
     has = arg >= 0
     lim_p = np.full((n, 3), np.nan)

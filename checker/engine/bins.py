@@ -108,9 +108,10 @@ def axis_bins(axes: np.ndarray, Q: np.ndarray):
 
 def binned_scan(tp: TestPoints, cutter, frame: RowFrame, Q: np.ndarray, axes: np.ndarray,
                 s_start: np.ndarray, s_cap: float, slack: float, m: int, knn: np.ndarray,
-                crossings: tuple[int, float] | None = None) -> Scan:
+                crossings: tuple[int, float] | None = None,
+                first: np.ndarray | None = None) -> Scan:
     """`search.scan` for rows of any tool axes `axes (N, 3)` (part frame, unit) with tool frames
-    `Q (N, 3, 3)`, one scan per bin of nearby axes; the merged result."""
+    `Q (N, 3, 3)`, one scan per bin of nearby axes (`first`: see `scan`); the merged result."""
     n = len(s_start)
     best = np.full(n, np.inf)
     arg = np.full(n, -1, dtype=np.int64)
@@ -122,7 +123,7 @@ def binned_scan(tp: TestPoints, cutter, frame: RowFrame, Q: np.ndarray, axes: np
         sub = RowFrame(frame.cc[rows], frame.n[rows], frame.e[rows], frame.fam.take(rows),
                        frame.exclusion)
         sc = scan(cutter, sub, tool_grid(tp, axis, Qb), s_start[rows], s_cap, slack, m, knn,
-                  crossings, rot=D)
+                  crossings, rot=D, first=None if first is None else first[rows])
         best[rows], arg[rows], evals[rows] = sc.best, sc.arg, sc.evaluations
         seeds[rows], seed_size[rows] = sc.seeds, sc.seed_size
         if sc.crossings is not None:

@@ -85,21 +85,26 @@ def _basins(indptr, indices, values, knn, m, rel, absm, best, arg, seeds, seed_s
 
 def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: float,
          slack: float, m: int, knn: np.ndarray, crossings: tuple[int, float] | None = None,
-         rot: np.ndarray | None = None) -> Scan:
+         rot: np.ndarray | None = None, first: np.ndarray | None = None) -> Scan:
     """Exact sampled minimum per row from finite trial sizes `s_start (N,)`. A row with trial
     size s looks at every test point within `slack` mm (half the sample spacing) of the disc,
     slab and ball of s (family.py); when its minimum is <= s it is the minimum over all test
     points (any point below s lies there), otherwise s grows by 4 up to `s_cap` (beyond it the
     row is unbounded). Seeds: see `_basins`. `crossings` (count, separation mm): also collect
     that many bottom-plane contour crossings per row (contour.py) from the final candidates.
-    `rot (N, 3, 3)`: each row's tool frame seen from the grid's (default: the grid's frame)."""
+    `rot (N, 3, 3)`: each row's tool frame seen from the grid's (default: the grid's frame).
+    `first (N,)`: smaller first trial sizes for rows whose `s_start` is an upper bound of their
+    minimum: such a row stops below s_start only once its disc holds every point up to its seed
+    limit (or s_start), so best, arg and seeds are those of a start at s_start."""
     n = len(s_start)
     best = np.full(n, np.inf)
     arg = np.full(n, -1, dtype=np.int64)
     seeds = np.full((n, m), -1, dtype=np.int64)
     seed_size = np.full((n, m), np.inf)
     evals = np.zeros(n, dtype=np.int64)
-    s_try = np.minimum(s_start, s_cap)
+    s_goal = np.minimum(s_start, s_cap)
+    s_try = s_goal.copy() if first is None else np.minimum(first, s_goal)
+    s_next = np.empty(n)
     active = np.arange(n)
     fam = frame.fam
     plane = np.column_stack([frame.n, np.einsum("ij,ij->i", frame.n, frame.cc) - slack])
@@ -124,6 +129,10 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
             ss = np.full((len(rows), m), np.inf)
             _basins(indptr, idx, vals, knn, m, _REL_MARGIN, slack, b, a, sd, ss)
             done = (b <= s) | (s >= s_cap)
+            early = s < s_goal[rows]  # below the given start: stop only with complete seeds
+            target = np.minimum(b * (1.0 + _REL_MARGIN) + slack, s_goal[rows])
+            done = np.where(early, b <= s, done)
+            s_next[rows] = np.where(early, target, s * _GROW)
             keep = done & (b <= s)
             best[rows[keep]], arg[rows[keep]] = b[keep], a[keep]
             seeds[rows[keep]], seed_size[rows[keep]] = sd[keep], ss[keep]
@@ -135,6 +144,6 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
                 cross.append((rows[r[ok]], p[ok], q[ok], f[ok]))
             still.append(rows[~done])
         active = np.concatenate(still) if still else active[:0]
-        s_try[active] = np.minimum(s_try[active] * _GROW, s_cap)
+        s_try[active] = np.minimum(s_next[active], s_cap)
     found = tuple(np.concatenate([c[t] for c in cross]) for t in range(4)) if cross else None
     return Scan(best, arg, seeds, seed_size, evals, found)

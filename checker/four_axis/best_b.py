@@ -18,6 +18,8 @@ from checker.four_axis.intervals import Intervals, feasible_intervals
 
 AllowableFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
 GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
+PLATEAU = 1e-9  # mm: coarse samples this close to the top make a flat top
+END_TOLERANCE = 0.05  # degrees: accuracy of the feasible intervals' ends
 
 
 @dataclass(frozen=True)
@@ -128,10 +130,11 @@ def best_b(
     tolerance: float,
     required: float | np.ndarray,
     reference: np.ndarray | None = None,
-    candidates: int = 3,
+    candidates: int = 2,
 ) -> BestB:
-    """Best B to `tolerance` degrees for n points, and their feasible intervals for a cutter that
-    needs `required` mm. Unbounded plateaus (inf) take the B nearest `reference` (the CAM's B)."""
+    """Best B to `tolerance` degrees for n points, and their feasible intervals (ends to
+    END_TOLERANCE) for a cutter that needs `required` mm. Unbounded and flat tops (the same size
+    at several coarse samples) take the top sample nearest `reference` (the CAM's B)."""
     grid = coarse_grid(b_min, b_max, coarse_step)
     samples = _scan(fn, n, grid)
     reference = np.zeros(n) if reference is None else np.nan_to_num(reference, nan=0.0)
@@ -143,7 +146,16 @@ def best_b(
         k = np.argmin(distance, axis=1)
         b_best[unbounded] = grid[k[unbounded]]
         at_best[unbounded] = np.inf
-    bounded = np.flatnonzero(~unbounded)
+    top = samples.max(axis=1, keepdims=True)
+    at_top = samples >= top - PLATEAU
+    flat = ~unbounded & (at_top.sum(axis=1) >= 2)
+    if flat.any():
+        # a flat top (the curvature limit, which no B changes): the top sample nearest the CAM's B
+        distance = np.where(at_top, np.abs(grid[None, :] - reference[:, None]), np.inf)
+        k = np.argmin(distance, axis=1)
+        b_best[flat] = grid[k[flat]]
+        at_best[flat] = top[flat, 0]
+    bounded = np.flatnonzero(~unbounded & ~flat)
     if bounded.size:
         peaks = _top_local_maxima(samples[bounded], min(candidates, grid.size))
         rows = np.repeat(bounded, peaks.shape[1])
@@ -161,5 +173,5 @@ def best_b(
         use_grid = coarse_best > chosen_f
         b_best[bounded] = np.where(use_grid, grid[np.argmax(samples[bounded], axis=1)], chosen_b)
         at_best[bounded] = np.maximum(chosen_f, coarse_best)
-    feasible = _refined_intervals(fn, grid, samples, required, tolerance)
+    feasible = _refined_intervals(fn, grid, samples, required, max(tolerance, END_TOLERANCE))
     return BestB(b_best, at_best, feasible, grid, samples)
