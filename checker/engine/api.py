@@ -186,7 +186,7 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     _, knn = tp.tree.query(rotate_rows(Q.transpose(0, 2, 1), frame.cc), k=k)
     knn = knn.reshape(n, k)
     s_ub = pair_sizes(cutter, frame, np.repeat(rows, k),
-                      rotate_rows(np.repeat(Q, k, axis=0), tp.points[knn.ravel()]))
+                      rotate_rows(Q, tp.points[knn.ravel()], np.repeat(rows, k)))
     s_ub = s_ub.reshape(n, k).min(axis=1)
     spacing = float(tp.spacing.max()) if len(tp.spacing) else 0.0
     slack = 0.5 * spacing + cfg.geometry.sag_tolerance
@@ -311,7 +311,7 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, own: np.nda
         pts = evaluate_mixed(part, np.repeat(sid, 8), uv[..., 0].ravel(),
                              uv[..., 1].ravel()).points
         f = pair_sizes(cutter, frame, np.repeat(rows, 8),
-                       rotate_rows(Q[np.repeat(rows, 8)], pts)).reshape(-1, 8)
+                       rotate_rows(Q, pts, np.repeat(rows, 8))).reshape(-1, 8)
         k = np.argmin(f, axis=1)
         ok = np.isfinite(f[ar, k])
         half = step if radius == radii[0] else 0.5 * step

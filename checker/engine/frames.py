@@ -50,9 +50,32 @@ def tool_rotations(axes: np.ndarray) -> np.ndarray:
     return Q
 
 
-def rotate_rows(Q: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Points p (K, 3) through their own rotations Q (K, 3, 3): Q_k @ p_k."""
-    return np.einsum("kij,kj->ki", Q, p)
+def rotate_rows(Q: np.ndarray, p: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
+    """Points p (K, 3) through rotations Q (N, 3, 3): `Q[rows[k]] @ p[k]` (rows (K,), default
+    Q has a rotation per point), without gathering Q per point."""
+    if rows is None:
+        return np.einsum("kij,kj->ki", Q, p)
+    out = np.empty((len(rows), 3))
+    _rotate_indexed(np.ascontiguousarray(Q), np.ascontiguousarray(rows, dtype=np.int64),
+                    np.ascontiguousarray(p, dtype=np.float64), out, 0)
+    return out
+
+
+def heights(Q: np.ndarray, p: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Tool-frame heights (K,) of points p (K, 3): `(Q[rows[k]] @ p[k])[2]`."""
+    out = np.empty((len(rows), 1))
+    _rotate_indexed(np.ascontiguousarray(Q), np.ascontiguousarray(rows, dtype=np.int64),
+                    np.ascontiguousarray(p, dtype=np.float64), out, 2)
+    return out[:, 0]
+
+
+@nb.njit(cache=True)
+def _rotate_indexed(Q, rows, p, out, first):
+    """out[k, c - first] = (Q[rows[k]] @ p[k])[c] for the components c >= first."""
+    for k in range(rows.shape[0]):
+        r = rows[k]
+        for c in range(first, 3):
+            out[k, c - first] = Q[r, c, 0] * p[k, 0] + Q[r, c, 1] * p[k, 1] + Q[r, c, 2] * p[k, 2]
 
 
 def identity_rows(n: int) -> np.ndarray:

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.cutter import BALL_FAMILY
-from checker.engine.frames import rotate_rows
+from checker.engine.frames import heights, rotate_rows
 from checker.engine.sizes import RowFrame, pair_sizes
 from checker.geometry.evaluate import evaluate_mixed
 from checker.part import Part
@@ -58,7 +58,7 @@ class _Objective:
         ev = evaluate_mixed(self.part, sid, u, v)
         if self.floor is not None:
             self._onto_floor(rows, sid, u, v, ev)
-        f = pair_sizes(self.cutter, self.frame, rows, rotate_rows(self.Q[rows], ev.points))
+        f = pair_sizes(self.cutter, self.frame, rows, rotate_rows(self.Q, ev.points, rows))
         for s in self.trimmed:
             sel = np.flatnonzero(sid == s)
             if sel.size:
@@ -69,12 +69,11 @@ class _Objective:
     def _onto_floor(self, rows, sid, u, v, ev) -> None:
         """Move points below their row's bottom plane onto it (in place: u, v, ev)."""
         for _ in range(_FLOOR_STEPS):
-            z = np.einsum("kj,kj->k", ev.points, self.Q[rows, 2])
+            z = heights(self.Q, ev.points, rows)
             low = np.flatnonzero(z < self.floor[rows])
             if low.size == 0:
                 return
-            qz = self.Q[rows[low], 2]
-            gu, gv = np.einsum("kj,kj->k", ev.du[low], qz), np.einsum("kj,kj->k", ev.dv[low], qz)
+            gu, gv = heights(self.Q, ev.du[low], rows[low]), heights(self.Q, ev.dv[low], rows[low])
             g2 = gu * gu + gv * gv
             ok = g2 > 1e-24
             low, gu, gv, g2 = low[ok], gu[ok], gv[ok], g2[ok]

@@ -131,7 +131,7 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
             done = (b <= s) | (s >= s_cap)
             early = s < s_goal[rows]  # below the given start: stop only with complete seeds
             target = np.minimum(b * (1.0 + _REL_MARGIN) + slack, s_goal[rows])
-            done = np.where(early, b <= s, done)
+            done = np.where(early, (b <= s) & (s >= target), done)
             s_next[rows] = np.where(early, target, s * _GROW)
             keep = done & (b <= s)
             best[rows[keep]], arg[rows[keep]] = b[keep], a[keep]

@@ -18,7 +18,7 @@ from checker.four_axis.intervals import Intervals, feasible_intervals
 
 AllowableFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
 GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
-PLATEAU = 1e-9  # mm: coarse samples this close to the top make a flat top
+PLATEAU = 1e-6  # mm: coarse samples this close to the top make a flat top
 END_TOLERANCE = 0.05  # degrees: accuracy of the feasible intervals' ends
 
 
