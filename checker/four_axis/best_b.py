@@ -131,12 +131,16 @@ def best_b(
     required: float | np.ndarray,
     reference: np.ndarray | None = None,
     candidates: int = 2,
+    coarse_fn: AllowableFn | None = None,
 ) -> BestB:
     """Best B to `tolerance` degrees for n points, and their feasible intervals (ends to
     END_TOLERANCE) for a cutter that needs `required` mm. Unbounded and flat tops (the same size
-    at several coarse samples) take the top sample nearest `reference` (the CAM's B)."""
+    at several coarse samples) take the top sample nearest `reference` (the CAM's B).
+    `coarse_fn`: a cheaper evaluation (an upper bound of `fn`) for the scan and the interval
+    ends; the refinement and the size at the best B use `fn`."""
+    coarse = fn if coarse_fn is None else coarse_fn
     grid = coarse_grid(b_min, b_max, coarse_step)
-    samples = _scan(fn, n, grid)
+    samples = _scan(coarse, n, grid)
     reference = np.zeros(n) if reference is None else np.nan_to_num(reference, nan=0.0)
     b_best = np.empty(n)
     at_best = np.empty(n)
@@ -173,5 +177,8 @@ def best_b(
         use_grid = coarse_best > chosen_f
         b_best[bounded] = np.where(use_grid, grid[np.argmax(samples[bounded], axis=1)], chosen_b)
         at_best[bounded] = np.maximum(chosen_f, coarse_best)
-    feasible = _refined_intervals(fn, grid, samples, required, max(tolerance, END_TOLERANCE))
+    if coarse_fn is not None:  # coarse sizes are upper bounds: the exact size at the best B
+        finite = np.isfinite(at_best)
+        at_best[finite] = fn(np.flatnonzero(finite), b_best[finite])
+    feasible = _refined_intervals(coarse, grid, samples, required, max(tolerance, END_TOLERANCE))
     return BestB(b_best, at_best, feasible, grid, samples)

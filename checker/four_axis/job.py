@@ -19,6 +19,7 @@ from checker.four_axis.plan import (
     allowable_over_b,
     cam_b,
     check_poses,
+    coarse_config,
     holder_check,
     plan_orientations,
 )
@@ -88,8 +89,9 @@ def check_path(
         b_original = cam_b(axes)
         step = np.r_[0.0, np.linalg.norm(np.diff(contacts.cc, axis=0), axis=1)]
         fn = allowable_over_b(test_points, part, cutter, contacts, cfg)
-        orientations = plan_orientations(fn, b_original, step, cutter.size + cfg.check.tolerance,
-                                         cfg, (lo, hi))
+        coarse = allowable_over_b(test_points, part, cutter, contacts, coarse_config(cfg))
+        orientations = plan_orientations(fn, coarse, b_original, step,
+                                         cutter.size + cfg.check.tolerance, cfg, (lo, hi))
         b_chosen = orientations.chosen.b
         chosen_axes = axis_for_b(b_chosen)
         tips_chosen = moved_tips(cutter, contacts, tips, b_original, b_chosen)

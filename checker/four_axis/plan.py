@@ -43,6 +43,13 @@ def _take(a: np.ndarray | None, rows: np.ndarray) -> np.ndarray | None:
     return None if a is None else a[rows]
 
 
+def coarse_config(cfg: Config) -> Config:
+    """The engine with one refinement start and step per row: sizes a little above the exact
+    ones (upper bounds), for scanning B."""
+    engine = cfg.engine.model_copy(update={"refine_seeds": 1, "refine_iterations": 1})
+    return cfg.model_copy(update={"engine": engine})
+
+
 def allowable_over_b(test_points, part, cutter, contacts, cfg: Config):
     """`fn(rows, b_deg) -> sizes` for the best-B search: the engine's allowable size of CC
     point `rows` at table angle `b_deg`; 0 where the point faces away from that axis.
@@ -66,19 +73,22 @@ def allowable_over_b(test_points, part, cutter, contacts, cfg: Config):
 
 def plan_orientations(
     fn,
+    coarse_fn,
     b_original: np.ndarray,
     path_length: np.ndarray,
     required: float,
     cfg: Config,
     b_range: tuple[float, float],
 ) -> Orientations:
-    """Best B and feasible intervals of every CC point, then the shortest-path and greedy
-    orientations inside them. `b_original` (N,) the CAM's B (nan: none), `path_length` (N,) mm
-    of the step arriving at each point, `required` the size the real cutter needs (mm)."""
+    """Best B and feasible intervals of every CC point (`fn` exact, `coarse_fn` its cheaper
+    upper bound for the scan), then the shortest-path and greedy orientations inside them.
+    `b_original` (N,) the CAM's B (nan: none), `path_length` (N,) mm of the step arriving at
+    each point, `required` the size the real cutter needs (mm)."""
     fa = cfg.four_axis
     n = len(b_original)
     best = best_b(fn, n, b_min=b_range[0], b_max=b_range[1], coarse_step=fa.b_coarse_step,
-                  tolerance=fa.b_tolerance, required=required, reference=b_original)
+                  tolerance=fa.b_tolerance, required=required, reference=b_original,
+                  coarse_fn=coarse_fn)
     optima = interval_optima(best.grid, best.samples, best.feasible)
     greedy, _ = greedy_smoothing(optima, best.b_best)
     extra = np.concatenate(optima) if any(len(o) for o in optima) else None
