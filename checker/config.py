@@ -37,7 +37,7 @@ class CheckConfig(_Section):
 class FourAxisConfig(_Section):
     b_min: float = -180.0
     b_max: float = 180.0
-    b_coarse_step: PositiveFloat = 4.0
+    b_coarse_step: PositiveFloat = 6.0
     b_tolerance: PositiveFloat = 0.01
     dp_b_step: PositiveFloat = 0.5
     dp_weight_change: float = Field(1.0, ge=0)

@@ -19,7 +19,8 @@ from checker.four_axis.intervals import Intervals, feasible_intervals
 AllowableFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
 GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
 PLATEAU = 1e-6  # mm: coarse samples this close to the top make a flat top
-END_TOLERANCE = 0.05  # degrees: accuracy of the feasible intervals' ends
+COARSE_PLATEAU = 1e-3  # mm: the same for a coarse evaluation (a cheaper upper bound)
+END_TOLERANCE = 0.2  # degrees: the feasible intervals' ends, kept on the feasible side
 
 
 @dataclass(frozen=True)
@@ -41,8 +42,19 @@ def coarse_grid(b_min: float, b_max: float, step: float) -> np.ndarray:
 
 
 def _scan(fn: AllowableFn, n: int, grid: np.ndarray) -> np.ndarray:
-    rows = np.repeat(np.arange(n), grid.size)
-    return fn(rows, np.tile(grid, n)).reshape(n, grid.size)
+    """fn over every (point, grid B), in two halves of the grid run side by side (the engine
+    releases the GIL in its compiled and numpy parts)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    halves = np.array_split(np.arange(grid.size), 2)
+
+    def run(cols: np.ndarray) -> np.ndarray:
+        rows = np.repeat(np.arange(n), cols.size)
+        return fn(rows, np.tile(grid[cols], n)).reshape(n, cols.size)
+
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        parts = list(pool.map(run, halves))
+    return np.concatenate(parts, axis=1)
 
 
 def _top_local_maxima(samples: np.ndarray, count: int) -> np.ndarray:
@@ -130,7 +142,7 @@ def best_b(
     tolerance: float,
     required: float | np.ndarray,
     reference: np.ndarray | None = None,
-    candidates: int = 2,
+    candidates: int | None = None,
     coarse_fn: AllowableFn | None = None,
 ) -> BestB:
     """Best B to `tolerance` degrees for n points, and their feasible intervals (ends to
@@ -151,7 +163,7 @@ def best_b(
         b_best[unbounded] = grid[k[unbounded]]
         at_best[unbounded] = np.inf
     top = samples.max(axis=1, keepdims=True)
-    at_top = samples >= top - PLATEAU
+    at_top = samples >= top - (PLATEAU if coarse_fn is None else COARSE_PLATEAU)
     flat = ~unbounded & (at_top.sum(axis=1) >= 2)
     if flat.any():
         # a flat top (the curvature limit, which no B changes): the top sample nearest the CAM's B
@@ -160,6 +172,8 @@ def best_b(
         b_best[flat] = grid[k[flat]]
         at_best[flat] = top[flat, 0]
     bounded = np.flatnonzero(~unbounded & ~flat)
+    if candidates is None:  # the best two local maxima, or the best one after a coarse scan
+        candidates = 2 if coarse_fn is None else 1
     if bounded.size:
         peaks = _top_local_maxima(samples[bounded], min(candidates, grid.size))
         rows = np.repeat(bounded, peaks.shape[1])
@@ -170,15 +184,17 @@ def best_b(
         b_ref, f_ref = _golden_max(fn, rows, lo, hi, tolerance)
         f_ref = f_ref.reshape(-1, peaks.shape[1])
         b_ref = b_ref.reshape(-1, peaks.shape[1])
-        coarse_best = samples[bounded].max(axis=1)
         pick = np.argmax(f_ref, axis=1)
         chosen_f = f_ref[np.arange(bounded.size), pick]
         chosen_b = b_ref[np.arange(bounded.size), pick]
-        use_grid = coarse_best > chosen_f
-        b_best[bounded] = np.where(use_grid, grid[np.argmax(samples[bounded], axis=1)], chosen_b)
-        at_best[bounded] = np.maximum(chosen_f, coarse_best)
-    if coarse_fn is not None:  # coarse sizes are upper bounds: the exact size at the best B
-        finite = np.isfinite(at_best)
-        at_best[finite] = fn(np.flatnonzero(finite), b_best[finite])
+        b_best[bounded], at_best[bounded] = chosen_b, chosen_f
+        if coarse_fn is None:  # a grid sample can beat a refined peak only on the same scale
+            coarse_best = samples[bounded].max(axis=1)
+            use_grid = coarse_best > chosen_f
+            b_best[bounded[use_grid]] = grid[np.argmax(samples[bounded[use_grid]], axis=1)]
+            at_best[bounded] = np.maximum(chosen_f, coarse_best)
+    if coarse_fn is not None:  # flat tops came from upper bounds: their exact size
+        rows = np.flatnonzero(flat)
+        at_best[rows] = fn(rows, b_best[rows])
     feasible = _refined_intervals(coarse, grid, samples, required, max(tolerance, END_TOLERANCE))
     return BestB(b_best, at_best, feasible, grid, samples)
