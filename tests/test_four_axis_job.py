@@ -129,3 +129,39 @@ def test_bad_four_axis_input_is_one_line_and_exit_2(tmp_path, repo):
     empty = tmp_path / "empty.apt"
     empty.write_text("PARTNO/E\nUNITS/MM\nCUTTER/6,3\nEND\nFINI\n")
     assert run([str(empty), "--no-store"]) == 2
+
+
+def _wall_job(tmp_path):
+    """A floor and a 40 mm wall 15 mm beside a ball D6's path along the floor."""
+    from geomdl import multi
+
+    def bilinear(corners):
+        s = BSpline.Surface()
+        s.degree_u = s.degree_v = 1
+        s.ctrlpts_size_u = s.ctrlpts_size_v = 2
+        s.ctrlpts = corners
+        s.knotvector_u = s.knotvector_v = [0, 0, 1, 1]
+        return s
+
+    floor = bilinear([[0, -10, 0], [0, 30, 0], [40, -10, 0], [40, 30, 0]])  # du x dv = +z
+    wall = bilinear([[0, 15, 0], [40, 15, 0], [0, 15, 40], [40, 15, 40]])  # faces -y
+    exchange.export_json(multi.SurfaceContainer([floor, wall]), str(tmp_path / "wall.json"))
+    (tmp_path / "wall.apt").write_text(
+        "PARTNO/WALL\nUNITS/MM\nCUTTER/6,3\nLOADTL/1\nFEDRAT/500,MMPM\n"
+        "GOTO/10,0,0\nGOTO/30,0,0\nEND\nFINI\n")
+    return tmp_path / "wall.apt"
+
+
+def test_holder_hit_reports_the_stickout_that_clears_it(tmp_path):
+    from checker.tool_library import load_tool_library
+
+    tool = load_tool_library()["BALL-D6"]  # holder D42 from 28 mm above the tip
+    assert tool.holder_diameter / 2 > 15.0 and tool.stickout < 40.0
+    doc = check_job(_wall_job(tmp_path), cutter=tool)
+    cc = _cc(doc)
+    assert [p.verdict for p in cc] == ["holder", "holder"]
+    for p in cc:
+        assert p.holder_clearance == pytest.approx(40.0, abs=0.5)  # the wall's top
+    assert all(p.verdict == "holder" for p in doc.points if p.kind == "intermediate")
+    # the bare cutter (no holder data) is clean there
+    assert check_job(tmp_path / "wall.apt").summary.counts.ok == doc.summary.points

@@ -97,9 +97,12 @@ def record(doc, console) -> None:
               help="B range searched for the best table angle, degrees (default from config)")
 @click.option("--reorient", is_flag=True,
               help="plan the table angle B for a 3-axis path (run it on the 4-axis machine)")
+@click.option("--tool", "tool_name", default=None,
+              help="the real cutter from the tool library (config/tools.toml), with its shank "
+                   "and holder, e.g. BALL-D6")
 @click.option("--no-store", is_flag=True, help="do not record this check in the results store")
 def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine, b_range,
-          reorient, no_store) -> None:
+          reorient, tool_name, no_store) -> None:
     """Check JOB (APT-CL or NX CLSF) against its part: allowable cutter, verdict and margin at
     every CC point.
 
@@ -112,7 +115,14 @@ def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine
 
     if not job.is_file():
         raise PathcheckError("job file not found: expected an existing CL file", path=job)
-    doc = check_job(job, part_path=part_path, cutter=cutter_text, config=config_path,
+    cutter = cutter_text
+    if tool_name is not None:
+        if cutter_text is not None:
+            raise PathcheckError("give --cutter or --tool, not both", code="usage")
+        from checker.tool_library import load_tool_library
+
+        cutter = load_tool_library()[tool_name]
+    doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
                     output=gcode_out, machine=machine, b_range=parse_b_range(b_range),
                     reorient=reorient)
     finish(doc, json_out, store=not no_store)

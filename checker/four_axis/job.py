@@ -28,8 +28,9 @@ from checker.four_axis.plan import (
 @dataclass(frozen=True)
 class PathChecks:
     """What the path-level checks add. Per CC row (N,): `b_chosen`, `tips_chosen` (N, 3), the
-    allowable size / verdict / margin at the chosen B, `holder_clearance` (nan: no hit); plus the
-    orientations (None for 3-axis jobs) and the intermediate poses checked."""
+    allowable size / verdict / margin at the chosen B (holder hits there included),
+    `holder_clearance` of the CL path as given (nan: no hit); plus the orientations (None for
+    3-axis jobs) and the intermediate poses checked."""
 
     orientations: Orientations | None
     b_chosen: np.ndarray | None
@@ -103,11 +104,13 @@ def check_path(
     else:
         pose_axes = axes
     holder_clearance = np.full(len(tips), np.nan)
-    held = holder_check(test_points, cutter, tips_chosen, pose_axes)
+    held = holder_check(test_points, cutter, tips, axes)  # the CL path as given
     if held is not None:
         holder_clearance[held.hit] = held.required_stickout[held.hit]
-        if verdict_c is not None:
-            verdict_c[held.hit] = "holder"
+    if verdict_c is not None:
+        held = holder_check(test_points, cutter, tips_chosen, pose_axes)
+        if held is not None:
+            verdict_c[held.hit & (verdict_c == "ok")] = "holder"
     poses = None
     pose_clearance = np.zeros(0)
     vertical = np.allclose(axes, [0.0, 0.0, 1.0], atol=1e-9)
