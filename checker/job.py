@@ -356,8 +356,8 @@ def _summary(points: list[PointResult], r: _Rows, cutter, four_axis: bool,
         counts_chosen = None
     bad = [p for p in points if p.verdict in _FINDINGS]
     bad.sort(key=lambda p: (-(p.depth or 0.0), p.margin if p.margin is not None else 1e300))
-    worst = [Finding(index=p.index, verdict=p.verdict, line=p.line, cc=p.cc, depth=p.depth,
-                     margin=p.margin) for p in bad[:_WORST]]
+    worst = [Finding(index=p.index, kind=p.kind, verdict=p.verdict, line=p.line, cc=p.cc,
+                     depth=p.depth, margin=p.margin) for p in bad[:_WORST]]
     reach = np.isfinite(r.size) & (r.verdict != "inaccessible")
     smallest = float(r.size[reach].min()) if reach.any() else None
     depths = [p.depth for p in points if p.depth is not None]

@@ -90,6 +90,7 @@ class Finding(_Model):
     """One of the worst findings, for the summary."""
 
     index: int
+    kind: Literal["cc", "intermediate"] = "cc"
     verdict: Verdict
     line: int | None
     cc: Vec3

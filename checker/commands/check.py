@@ -41,10 +41,11 @@ def summary_view(doc):
     out = [head]
     if s.worst:
         t = Table(title="worst findings")
-        for col in ("line", "verdict", "depth (mm)", "margin (mm)", "cc (mm)"):
+        for col in ("line", "pose", "verdict", "depth (mm)", "margin (mm)", "cc (mm)"):
             t.add_column(col)
         for f in s.worst:
-            t.add_row(str(f.line), f.verdict, f"{f.depth or 0:.4f}",
+            pose = "CC" if f.kind == "cc" else "between"
+            t.add_row(str(f.line), pose, f.verdict, f"{f.depth or 0:.4f}",
                       "-" if f.margin is None else f"{f.margin:.4f}",
                       ", ".join(f"{x:.3f}" for x in f.cc))
         out.append(t)
