@@ -193,7 +193,8 @@ class MotionArrays:
     spindle (N,) rpm (nan: unknown), line (N,) 1-based file line, op (N,) operation index,
     cycle (N,) bool (inside ``CYCLE/``...``CYCLE/OFF``: a canned-cycle position), arc (N,) index
     into `ToolPath.arcs` of the arc ending at that row, -1 for straight moves (arc-sampled rows
-    from ``motion_arrays(arc_chord_tol=...)`` carry the arc index too).
+    from ``motion_arrays(arc_chord_tol=...)`` carry the arc index too), coolant (N,) in effect
+    (0 off, 7 mist, 8 flood, -1 not stated).
     """
 
     tip: np.ndarray
@@ -205,6 +206,7 @@ class MotionArrays:
     op: np.ndarray
     cycle: np.ndarray
     arc: np.ndarray
+    coolant: np.ndarray
 
     def __len__(self) -> int:
         return len(self.line)
@@ -226,7 +228,8 @@ class MotionArrays:
         return MotionArrays(*(getattr(self, f)[idx] for f in _MOTION_FIELDS))
 
 
-_MOTION_FIELDS = ("tip", "axis", "rapid", "feed", "spindle", "line", "op", "cycle", "arc")
+_MOTION_FIELDS = ("tip", "axis", "rapid", "feed", "spindle", "line", "op", "cycle", "arc",
+                  "coolant")
 
 
 @dataclass(slots=True)
@@ -275,4 +278,5 @@ class ToolPath:
             out.op,
             out.cycle,
             out.arc,
+            out.coolant,
         )

@@ -160,6 +160,7 @@ def toolpath_of(motions: PartMotions, *, path: str | Path, units: str, cutter) -
         op=np.zeros(n, dtype=np.int64),
         cycle=np.zeros(n, dtype=bool),
         arc=np.full(n, -1, dtype=np.int64),
+        coolant=np.full(n, -1, dtype=np.int64),
     )
     operation = Operation(name=Path(path).stem, cutter=cutter, end_motion=n)
     return ToolPath(path=str(path), dialect="gcode", units=units, records=[],

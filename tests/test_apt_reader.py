@@ -184,7 +184,7 @@ def test_continuation_comments_and_free_text():
     assert tp.records[3].text == "[HOLDER=C40] 6MM, 2FL"
     assert tp.operations[0].name == "ROUGH"
     assert tp.unknown == {"CSI_SET_FLUTE_LENGTH": 1}
-    assert tp.ignored == {"$$": 1, "COOLNT": 1, "INSERT": 1, "PPRINT": 1}
+    assert tp.ignored == {"$$": 1, "INSERT": 1, "PPRINT": 1}  # COOLNT is used: coolant
 
 
 def test_card_image_columns_73_to_80_ignored():

@@ -36,7 +36,7 @@ FEED_UNITS = {"IPM": "inch", "IPR": "inch", "MMPM": "mm", "MMPR": "mm"}
 # (statements that move or turn the part, such as ORIGIN or ROTABL, stay `unknown` on purpose)
 IGNORED = frozenset(
     {
-        "$$", "PAINT", "COOLNT", "CUTCOM", "PPRINT", "INSERT", "PARTNO", "END", "FINI",
+        "$$", "PAINT", "CUTCOM", "PPRINT", "INSERT", "PARTNO", "END", "FINI",
         "END-OF-PATH", "SELECT", "TITLE", "REMARK", "UNITS", "UNIT", "INTOL", "OUTTOL", "TOLER",
         "MACHIN", "CLRSRF", "CLEARP", "DELAY", "OPSTOP", "STOP", "SEQNO", "OPSKIP", "AUXFUN",
         "PREFUN", "DISPLY",
@@ -140,7 +140,7 @@ class _Reader:
         self.rapid: list[bool] = []
         self.line: list[int] = []
         self.sid: list[int] = []
-        self.states: list[tuple[float, float, float, int, int, bool]] = []
+        self.states: list[tuple[float, float, float, int, int, bool, int]] = []
         self.dirty = True
         # state
         self.default_axis = (0.0, 0.0, 1.0)
@@ -149,6 +149,7 @@ class _Reader:
         self.feed_now = math.nan
         self.feed_per_rev: float | None = None
         self.rpm = math.nan
+        self.coolant = -1  # COOLNT in effect: 0 off, 7 mist, 8 flood, -1 not stated
         self.in_cycle = False
         self.cycle_feed = math.nan  # mm/min of the current canned cycle
         self.world = False
@@ -202,10 +203,10 @@ class _Reader:
         if self.in_cycle and not math.isnan(self.cycle_feed):
             feed, per_rev = self.cycle_feed, math.nan
         self.states.append((feed, per_rev, self.rpm, self.frame_now, len(self.ops) - 1,
-                            self.in_cycle))
+                            self.in_cycle, self.coolant))
         self.dirty = False
 
-    def state_of(self, row: int) -> tuple[float, float, float, int, int, bool]:
+    def state_of(self, row: int) -> tuple[float, float, float, int, int, bool, int]:
         return self.states[self.sid[row]]
 
     def add_motion(self, rec: Record, xyz: tuple[float, float, float], rapid: bool) -> None:
@@ -284,6 +285,8 @@ class _Reader:
             self.pending_arc = (rec, values, turns, self.frame_now)
         elif word == "SPINDL":
             self.spindl(rec)
+        elif word == "COOLNT":
+            self.coolant = _coolant(rec, self.coolant)
         elif word == "CYCLE":
             self.cycle(rec)
         elif word in ("CUTTER", "TLDATA"):
@@ -469,7 +472,7 @@ class _Reader:
                 code="parse",
             )
         axis /= norm[:, None]
-        st = np.asarray(self.states, dtype=float).reshape(-1, 6)[self.sid]
+        st = np.asarray(self.states, dtype=float).reshape(-1, 7)[self.sid]
         frame = st[:, 3].astype(np.intp)
         fr.apply_frames(tip, axis, frame, self.matrices)
         rapid = np.asarray(self.rapid, dtype=bool)
@@ -486,6 +489,7 @@ class _Reader:
             op=st[:, 4].astype(np.int64),
             cycle=st[:, 5].astype(bool),
             arc=np.full(n, -1, dtype=np.int64),
+            coolant=st[:, 6].astype(np.int64),
         )
 
     def build_arcs(self, m: MotionArrays) -> list[Arc]:
@@ -557,7 +561,17 @@ class _Reader:
 
 
 # statements that change what `_Reader.push_state` records
-_STATE_WORDS = frozenset({"FEDRAT", "SPINDL", "CYCLE", "CSYS", "MSYS"})
+_STATE_WORDS = frozenset({"FEDRAT", "SPINDL", "COOLNT", "CYCLE", "CSYS", "MSYS"})
+# COOLNT/ words -> coolant code (M-code number: 7 mist, 8 flood, 0 off)
+_COOLANT = {"ON": 8, "FLOOD": 8, "THRU": 8, "TAP": 8, "MIST": 7, "AIR": 7, "OFF": 0}
+
+
+def _coolant(rec: Record, now: int) -> int:
+    """The coolant in effect after a COOLNT/ record (unknown words keep the current state)."""
+    for a in rec.args:
+        if isinstance(a, str) and a in _COOLANT:
+            return _COOLANT[a]
+    return now
 # statements that may not stand between a CIRCLE and its end GOTO
 _BREAKS_ARC = frozenset(
     {"CIRCLE", "FROM", "GODLTA", "CUTTER", "TLDATA", "LOAD", "LOADTL", "TOOL PATH", "CSYS",
