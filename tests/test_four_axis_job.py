@@ -165,3 +165,16 @@ def test_holder_hit_reports_the_stickout_that_clears_it(tmp_path):
     assert all(p.verdict == "holder" for p in doc.points if p.kind == "intermediate")
     # the bare cutter (no holder data) is clean there
     assert check_job(tmp_path / "wall.apt").summary.counts.ok == doc.summary.points
+
+
+@pytest.mark.slow
+def test_full_compressor_path_is_clean_and_the_shortest_path_moves_less(repo):
+    """The 2 x 41 x 41 sample job as in thesis chapter 5 (about a minute)."""
+    doc = check_job(repo / "samples/compressor/compressor.apt")
+    assert doc.summary.cc_points == 3364
+    for counts in (doc.summary.counts, doc.summary.counts_chosen):
+        assert counts.ok >= 3364
+        assert counts.gouge == counts.interference == counts.holder == counts.inaccessible == 0
+    o = doc.orientation
+    assert o.infeasible_points == 0
+    assert o.dp_total_rotation < o.original_total_rotation < o.greedy_total_rotation
