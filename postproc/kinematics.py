@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.errors import PathcheckError
+from checker.four_axis.axes import axis_for_b, b_for_axis, check_four_axis, rotate_about_y
 from postproc.machine import Machine
 
 #: sub-steps used to integrate the tip path relative to the part over one block
@@ -19,9 +19,7 @@ PATH_SUBSTEPS = 16
 
 def _rotate_y(v: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """Rotate vectors ``v (..., 3)`` about +Y by ``theta (...)`` radians (right-hand rule)."""
-    c, s = np.cos(theta), np.sin(theta)
-    x, y, z = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack([c * x + s * z, y, -s * x + c * z], axis=-1)
+    return rotate_about_y(v, np.degrees(theta), np.zeros(3))
 
 
 def rotation_rad(b_word: np.ndarray, machine: Machine) -> np.ndarray:
@@ -48,8 +46,7 @@ def machine_to_part(
 
 def axis_from_rotation(theta: np.ndarray) -> np.ndarray:
     """Part-frame tool axis ``(N, 3)`` for part rotations ``theta (N,)`` radians."""
-    theta = np.asarray(theta, dtype=float)
-    return np.stack([-np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=-1)
+    return axis_for_b(np.degrees(theta))
 
 
 def rotation_from_axis(
@@ -63,18 +60,8 @@ def rotation_from_axis(
     ``b = atan2(-i, k)``. An axis with ``|j| > j_tolerance`` is not a 4-axis-about-Y axis (an
     error naming ``path`` and the line from ``lines``)."""
     axis = np.asarray(axis, dtype=float)
-    bad = np.flatnonzero(np.abs(axis[:, 1]) > j_tolerance)
-    if bad.size:
-        k = int(bad[0])
-        line = None if lines is None else int(lines[k])
-        raise PathcheckError(
-            f"tool axis {tuple(np.round(axis[k], 6))} is not a 4-axis axis about Y: expected j = 0 "
-            f"(|j| <= {j_tolerance}), found j = {axis[k, 1]:.6g}",
-            path=path,
-            line=line,
-            code="kinematics",
-        )
-    return np.degrees(np.arctan2(-axis[:, 0], axis[:, 2]))
+    check_four_axis(axis, lines, path, j_tolerance)
+    return b_for_axis(axis)
 
 
 def tip_path_length(

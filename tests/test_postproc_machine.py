@@ -95,7 +95,7 @@ def test_axis_convention():
     axis = axis_from_rotation(np.radians(b))
     assert np.allclose(axis[1], [-0.5, 0.0, np.sqrt(3) / 2])
     assert np.allclose(rotation_from_axis(axis), [0.0, 30.0, -90.0, 180.0])
-    with pytest.raises(PathcheckError, match="not a 4-axis axis about Y.*j = 0.1"):
+    with pytest.raises(PathcheckError, match="not a 4-axis path about Y.*j = 0.1"):
         rotation_from_axis(np.array([[0.0, 0.1, 0.995]]), lines=np.array([7]))
 
 

@@ -36,9 +36,10 @@ def rotate_about_y(points: np.ndarray, b_deg: np.ndarray, center: np.ndarray) ->
     return np.stack([x, d[..., 1], z], axis=-1) + center
 
 
-def check_four_axis(axes: np.ndarray, lines: np.ndarray, path: str, tolerance: float) -> None:
+def check_four_axis(axes: np.ndarray, lines: np.ndarray | None, path: str | None,
+                    tolerance: float) -> None:
     """Raise when a tool axis is not perpendicular to Y (|j| > tolerance): the path is not 4-axis
-    about Y, and is never silently projected. Names the first offending line."""
+    about Y, and is never silently projected. Names the first offending line (of `lines`)."""
     j = np.abs(np.asarray(axes, dtype=float)[:, 1])
     bad = np.flatnonzero(j > tolerance)
     if bad.size:
@@ -47,7 +48,7 @@ def check_four_axis(axes: np.ndarray, lines: np.ndarray, path: str, tolerance: f
             f"not a 4-axis path about Y: tool axis {np.round(axes[first], 6).tolist()} has "
             f"j = {axes[first, 1]:.6g} (expected |j| <= {tolerance:g}); {bad.size} axes like it",
             path=path,
-            line=int(lines[first]),
+            line=None if lines is None else int(lines[first]),
             code="not-4-axis",
         )
 
