@@ -67,18 +67,15 @@ def _cutters(toolpath, ops: np.ndarray, cutter, apt_path: Path) -> dict[int, obj
 
 
 def _depth(cutter, tips: np.ndarray, axes: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    """(N,) penetration (mm, >= 0) of the real cutter at its CL poses into points (part frame)."""
-    from checker.engine.frames import group_axes, tool_rotation
+    """(N,) penetration (mm, >= 0) of the real cutter at its CL poses into points (part frame),
+    each row in its own tool frame."""
+    from checker.engine.frames import rotate_rows, tool_rotations
 
     out = np.zeros(len(tips))
-    ok = np.isfinite(pts).all(axis=1)
-    keys, group = group_axes(axes)
-    for g, axis in enumerate(keys):
-        rows = np.flatnonzero((group == g) & ok)
-        if rows.size:
-            Q = tool_rotation(axis)
-            sd = cutter.signed_distance((pts[rows] - tips[rows]) @ Q.T)
-            out[rows] = np.maximum(-sd, 0.0)
+    rows = np.flatnonzero(np.isfinite(pts).all(axis=1))
+    if rows.size:
+        local = rotate_rows(tool_rotations(axes[rows]), pts[rows] - tips[rows])
+        out[rows] = np.maximum(-cutter.signed_distance(local), 0.0)
     return out
 
 

@@ -11,13 +11,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.config import Config
-from checker.four_axis.axes import axis_for_b, check_b_range, check_four_axis, rotate_about_y
+from checker.four_axis.axes import (
+    axis_for_b,
+    b_for_axis,
+    check_b_range,
+    check_four_axis,
+    rotate_about_y,
+)
 from checker.four_axis.best_b import best_b
 from checker.four_axis.plan import (
     Orientations,
     PoseCheck,
     allowable_over_b,
-    cam_b,
     check_poses,
     coarse_config,
     holder_check,
@@ -87,7 +92,7 @@ def check_path(
         check_four_axis(axes, lines, path, cfg.four_axis.axis_j_tolerance)
         lo, hi = b_range if b_range is not None else (cfg.four_axis.b_min, cfg.four_axis.b_max)
         check_b_range(lo, hi, *machine_limits)
-        b_original = cam_b(axes)
+        b_original = b_for_axis(axes)
         step = np.r_[0.0, np.linalg.norm(np.diff(contacts.cc, axis=0), axis=1)]
         fn = allowable_over_b(test_points, part, cutter, contacts, cfg)
         coarse = allowable_over_b(test_points, part, cutter, contacts, coarse_config(cfg))

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.config import Config
-from checker.four_axis.axes import axis_for_b, b_for_axis
+from checker.four_axis.axes import axis_for_b
 from checker.four_axis.best_b import BestB, best_b
 from checker.four_axis.holder import HolderCheck, check_holder
 from checker.four_axis.orientation import (
@@ -98,11 +98,6 @@ def plan_orientations(
         max_db_per_mm=fa.max_db_per_mm, extra_candidates=extra,
     )
     return Orientations(b_original, best, chosen, greedy)
-
-
-def cam_b(axes: np.ndarray) -> np.ndarray:
-    """The CAM's table angle of each part-frame tool axis, degrees."""
-    return b_for_axis(axes)
 
 
 @dataclass(frozen=True)
