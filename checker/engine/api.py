@@ -9,6 +9,7 @@ import numpy as np
 
 from checker.config import Config, default_config
 from checker.cutter import BALL_FAMILY
+from checker.engine import limits
 from checker.engine.bins import binned_scan, part_tops
 from checker.engine.family import family_bounds
 from checker.engine.frames import group_axes, rotate_rows, tool_rotations
@@ -17,6 +18,7 @@ from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes
 from checker.engine.verdict import verdicts
 from checker.errors import PathcheckError
 from checker.geometry.evaluate import evaluate_mixed
+from checker.geometry.inverse import invert_points
 from checker.geometry.sampling import TestPoints
 from checker.part import Part
 
@@ -154,8 +156,6 @@ def _snap(tp: TestPoints, part: Part, cc: np.ndarray, normals: np.ndarray):
     replaces a given normal within `_SNAP_ANGLE` rad of it (either sign), so that rounding in
     the input does not disturb the sizes near the CC point. Returns (cc, normals, surface (N,),
     uv (N, 2))."""
-    from checker.geometry.inverse import invert_points
-
     _, near = tp.tree.query(cc)
     own = tp.surface[near].astype(np.int64)
     uv = np.full((len(cc), 2), np.nan)
@@ -183,7 +183,8 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     n = len(frame.cc)
     rows = np.arange(n)
     k = min(_KNN, len(tp.points))
-    _, knn = tp.tree.query(rotate_rows(Q.transpose(0, 2, 1), frame.cc), k=k)
+    cc_part = rotate_rows(Q.transpose(0, 2, 1), frame.cc)
+    _, knn = tp.tree.query(cc_part, k=k)
     knn = knn.reshape(n, k)
     s_ub = pair_sizes(cutter, frame, np.repeat(rows, k),
                       rotate_rows(Q, tp.points[knn.ravel()], np.repeat(rows, k)))
@@ -214,29 +215,41 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
         extra = _contour_starts(tp, part, sc.crossings)
         srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
                                   zip((srow, ssid, suv, sstep), extra, strict=True))
+    pairs = None
     if uv_own is not None:
-        ring = _ring_starts(part, cutter, frame, Q, own, uv_own,
+        pairs = _contact_pairs(tp, part, knn, own, uv_own, cc_part)
+        ring = _ring_starts(part, cutter, frame, Q, *pairs,
                             [eng.ring, 0.5 * spacing, 1.5 * spacing])
-        if ring is not None:
-            srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
-                                      zip((srow, ssid, suv, sstep), ring, strict=True))
-            evals += 24 * (own >= 0)
+        srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
+                                  zip((srow, ssid, suv, sstep), ring, strict=True))
+        np.add.at(evals, pairs[0], 24)
     seam = _seam_starts(tp, part, knn, own, spacing)
     srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
                               zip((srow, ssid, suv, sstep), seam, strict=True))
+    best = (size, lim_p, lim_s, lim_uv)
     if srow.size:
         ref = refine(part, cutter, frame, Q, srow, ssid, suv, sstep, eng.refine_iterations)
         np.add.at(evals, srow, ref.evaluations)
-        order = np.lexsort((ref.size, srow))
-        first = np.ones(order.size, dtype=bool)
-        first[1:] = srow[order][1:] != srow[order][:-1]
-        pick = order[first]
-        r = srow[pick]
-        better = ref.size[pick] < size[r]
-        r, pick = r[better], pick[better]
-        size[r], lim_p[r] = ref.size[pick], ref.point[pick]
-        lim_s[r], lim_uv[r] = ssid[pick], ref.uv[pick]
+        _keep_smaller(best, srow, ref.size, ref.point, ssid, ref.uv)
+    if pairs is not None and limits.applies(cutter):
+        prow, psid, puv = pairs
+        lim = limits.flat_contour_limit(part, frame, Q, prow, psid, puv)
+        _keep_smaller(best, prow, lim, cc_part[prow], psid, puv)
     return size, lim_p, lim_s, lim_uv, evals
+
+
+def _keep_smaller(best: tuple, rows: np.ndarray, size: np.ndarray, point: np.ndarray,
+                  sid: np.ndarray, uv: np.ndarray) -> None:
+    """Per row, the smallest of the candidates (rows (K,), size, point, surface, uv) replaces
+    `best` = (size (N,), point (N, 3), surface (N,), uv (N, 2)) where it is smaller (in place)."""
+    order = np.lexsort((size, rows))
+    first = np.ones(order.size, dtype=bool)
+    first[1:] = rows[order][1:] != rows[order][:-1]
+    pick = order[first]
+    r = rows[pick]
+    better = size[pick] < best[0][r]
+    r, pick = r[better], pick[better]
+    best[0][r], best[1][r], best[2][r], best[3][r] = size[pick], point[pick], sid[pick], uv[pick]
 
 
 def _seed_starts(tp: TestPoints, part: Part, sc, spacing: float):
@@ -267,6 +280,32 @@ def _contour_starts(tp: TestPoints, part: Part, crossings: tuple):
     return rows, sid, uv, step
 
 
+def _contact_pairs(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray,
+                   uv_own: np.ndarray, cc: np.ndarray):
+    """(rows (K,), surfaces (K,), uv (K, 2)): every surface each CC point `cc (N, 3)` (part
+    frame) lies on: its own (`own`, `uv_own`, where known) and, on a seam, every other surface
+    of its nearest test points `knn (N, k)` that passes within `_SNAP` mm of it (uv by
+    inversion from that test point)."""
+    has = (own >= 0) & np.isfinite(uv_own).all(axis=1)
+    rows, sids, uvs = [np.flatnonzero(has)], [own[has]], [uv_own[has]]
+    n, k = knn.shape
+    sid = tp.surface[knn]
+    first = np.ones((n, k), dtype=bool)  # nearest test point of its surface in the row
+    for j in range(1, k):
+        first[:, j] = (sid[:, :j] != sid[:, j:j + 1]).all(axis=1)
+    r, j = np.nonzero(first & (sid != own[:, None]) & (sid >= 0))
+    idx = knn[r, j]
+    for s in np.unique(tp.surface[idx]):
+        sel = np.flatnonzero(tp.surface[idx] == s)
+        u, v, dist = invert_points(part.surfaces[int(s)], cc[r[sel]], tp.uv[idx[sel], 0],
+                                   tp.uv[idx[sel], 1])
+        ok = dist <= _SNAP
+        rows.append(r[sel][ok])
+        sids.append(np.full(int(ok.sum()), s, dtype=np.int64))
+        uvs.append(np.column_stack([u, v])[ok])
+    return np.concatenate(rows), np.concatenate(sids).astype(np.int64), np.concatenate(uvs)
+
+
 def _seam_starts(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray, spacing: float):
     """Where the CC point lies on or near a seam: among its nearest test points, the nearest one
     on each other surface within one spacing starts a refinement (the rings stay on the CC
@@ -287,17 +326,13 @@ def _seam_starts(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray, s
     return rows[pick], tp.surface[idx].astype(np.int64), tp.uv[idx], step
 
 
-def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, own: np.ndarray,
-                 uv_own: np.ndarray, radii: list[float]):
-    """Around each CC point on its own surface, 8 points on each ring of `radii` (mm): the
-    first ring probes the curvature limit at the CC point, the wider ones the narrow valleys
-    near it that the samples do not resolve. The best point of each ring is a refinement
-    start (stencil half-width: half the ring radius). None when no row has its own surface."""
-    rows = np.flatnonzero((own >= 0) & np.isfinite(uv_own).all(axis=1))
-    if rows.size == 0:
-        return None
-    sid = own[rows]
-    ev = evaluate_mixed(part, sid, uv_own[rows, 0], uv_own[rows, 1])
+def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
+                 sid: np.ndarray, uv: np.ndarray, radii: list[float]):
+    """Around each CC point, on each surface it lies on (pairs rows (K,), sid (K,), uv (K, 2)),
+    8 points on each ring of `radii` (mm): the first ring probes the curvature limit at the CC
+    point, the wider ones the narrow valleys near it that the samples do not resolve. The best
+    point of each ring is a refinement start (stencil half-width: half the ring radius)."""
+    ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
     per_mm = 1.0 / np.maximum(np.column_stack([np.linalg.norm(ev.du, axis=1),
                                                 np.linalg.norm(ev.dv, axis=1)]), 1e-12)
     dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
@@ -306,14 +341,13 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, own: np.nda
     ar = np.arange(rows.size)
     for radius in radii:
         step = radius * per_mm
-        uv = np.clip(uv_own[rows, None, :] + _RING[None] * step[:, None, :], lo[:, None],
-                     hi[:, None])
-        pts = evaluate_mixed(part, np.repeat(sid, 8), uv[..., 0].ravel(),
-                             uv[..., 1].ravel()).points
+        ring = np.clip(uv[:, None, :] + _RING[None] * step[:, None, :], lo[:, None], hi[:, None])
+        pts = evaluate_mixed(part, np.repeat(sid, 8), ring[..., 0].ravel(),
+                             ring[..., 1].ravel()).points
         f = pair_sizes(cutter, frame, np.repeat(rows, 8),
                        rotate_rows(Q, pts, np.repeat(rows, 8))).reshape(-1, 8)
         k = np.argmin(f, axis=1)
         ok = np.isfinite(f[ar, k])
         half = step if radius == radii[0] else 0.5 * step
-        out.append((rows[ok], sid[ok], uv[ar, k][ok], half[ok]))
+        out.append((rows[ok], sid[ok], ring[ar, k][ok], half[ok]))
     return tuple(np.concatenate([o[t] for o in out]) for t in range(4))

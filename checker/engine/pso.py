@@ -45,7 +45,7 @@ def pso_search(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rng: np.rando
 
     def f_of(Xf: np.ndarray, r: np.ndarray) -> np.ndarray:
         sid, u, v = _to_surface(part, Xf)
-        return obj(r, sid, u, v)[0]
+        return obj.exact(r, sid, u, v, order=1)[0]
 
     F = f_of(X.reshape(-1, 2), rows).reshape(n, npart)
     pbest, pval = X.copy(), F.copy()
@@ -89,7 +89,7 @@ def pso_search(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rng: np.rando
         if res.fun < size[i]:
             size[i], X_final[i] = res.fun, np.clip(res.x, 0.0, hi - 1e-12)
     sid, u, v = _to_surface(part, X_final)
-    pts = obj(np.arange(n), sid, u, v)[1]
+    pts = obj.exact(np.arange(n), sid, u, v, order=1)[1]
     found = np.isfinite(size)
     pts[~found] = np.nan
     sid = np.where(found, sid, -1)
