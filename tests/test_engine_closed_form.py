@@ -1,7 +1,9 @@
 """Allowable sizes against closed-form truths derived for exact rational NURBS parts.
 
 Bowl (sphere radius rho, concave): a ball of radius rho fits everywhere (r* = rho). A bull-nose
-of corner r touching at polar angle phi from the bottom: its corner circle lies in the
+of corner r (r = 0: a flat end-mill, whose bottom rim passes through the CC point and whose
+limit there is the closed form of checker/engine/limits.py) touching at polar angle phi from the
+bottom: its corner circle lies in the
 horizontal plane of the fillet centre O, whose section of the offset sphere (radius rho - r) is a
 circle through O of radius (rho - r) sin(phi) centred on the bowl axis, so R* = (rho - r) sin(phi)
 (the corner circle coincides with it). Groove (cylinder radius rho, concave): the same argument in
@@ -29,7 +31,7 @@ def _cc(part, u, v):
     return ev.points, ev.normals
 
 
-@pytest.mark.parametrize("cut", ["CUTTER/10,5", "CUTTER/12,2", "CUTTER/8,1"])
+@pytest.mark.parametrize("cut", ["CUTTER/10,5", "CUTTER/12,2", "CUTTER/8,1", "CUTTER/10"])
 def test_bowl(cut):
     rho = 20.0
     part, g = bowl(rho)
@@ -50,7 +52,7 @@ def test_bowl(cut):
     assert (res.verdict == expect).all()
 
 
-@pytest.mark.parametrize("cut", ["CUTTER/10,5", "CUTTER/12,2"])
+@pytest.mark.parametrize("cut", ["CUTTER/10,5", "CUTTER/12,2", "CUTTER/10"])
 def test_groove(cut):
     rho = 15.0
     part, _ = groove(rho, 80.0)
