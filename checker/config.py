@@ -82,7 +82,7 @@ class EngineConfig(_Section):
     exclusion: PositiveFloat = 1e-3
     ring: PositiveFloat = 0.01
     refine_seeds: PositiveInt = 4
-    refine_iterations: PositiveInt = 12
+    refine_iterations: PositiveInt = 24
     pso_particles: PositiveInt = 64
     pso_repeat: PositiveInt = 30
     pso_inertia: tuple[float, float] = (0.1, 0.2)
