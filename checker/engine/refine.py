@@ -19,7 +19,7 @@ import numpy as np
 
 from checker.cutter import BALL_FAMILY
 from checker.engine.frames import heights, rotate_rows
-from checker.engine.sizes import RowFrame, pair_sizes
+from checker.engine.sizes import RowFrame, pair_sizes, point_size, size_args
 from checker.geometry.evaluate import SurfaceEval, evaluate_mixed
 from checker.part import Part
 
@@ -33,6 +33,7 @@ _PRUNE_REL, _PRUNE_ABS = 0.01, 0.02  # 'far above': more than 1 % + 0.02 mm
 _CONVERGED = 1e-5  # a start stops when its stencil is this fraction of the initial one
 _OFFS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.float64)
 _CENTRE = 4  # index of the stencil centre in _OFFS
+_CHUNK = 256  # model queries per parallel task
 
 
 @dataclass
@@ -67,15 +68,12 @@ def _free(g, x, lo, hi):
     return 0.0 if (x >= hi and g > 0.0) or (x <= lo and g < 0.0) else g
 
 
-@nb.njit(cache=True, parallel=True)
-def _taylor_points(d, uv0, starts, rows, Q, floor, snap, lo, hi, u, v, pts):
-    """Model points `pts (K, 3)` of starts `starts (K,)` at (u, v) (K,); with `floor` (per row,
-    tool-frame height; empty: no floor) points below it (with `snap`: every point) move onto it
-    first by Newton steps on the model's height (u, v updated in place, clipped to [lo, hi]
-    (K, 2))."""
-    for k in nb.prange(u.shape[0]):
+@nb.njit(cache=True)
+def _model_range(d, uv0, starts, rows, Q, floor, snap, lo, hi, u, v, pts, f, sz, k0, k1):
+    """`_model_sizes` for the queries k0 <= k < k1."""
+    e = np.empty((3, 3))
+    for k in range(k0, k1):
         s, r = starts[k], rows[k]
-        e = np.empty((3, 3))
         _taylor_at(d, uv0, s, u[k], v[k], e)
         for _ in range(_FLOOR_STEPS if floor.shape[0] else 0):
             z = Q[r, 2, 0] * e[0, 0] + Q[r, 2, 1] * e[0, 1] + Q[r, 2, 2] * e[0, 2]
@@ -94,6 +92,23 @@ def _taylor_points(d, uv0, starts, rows, Q, floor, snap, lo, hi, u, v, pts):
             _taylor_at(d, uv0, s, u[k], v[k], e)
         for m in range(3):
             pts[k, m] = e[0, m]
+        x = Q[r, 0, 0] * e[0, 0] + Q[r, 0, 1] * e[0, 1] + Q[r, 0, 2] * e[0, 2]
+        y = Q[r, 1, 0] * e[0, 0] + Q[r, 1, 1] * e[0, 1] + Q[r, 1, 2] * e[0, 2]
+        z = Q[r, 2, 0] * e[0, 0] + Q[r, 2, 1] * e[0, 1] + Q[r, 2, 2] * e[0, 2]
+        f[k] = point_size(sz, r, x, y, z)
+
+
+@nb.njit(cache=True, parallel=True)
+def _model_sizes(d, uv0, starts, rows, Q, floor, snap, lo, hi, u, v, pts, f, sz):
+    """Model points `pts (K, 3)` (part frame) and their sizes `f (K,)` (rules of
+    `sizes.point_size`, tool frame of each row through `Q`) of starts `starts (K,)` at (u, v)
+    (K,); with `floor` (per row, tool-frame height; empty: no floor) points below it (with
+    `snap`: every point) move onto it first by Newton steps on the model's height (u, v updated
+    in place, clipped to [lo, hi] (K, 2)). Parallel over chunks of queries."""
+    n = u.shape[0]
+    for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
+        _model_range(d, uv0, starts, rows, Q, floor, snap, lo, hi, u, v, pts, f, sz, c * _CHUNK,
+                     min(n, (c + 1) * _CHUNK))
 
 
 class _Taylor:
@@ -125,6 +140,7 @@ class _Objective:
         self.dom = np.array([s.domain for s in part.surfaces], dtype=np.float64)
         flat = cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0
         self.floor = frame.fam.z0 + _ABOVE if flat else None
+        self.sz = size_args(cutter, frame, np.arange(len(frame.cc)))
 
     def exact(self, rows, sid, u, v, order: int = 2):
         """(f (K,), points (K, 3) part frame, uv (K, 2), evaluation of that order) on the
@@ -139,17 +155,21 @@ class _Objective:
         """(f (K,), points (K, 3), uv (K, 2)) on the Taylor models of `starts (K,)`; `snap`:
         move every point onto the bottom plane (to walk along the contour)."""
         u, v = u.copy(), v.copy()
-        pts = np.empty((len(u), 3))
+        pts, f = np.empty((len(u), 3)), np.empty(len(u))
         floor = np.zeros(0) if self.floor is None else self.floor
         d = self.dom[sid]
-        _taylor_points(taylor.d, taylor.uv0, starts, rows, self.Q, floor, snap,
-                       np.ascontiguousarray(d[:, :, 0]), np.ascontiguousarray(d[:, :, 1]), u, v,
-                       pts)
-        return self._sizes(rows, sid, u, v, pts)
+        _model_sizes(taylor.d, taylor.uv0, starts, rows, self.Q, floor, snap,
+                     np.ascontiguousarray(d[:, :, 0]), np.ascontiguousarray(d[:, :, 1]), u, v,
+                     pts, f, self.sz)
+        return self._trimmed(sid, u, v, f, pts)
 
     def _sizes(self, rows, sid, u, v, pts):
         """(f (K,), points, uv (K, 2)): sizes of the part-frame points, inf outside trims."""
         f = pair_sizes(self.cutter, self.frame, rows, rotate_rows(self.Q, pts, rows))
+        return self._trimmed(sid, u, v, f, pts)
+
+    def _trimmed(self, sid, u, v, f, pts):
+        """(f, points, uv (K, 2)) with f = inf at the points outside their surface's trim."""
         for s in self.trimmed:
             sel = np.flatnonzero(sid == s)
             if sel.size:
