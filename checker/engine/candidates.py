@@ -1,24 +1,37 @@
 """Candidate test points per CC row: all points inside a vertical disc and a height slab (tool
-frame), found through a uniform 2-D cell grid, returned as CSR lists. Numba-compiled."""
+frame), found through a uniform 2-D cell grid. A row's trial region is one row of a region array
+(see `region_rows`); `inside` and `cell_range` are the numba pieces every traversal shares, and
+`disc_candidates` returns the plain CSR lists."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numba as nb
 import numpy as np
 
+from checker.engine.family import FamilyBounds
 from checker.engine.frames import identity_rows, rotated
 
 SERIAL_ROWS = 64  # below this many rows a kernel runs serially (thread start-up costs more)
 _EPS_MM = 1e-9  # mm added to a tilted search disc against rounding
+_CULL_EPS_MM = 1e-6  # mm by which a cell's box must miss a region to be skipped
+
+# Columns of a region array (N, REGION_COLS), each row in its own tool frame, mm: the disc
+# (centre, radius), the slab (z low, z high), the ball below `ZEQ` (centre, radius), the plane
+# (normal, offset: a point p must have normal . p >= offset) and the disc in the grid's frame
+# that holds the region's grid points (centre, radius; -1: no point).
+CX, CY, RAD, ZLO, ZHI, SX, SY, SZ, SR, ZEQ, PX, PY, PZ, PD, BX, BY, BRAD = range(17)
+REGION_COLS = 17
 
 
 @dataclass
 class CellGrid:
     """Test points (tool frame, mm) binned by (x, y) into square cells of side `cell` mm:
     points of cell c are `order[start[c]:start[c + 1]]`; cell (i, j) is `c = i * ny + j`;
-    `xyz_cells = xyz[order]` (the points in cell order)."""
+    `xyz_cells = xyz[order]` (the points in cell order); `box_lo`, `box_hi` (C, 3) the corners
+    of each cell's bounding box (inf, -inf for an empty cell), `bounds (2, 3)` those of all
+    points; `memo` what other modules derive from the grid once."""
 
     xyz: np.ndarray
     origin: np.ndarray
@@ -28,6 +41,16 @@ class CellGrid:
     start: np.ndarray
     order: np.ndarray
     xyz_cells: np.ndarray
+    box_lo: np.ndarray
+    box_hi: np.ndarray
+    bounds: np.ndarray
+    memo: dict = field(default_factory=dict)
+
+    def kernel_args(self) -> tuple:
+        """The grid as one tuple for the numba kernels: (xyz_cells, order, start, x0, y0, cell,
+        nx, ny, box_lo, box_hi)."""
+        return (self.xyz_cells, self.order, self.start, float(self.origin[0]),
+                float(self.origin[1]), self.cell, self.nx, self.ny, self.box_lo, self.box_hi)
 
 
 def build_grid(xyz: np.ndarray, per_cell: float = 6.0) -> CellGrid:
@@ -41,60 +64,163 @@ def build_grid(xyz: np.ndarray, per_cell: float = 6.0) -> CellGrid:
     c = ij[:, 0] * ny + ij[:, 1]
     order = np.argsort(c, kind="stable")
     start = np.searchsorted(c[order], np.arange(nx * ny + 1))
-    return CellGrid(np.ascontiguousarray(xyz), lo, cell, nx, ny, start, order,
-                    np.ascontiguousarray(xyz[order]))
+    xyz_cells = np.ascontiguousarray(xyz[order])
+    box_lo = np.full((nx * ny, 3), np.inf)
+    box_hi = np.full((nx * ny, 3), -np.inf)
+    full = np.flatnonzero(start[1:] > start[:-1])
+    if full.size:
+        box_lo[full] = np.minimum.reduceat(xyz_cells, start[full], axis=0)
+        box_hi[full] = np.maximum.reduceat(xyz_cells, start[full], axis=0)
+    return CellGrid(np.ascontiguousarray(xyz), lo, cell, nx, ny, start, order, xyz_cells, box_lo,
+                    box_hi, np.array([xyz.min(axis=0), xyz.max(axis=0)]))
+
+
+@nb.njit(cache=True, inline="always")
+def inside(reg, i, x, y, z):
+    """Whether the point (x, y, z) (row i's frame, mm) lies in row i's region `reg[i]`: in the
+    slab, on or above the plane, in the ball where below `ZEQ`, and in the disc."""
+    if z < reg[i, ZLO] or z > reg[i, ZHI]:
+        return False
+    if reg[i, PX] * x + reg[i, PY] * y + reg[i, PZ] * z < reg[i, PD]:
+        return False  # below the tangent plane: no cutter of the family reaches it
+    if z < reg[i, ZEQ]:  # below the equator: inside the sphere or nothing
+        sx = x - reg[i, SX]
+        sy = y - reg[i, SY]
+        sz = z - reg[i, SZ]
+        if sx * sx + sy * sy + sz * sz > reg[i, SR] * reg[i, SR]:
+            return False
+    dx = x - reg[i, CX]
+    dy = y - reg[i, CY]
+    return dx * dx + dy * dy <= reg[i, RAD] * reg[i, RAD]
+
+
+@nb.njit(cache=True, inline="always")
+def cell_range(reg, i, grid):
+    """Cell columns i0..i1 and rows j0..j1 covering row i's grid-frame disc (empty: i1 < i0 or
+    j1 < j0)."""
+    x0, y0, cell, nx, ny = grid[3], grid[4], grid[5], grid[6], grid[7]
+    bx, by, br = reg[i, BX], reg[i, BY], reg[i, BRAD]
+    i0 = int(min(max(np.floor((bx - br - x0) / cell), 0.0), nx - 1.0))
+    i1 = int(min(max(np.floor((bx + br - x0) / cell), -1.0), nx - 1.0))
+    j0 = int(min(max(np.floor((by - br - y0) / cell), 0.0), ny - 1.0))
+    j1 = int(min(max(np.floor((by + br - y0) / cell), -1.0), ny - 1.0))
+    return i0, i1, j0, j1
+
+
+@nb.njit(cache=True, inline="always")
+def column_span(reg, i, grid, a, j0, j1):
+    """The rows of cell column a, within j0..j1, that meet row i's grid-frame disc (empty:
+    second < first); `_CULL_EPS_MM` wider against rounding."""
+    x0, y0, cell, nx = grid[3], grid[4], grid[5], grid[6]
+    bx, by, br = reg[i, BX], reg[i, BY], reg[i, BRAD]
+    left = x0 + a * cell
+    dx = left - bx if bx < left else 0.0
+    if a < nx - 1:  # the last column also holds the points beyond its right edge
+        dx = max(dx, bx - (left + cell))
+    dx = max(dx - _CULL_EPS_MM, 0.0)
+    if dx > br:
+        return j0, j0 - 1
+    h = np.sqrt(br * br - dx * dx) + _CULL_EPS_MM
+    return (int(max(np.floor((by - h - y0) / cell), j0)),
+            int(min(np.floor((by + h - y0) / cell), j1)))
+
+
+@nb.njit(cache=True, inline="always")
+def grid_view(reg, i, rot):
+    """Row i's region axes seen from the grid's frame, for `cell_misses`: the row's z axis, the
+    plane's normal and the ball's centre (grid frame, 9 floats)."""
+    px, py, pz = reg[i, PX], reg[i, PY], reg[i, PZ]
+    sx, sy, sz = reg[i, SX], reg[i, SY], reg[i, SZ]
+    return (rot[i, 2, 0], rot[i, 2, 1], rot[i, 2, 2],
+            px * rot[i, 0, 0] + py * rot[i, 1, 0] + pz * rot[i, 2, 0],
+            px * rot[i, 0, 1] + py * rot[i, 1, 1] + pz * rot[i, 2, 1],
+            px * rot[i, 0, 2] + py * rot[i, 1, 2] + pz * rot[i, 2, 2],
+            sx * rot[i, 0, 0] + sy * rot[i, 1, 0] + sz * rot[i, 2, 0],
+            sx * rot[i, 0, 1] + sy * rot[i, 1, 1] + sz * rot[i, 2, 1],
+            sx * rot[i, 0, 2] + sy * rot[i, 1, 2] + sz * rot[i, 2, 2])
+
+
+@nb.njit(cache=True, inline="always")
+def cell_heights(view, lo, hi, c):
+    """Lowest and highest row-frame height (mm, widened by _CULL_EPS_MM) over the box `lo[c]`,
+    `hi[c]` (grid frame; `view` from `grid_view`)."""
+    hx, hy = 0.5 * (hi[c, 0] - lo[c, 0]), 0.5 * (hi[c, 1] - lo[c, 1])
+    hz = 0.5 * (hi[c, 2] - lo[c, 2])
+    mx, my = 0.5 * (hi[c, 0] + lo[c, 0]), 0.5 * (hi[c, 1] + lo[c, 1])
+    mz = 0.5 * (hi[c, 2] + lo[c, 2])
+    zc = view[0] * mx + view[1] * my + view[2] * mz
+    zh = abs(view[0]) * hx + abs(view[1]) * hy + abs(view[2]) * hz
+    return zc - zh - _CULL_EPS_MM, zc + zh + _CULL_EPS_MM
+
+
+@nb.njit(cache=True, inline="always")
+def cell_misses(reg, i, view, grid, c):
+    """Whether no point of cell c can lie in row i's region (`view` from `grid_view`): the
+    cell's bounding box is outside the grid-frame disc, or (row frame) above or below the slab,
+    below the plane, or below the equator and outside the ball, by more than _CULL_EPS_MM."""
+    lo, hi = grid[8], grid[9]
+    hx, hy = 0.5 * (hi[c, 0] - lo[c, 0]), 0.5 * (hi[c, 1] - lo[c, 1])
+    hz = 0.5 * (hi[c, 2] - lo[c, 2])
+    mx, my = 0.5 * (hi[c, 0] + lo[c, 0]), 0.5 * (hi[c, 1] + lo[c, 1])
+    mz = 0.5 * (hi[c, 2] + lo[c, 2])
+    dx = max(abs(mx - reg[i, BX]) - hx, 0.0)
+    dy = max(abs(my - reg[i, BY]) - hy, 0.0)
+    far = reg[i, BRAD] + _CULL_EPS_MM
+    if dx * dx + dy * dy > far * far:
+        return True
+    zc = view[0] * mx + view[1] * my + view[2] * mz
+    zh = abs(view[0]) * hx + abs(view[1]) * hy + abs(view[2]) * hz
+    if zc + zh < reg[i, ZLO] - _CULL_EPS_MM or zc - zh > reg[i, ZHI] + _CULL_EPS_MM:
+        return True
+    top = view[3] * mx + view[4] * my + view[5] * mz + abs(view[3]) * hx + abs(view[4]) * hy \
+        + abs(view[5]) * hz
+    if top < reg[i, PD] - _CULL_EPS_MM:
+        return True
+    if zc + zh < reg[i, ZEQ] - _CULL_EPS_MM:
+        ex = max(abs(mx - view[6]) - hx, 0.0)
+        ey = max(abs(my - view[7]) - hy, 0.0)
+        ez = max(abs(mz - view[8]) - hz, 0.0)
+        far = reg[i, SR] + _CULL_EPS_MM
+        if ex * ex + ey * ey + ez * ez > far * far:
+            return True
+    return False
 
 
 @nb.njit(cache=True)
-def _collect_row(i, xyz, lo0, lo1, cell, nx, ny, start, order, bx, by, brad, rot, cx, cy, rad, zlo,
-                 zhi, sph, zeq, plane, indptr, out, fill):
-    """Candidates of row i: the cells within `brad[i]` of (bx, by)[i] (grid frame), each point
-    tested in the row's own frame (`rot[i]` @ grid point). `xyz` in cell order; the cells of a
-    grid column form one range of it."""
-    i0 = int(min(max(np.floor((bx[i] - brad[i] - lo0) / cell), 0.0), nx - 1.0))
-    i1 = int(min(max(np.floor((bx[i] + brad[i] - lo0) / cell), -1.0), nx - 1.0))
-    j0 = int(min(max(np.floor((by[i] - brad[i] - lo1) / cell), 0.0), ny - 1.0))
-    j1 = int(min(max(np.floor((by[i] + brad[i] - lo1) / cell), -1.0), ny - 1.0))
-    r2 = rad[i] * rad[i]
+def _collect_row(i, grid, rot, reg, indptr, out, fill):
+    """Candidates of row i: the points of the cells under its grid-frame disc whose boxes can
+    meet its region, each tested in the row's own frame (`rot[i]` @ grid point). Counts into
+    `out[i]`, or (fill) writes the point ids from `out[indptr[i]]`."""
+    xyz, order, start, ny = grid[0], grid[1], grid[2], grid[7]
+    i0, i1, j0, j1 = cell_range(reg, i, grid)
+    view = grid_view(reg, i, rot)
     k = indptr[i]
     cnt = 0
     for a in range(i0, i1 + 1):
-        for t in range(start[a * ny + j0], start[a * ny + max(j1, j0 - 1) + 1]):
-            x, y, z = rotated(rot, i, xyz, t)
-            if z < zlo[i] or z > zhi[i]:
+        ja, jb = column_span(reg, i, grid, a, j0, j1)
+        for c in range(a * ny + ja, a * ny + jb + 1):
+            if start[c] == start[c + 1] or cell_misses(reg, i, view, grid, c):
                 continue
-            if plane[i, 0] * x + plane[i, 1] * y + plane[i, 2] * z < plane[i, 3]:
-                continue  # below the tangent plane: no cutter of the family reaches it
-            if z < zeq[i]:  # below the equator: inside the sphere or nothing
-                sx = x - sph[i, 0]
-                sy = y - sph[i, 1]
-                sz = z - sph[i, 2]
-                if sx * sx + sy * sy + sz * sz > sph[i, 3] * sph[i, 3]:
-                    continue
-            dx = x - cx[i]
-            dy = y - cy[i]
-            if dx * dx + dy * dy <= r2:
-                if fill:
-                    out[k + cnt] = order[t]
-                cnt += 1
+            for t in range(start[c], start[c + 1]):
+                x, y, z = rotated(rot, i, xyz, t)
+                if inside(reg, i, x, y, z):
+                    if fill:
+                        out[k + cnt] = order[t]
+                    cnt += 1
     if not fill:
         out[i] = cnt
 
 
 @nb.njit(cache=True, parallel=True)
-def _collect_par(xyz, lo0, lo1, cell, nx, ny, start, order, bx, by, brad, rot, cx, cy, rad, zlo,
-                 zhi, sph, zeq, plane, indptr, out, fill):
-    for i in nb.prange(cx.shape[0]):
-        _collect_row(i, xyz, lo0, lo1, cell, nx, ny, start, order, bx, by, brad, rot, cx, cy, rad,
-                     zlo, zhi, sph, zeq, plane, indptr, out, fill)
+def _collect_par(grid, rot, reg, indptr, out, fill):
+    for i in nb.prange(reg.shape[0]):
+        _collect_row(i, grid, rot, reg, indptr, out, fill)
 
 
 @nb.njit(cache=True)
-def _collect_ser(xyz, lo0, lo1, cell, nx, ny, start, order, bx, by, brad, rot, cx, cy, rad, zlo,
-                 zhi, sph, zeq, plane, indptr, out, fill):
-    for i in range(cx.shape[0]):
-        _collect_row(i, xyz, lo0, lo1, cell, nx, ny, start, order, bx, by, brad, rot, cx, cy, rad,
-                     zlo, zhi, sph, zeq, plane, indptr, out, fill)
+def _collect_ser(grid, rot, reg, indptr, out, fill):
+    for i in range(reg.shape[0]):
+        _collect_row(i, grid, rot, reg, indptr, out, fill)
 
 
 def _search_disc(grid: CellGrid, rot: np.ndarray, centre: np.ndarray, rad: np.ndarray,
@@ -105,7 +231,7 @@ def _search_disc(grid: CellGrid, rot: np.ndarray, centre: np.ndarray, rad: np.nd
     C a rotation keeps distances, so a point at height offset w from C moves sideways by at most
     |w| sin(delta), delta the angle between the row's axis and the grid's (sin(delta) =
     |(rot[2, 0], rot[2, 1])|)."""
-    lo, hi = grid.xyz.min(axis=0), grid.xyz.max(axis=0)
+    lo, hi = grid.bounds
     r2 = rot[:, 2, :]
     z1 = np.maximum(zlo, np.minimum(r2 * lo, r2 * hi).sum(axis=1))
     z2 = np.minimum(zhi, np.maximum(r2 * lo, r2 * hi).sum(axis=1))
@@ -118,6 +244,29 @@ def _search_disc(grid: CellGrid, rot: np.ndarray, centre: np.ndarray, rad: np.nd
     return np.where(tilted, c[:, 0], centre[:, 0]), np.where(tilted, c[:, 1], centre[:, 1]), brad
 
 
+def regions(grid: CellGrid, centre: np.ndarray, radius: np.ndarray, zlo: np.ndarray,
+            zhi: np.ndarray, sphere: np.ndarray, zeq: np.ndarray, plane: np.ndarray,
+            rot: np.ndarray) -> np.ndarray:
+    """Region array (N, REGION_COLS) of the rows' tests (see `disc_candidates`) with the
+    grid-frame discs that hold them (`rot (N, 3, 3)`: each row's frame seen from the grid's)."""
+    rad = np.where(np.isfinite(radius), radius, 1e300)
+    reg = np.empty((len(rad), REGION_COLS))
+    reg[:, CX], reg[:, CY], reg[:, RAD], reg[:, ZLO], reg[:, ZHI] = *centre.T, rad, zlo, zhi
+    reg[:, SX:SR + 1], reg[:, ZEQ], reg[:, PX:PD + 1] = sphere, zeq, plane
+    reg[:, BX], reg[:, BY], reg[:, BRAD] = _search_disc(grid, rot, centre, rad, zlo, zhi)
+    return reg
+
+
+def region_rows(grid: CellGrid, fam: FamilyBounds, s: np.ndarray, slack: float,
+                plane: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """Region array of the trial sizes `s (N,)` (finite, mm) of rows with bounds `fam`: every
+    test point whose size can be <= s lies in it (family.py), with every bound grown by `slack`
+    mm (half the sample spacing); `plane (N, 4)` the tangent plane lowered by the slack."""
+    sphere, zeq = fam.lower_ball(s, slack)
+    return regions(grid, fam.centre(s), fam.radius(s) + slack, fam.z_low(s) - slack,
+                   fam.z_top + slack, sphere, zeq, plane, rot)
+
+
 def disc_candidates(grid: CellGrid, centre: np.ndarray, radius: np.ndarray, zlo: np.ndarray,
                     zhi: np.ndarray, sphere: np.ndarray, zeq: np.ndarray, plane: np.ndarray,
                     rot: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -128,18 +277,13 @@ def disc_candidates(grid: CellGrid, centre: np.ndarray, radius: np.ndarray, zlo:
     each row's own tool frame seen from the grid's (a point p of the grid is `rot[i] @ p` for
     row i; default: the grid's frame)."""
     n = len(radius)
-    rad = np.where(np.isfinite(radius), radius, 1e300)
     rot = identity_rows(n) if rot is None else np.ascontiguousarray(rot)
-    bx, by, brad = _search_disc(grid, rot, centre, rad, zlo, zhi)
-    args = (grid.xyz_cells, float(grid.origin[0]), float(grid.origin[1]), grid.cell, grid.nx,
-            grid.ny, grid.start, grid.order, bx, by, brad, rot, np.ascontiguousarray(centre[:, 0]),
-            np.ascontiguousarray(centre[:, 1]), rad, zlo, zhi, np.ascontiguousarray(sphere),
-            np.ascontiguousarray(zeq), np.ascontiguousarray(plane))
+    reg = regions(grid, centre, radius, zlo, zhi, sphere, zeq, plane, rot)
     collect = _collect_ser if n < SERIAL_ROWS else _collect_par
     counts = np.zeros(n, dtype=np.int64)
-    collect(*args, np.zeros(n + 1, dtype=np.int64), counts, False)
+    collect(grid.kernel_args(), rot, reg, np.zeros(n + 1, dtype=np.int64), counts, False)
     indptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(counts, out=indptr[1:])
     indices = np.empty(indptr[-1], dtype=np.int64)
-    collect(*args, indptr, indices, True)
+    collect(grid.kernel_args(), rot, reg, indptr, indices, True)
     return indptr, indices

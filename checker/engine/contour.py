@@ -13,18 +13,88 @@ import numba as nb
 import numpy as np
 
 from checker import kernels
-from checker.engine.candidates import SERIAL_ROWS
-from checker.engine.frames import identity_rows, rotated
+from checker.engine.candidates import CellGrid, cell_heights
+from checker.engine.frames import rotated
+
+_EPS_Z = 1e-6  # mm by which a cell must clear the bottom plane to be passed over
 
 
 @nb.njit(cache=True)
-def _crossings_row(i, indptr, indices, xyz, rot, knn, floor, cc, n, e, prm, m, sep, out_p, out_q,
-                   out_f, out_v, out_x):
-    """Crossings of row i (grid points seen in the row's frame: rot[i] @ p)."""
-    for k in range(indptr[i], indptr[i + 1]):
-        p = indices[k]
+def _edge_data(xyz, knn, order, start, edges, nb_lo, nb_hi):
+    """The arrays of `edge_data`, filled."""
+    for c in range(start.shape[0] - 1):
+        for t in range(start[c], start[c + 1]):
+            p = order[t]
+            reach = 0.0
+            low = np.inf
+            for k in range(knn.shape[1]):
+                q = knn[p, k]
+                if q < 0:
+                    continue
+                d = 0.0
+                for j in range(3):
+                    d += (xyz[q, j] - xyz[p, j]) ** 2
+                    nb_lo[c, j] = min(nb_lo[c, j], xyz[q, j])
+                    nb_hi[c, j] = max(nb_hi[c, j], xyz[q, j])
+                reach = max(reach, np.sqrt(d))
+                low = min(low, xyz[q, 2])
+            edges[p, 0] = reach * (1.0 + 1e-9) + 1e-9
+            edges[p, 1] = low
+
+
+def edge_data(grid: CellGrid, knn: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What `row_crossings` and `straddles` need to pass over points and cells that start no
+    crossing (grid frame, mm): per test point (M, 2) the length of its longest sample-graph edge
+    (grown a little against rounding) and the lowest height of its neighbours (inf: none); per
+    cell (C, 3) the corners of the box holding its points' neighbours (inf, -inf: none). Kept
+    in the grid's memo for the same `knn`."""
+    hit = grid.memo.get("edges")
+    if hit is None or hit[0] is not knn:
+        cells = len(grid.start) - 1
+        edges = np.empty((len(grid.xyz), 2))
+        nb_lo, nb_hi = np.full((cells, 3), np.inf), np.full((cells, 3), -np.inf)
+        _edge_data(grid.xyz, knn, grid.order, grid.start, edges, nb_lo, nb_hi)
+        hit = grid.memo["edges"] = (knn, (edges, nb_lo, nb_hi))
+    return hit[1]
+
+
+@nb.njit(cache=True, inline="always")
+def straddles(view, grid, nb_lo, nb_hi, c, floor):
+    """Whether cell c can hold a point at or above `floor` (row frame, mm) with a neighbour
+    below it (`view`: candidates.grid_view of the row; boxes from `edge_data`)."""
+    if view[0] == 0.0 and view[1] == 0.0 and view[2] == 1.0:  # the grid's own z axis
+        return grid[9][c, 2] + _EPS_Z >= floor and nb_lo[c, 2] - _EPS_Z < floor
+    top = cell_heights(view, grid[8], grid[9], c)[1]
+    return top >= floor and cell_heights(view, nb_lo, nb_hi, c)[0] < floor
+
+
+@nb.njit(cache=True, inline="always")
+def _may_cross(i, rot, xyz, p, zp, floor, edges):
+    """Whether a neighbour of point p (at height zp >= floor in row i's frame) can lie below
+    the floor: exactly from the neighbours' lowest height where the row's z axis is the grid's,
+    else bounded through the row's tilt (|rot[i, 2] - e_z|) and the longest edge."""
+    reach, low = edges[p, 0], edges[p, 1]
+    if zp - floor > reach:
+        return False
+    if rot[i, 2, 0] == 0.0 and rot[i, 2, 1] == 0.0 and rot[i, 2, 2] == 1.0:
+        return low < floor
+    tilt = np.sqrt(rot[i, 2, 0] ** 2 + rot[i, 2, 1] ** 2 + (rot[i, 2, 2] - 1.0) ** 2)
+    return zp + (low - xyz[p, 2]) - tilt * reach - 1e-9 < floor
+
+
+@nb.njit(cache=True)
+def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, m, sep, out_p, out_q, out_f, out_v,
+                  out_x):
+    """Up to m crossings of row i, at least `sep` mm apart (the best of each place), from its
+    candidate points `cand[:count]` (ids into `xyz`, the grid's frame; the row sees
+    `rot[i] @ xyz[p]`), into row i of the `out_*` arrays: p, q, fraction, size and (x, y) of
+    the crossing. The bottom plane is at the height `z0` of the row in `sz` (sizes.size_args);
+    `edges` from `edge_data`."""
+    cc, n, e, floor, prm = sz[0], sz[1], sz[2], sz[3], sz[5]
+    for k in range(count):
+        p = cand[k]
         xp, yp, zp = rotated(rot, i, xyz, p)
-        if zp < floor[i]:
+        if zp < floor[i] or not _may_cross(i, rot, xyz, p, zp, floor[i], edges):
             continue
         for t in range(knn.shape[1]):
             q = knn[p, t]
@@ -54,41 +124,3 @@ def _crossings_row(i, indptr, indices, xyz, rot, knn, floor, cc, n, e, prm, m, s
             if v < out_v[i, slot]:
                 out_v[i, slot], out_p[i, slot], out_q[i, slot], out_f[i, slot] = v, p, q, f
                 out_x[i, slot, 0], out_x[i, slot, 1] = x, y
-
-
-@nb.njit(cache=True, parallel=True)
-def _crossings_par(indptr, indices, xyz, rot, knn, floor, cc, n, e, prm, m, sep, out_p, out_q,
-                   out_f, out_v, out_x):
-    for i in nb.prange(indptr.shape[0] - 1):
-        _crossings_row(i, indptr, indices, xyz, rot, knn, floor, cc, n, e, prm, m, sep, out_p,
-                       out_q, out_f, out_v, out_x)
-
-
-@nb.njit(cache=True)
-def _crossings_ser(indptr, indices, xyz, rot, knn, floor, cc, n, e, prm, m, sep, out_p, out_q,
-                   out_f, out_v, out_x):
-    for i in range(indptr.shape[0] - 1):
-        _crossings_row(i, indptr, indices, xyz, rot, knn, floor, cc, n, e, prm, m, sep, out_p,
-                       out_q, out_f, out_v, out_x)
-
-
-def contour_seeds(cutter, cc, n, e, floor, xyz, knn, indptr, indices, m: int, sep: float,
-                  rot: np.ndarray | None = None):
-    """Per row (N) up to m crossings at least `sep` mm apart (the best of each place): (row
-    (S,), p (S,), q (S,), fraction (S,), size (S,)) with
-    the crossing at `xyz[p] + fraction * (xyz[q] - xyz[p])`; rows `cc`, `n`, `e` (N, 3) and
-    bottom heights `floor (N,)` in the tool frame, candidates in CSR over `xyz`; `rot (N, 3, 3)`
-    each row's tool frame seen from the frame of `xyz` (row i sees `rot[i] @ xyz[p]`; default:
-    the same frame)."""
-    rows = len(floor)
-    out_p = np.full((rows, m), -1, dtype=np.int64)
-    out_q = np.full((rows, m), -1, dtype=np.int64)
-    out_f = np.zeros((rows, m))
-    out_v = np.full((rows, m), np.inf)
-    out_x = np.zeros((rows, m, 2))
-    rot = identity_rows(rows) if rot is None else np.ascontiguousarray(rot)
-    kernel = _crossings_ser if rows < SERIAL_ROWS else _crossings_par
-    kernel(indptr, indices, xyz, rot, knn, floor, cc, n, e, cutter.kernel_params(), m, sep, out_p,
-           out_q, out_f, out_v, out_x)
-    r, c = np.nonzero(np.isfinite(out_v))
-    return r, out_p[r, c], out_q[r, c], out_f[r, c], out_v[r, c]

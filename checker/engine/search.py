@@ -1,21 +1,41 @@
 """The global scan: the exact minimum of the imaginary size over all test points of the part
-per CC row, with sound pruning (family.py) and doubling of the trial size, then up to m seed
-points per row in distinct basins for the local refinement."""
+per CC row, with sound pruning (family.py), then up to m seed points per row in distinct basins
+for the local refinement.
+
+The result is that of a plain growing scan: trial sizes s_goal, 4 s_goal, ... (capped at s_cap,
+s_goal = min(s_start, s_cap)) until the smallest size B over the candidates C(s) of the trial
+(the test points of the region, grown by the slack, where a size <= s can lie; candidates.py) is
+<= s; call that trial size G(B). The seeds are the sampled local minima (basins.py) up to the
+limit L(B) = (1 + rel) B + slack among C(G), and so those among all test points when G >= L
+(C(s) holds every point of size <= s); the contour crossings come from C(G).
+
+This scan gets there from fewer evaluations. A bound u >= B comes first, from the minima of
+nearby rows (every `_ANCHOR_STEP`-th row is scanned first, from a coarse bound) through
+bound.py; then a pass takes the candidates C(G(u)) (C(min(G(u), L(u))) without crossings) and
+evaluates only those in the region of L(u) grown by `_EVAL_MARGIN_MM` alone, which holds every
+point of size <= L(u). That pass finds B, and it completes the row unless G(B) < L(B) with
+G(B) != G(u) (or G(B) != G(u) with crossings); then a second pass at B does. Rows without a
+bound, and rows no cutter of the family can touch (every size 0, no sound region), take the
+plain growing scan itself.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba as nb
 import numpy as np
 
-from checker.engine.candidates import CellGrid, disc_candidates
-from checker.engine.contour import contour_seeds
-from checker.engine.sizes import RowFrame, csr_sizes
+from checker.engine.bound import coarse_bounds, warm_bounds
+from checker.engine.candidates import CellGrid, region_rows
+from checker.engine.contour import edge_data
+from checker.engine.frames import identity_rows
+from checker.engine.sizes import RowFrame, size_args, untouchable
+from checker.engine.sweep import Pass, sweep
 
 _GROW = 4.0
-_CHUNK_ROWS = 1024
-_REL_MARGIN = 0.2
+_REL_MARGIN = 0.05
+_ANCHOR_STEP = 8  # every this many rows one is scanned first; the others start from its minima
+_EVAL_MARGIN_MM = 1e-6  # growth of the evaluated region against rounding
 
 
 @dataclass
@@ -33,117 +53,175 @@ class Scan:
     crossings: tuple | None = None
 
 
-@nb.njit(cache=True)
-def _basins(indptr, indices, values, knn, m, rel, absm, best, arg, seeds, seed_size):
-    """Per row: smallest value and its point, then up to m seeds: the candidates that are
-    sampled local minima (no candidate among their nearest test points is smaller), by
-    increasing value, within `rel * best + absm` of the best."""
-    npts = knn.shape[0]
-    stamp = np.full(npts, -1, dtype=np.int64)
-    pos = np.zeros(npts, dtype=np.int64)
-    for i in range(indptr.shape[0] - 1):
-        a, b = indptr[i], indptr[i + 1]
-        for k in range(a, b):
-            stamp[indices[k]] = i
-            pos[indices[k]] = k
-        vbest = np.inf
-        for k in range(a, b):
-            if values[k] < vbest:
-                vbest = values[k]
-                best[i] = vbest
-                arg[i] = indices[k]
-        if not np.isfinite(vbest):
-            continue
-        limit = vbest * (1.0 + rel) + absm
-        taken = 0
-        for k in range(a, b):
-            v = values[k]
-            if v > limit:
-                continue
-            p = indices[k]
-            local = True
-            for t in range(knn.shape[1]):
-                q = knn[p, t]
-                if q >= 0 and q < npts and stamp[q] == i and values[pos[q]] < v:
-                    local = False
-                    break
-            if not local:
-                continue
-            if taken < m:
-                seeds[i, taken] = p
-                seed_size[i, taken] = v
-                taken += 1
-            else:
-                worst = 0
-                for t in range(1, m):
-                    if seed_size[i, t] > seed_size[i, worst]:
-                        worst = t
-                if v < seed_size[i, worst]:
-                    seeds[i, worst] = p
-                    seed_size[i, worst] = v
+def _ladder(x: np.ndarray, s_goal: np.ndarray, s_cap: float) -> np.ndarray:
+    """(N,) the first of the trial sizes s_goal, 4 s_goal, ... (each capped at s_cap) that is
+    >= x (mm): where the plain growing scan stops for a row of minimum x; inf where x > s_cap."""
+    g = s_goal.copy()
+    up = (g < x) & (g < s_cap)
+    while up.any():
+        g[up] = np.minimum(g[up] * _GROW, s_cap)
+        up = (g < x) & (g < s_cap)
+    return np.where(g >= x, g, np.inf)
+
+
+@dataclass
+class _Rows:
+    """What every pass over the rows of one scan shares."""
+
+    cutter: object
+    frame: RowFrame
+    grid: CellGrid
+    rot: np.ndarray
+    slack: float
+    m: int
+    knn: np.ndarray
+    crossings: tuple | None
+
+    def region(self, rows: np.ndarray, s: np.ndarray, margin: float) -> np.ndarray:
+        """Region arrays (candidates.py) of finite trial sizes `s` (mm) for `rows`, every bound
+        grown by `margin` mm."""
+        fr = self.frame
+        plane = np.column_stack([fr.n[rows], np.einsum("ij,ij->i", fr.n[rows], fr.cc[rows])
+                                 - margin])
+        return region_rows(self.grid, fr.fam.take(rows), s, margin, plane, self.rot[rows])
+
+    def run(self, rows: np.ndarray, s_p: np.ndarray, s_e: np.ndarray) -> Pass:
+        """A pass over `rows` with the candidates C(s_p), evaluating those in the region of s_e
+        grown by `_EVAL_MARGIN_MM` (all candidates where s_e is inf)."""
+        reg = self.region(rows, s_p, self.slack)
+        lim = reg.copy()
+        some = np.isfinite(s_e)
+        lim[some] = self.region(rows[some], s_e[some], _EVAL_MARGIN_MM)
+        return sweep(self.grid, self.rot[rows], reg, lim, size_args(self.cutter, self.frame, rows),
+                     self.knn, self.m, _REL_MARGIN, self.slack, self.crossings)
+
+    def coarse(self, rows: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Upper bounds of the rows' minima from the region of trial sizes `s` (bound.py) and
+        the evaluations spent."""
+        return coarse_bounds(self.grid, self.rot[rows], self.region(rows, s, self.slack),
+                             size_args(self.cutter, self.frame, rows), self.knn)
+
+    def warm(self, rows: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Upper bounds of the rows' minima from start points `starts (N, S)` (bound.py) and
+        the evaluations spent."""
+        return warm_bounds(self.grid, self.rot[rows], starts,
+                           size_args(self.cutter, self.frame, rows), self.knn)
+
+
+class _State:
+    """Per-row progress of one scan: the result so far, the bound u >= B, B once found, the next
+    trial of the plain growing scan, and the rows still open."""
+
+    def __init__(self, ctx: _Rows, s_start: np.ndarray, s_cap: float):
+        n, m = len(s_start), ctx.m
+        self.ctx, self.s_cap = ctx, s_cap
+        self.out = Scan(np.full(n, np.inf), np.full(n, -1, dtype=np.int64),
+                        np.full((n, m), -1, dtype=np.int64), np.full((n, m), np.inf),
+                        np.zeros(n, dtype=np.int64))
+        self.s_goal = np.minimum(s_start, s_cap)
+        self.rung = self.s_goal.copy()  # next trial of the plain scan
+        self.u = np.full(n, np.inf)
+        self.low = np.full(n, np.nan)  # B, once found
+        self.plain = untouchable(ctx.cutter, ctx.frame.n)  # these take the plain scan only
+        self.open = np.ones(n, dtype=bool)
+        self.cross: list[tuple] = []
+
+    def settle(self, rows: np.ndarray, p: Pass, s_p: np.ndarray, s_e: np.ndarray,
+               sure: np.ndarray | bool = False) -> None:
+        """Take a pass over `rows` with candidates C(s_p), evaluated up to s_e (inf: all), that
+        was `sure` to find the minimum (from a bound): store the rows it completes (module
+        docstring)."""
+        out, slack = self.out, self.ctx.slack
+        out.evaluations[rows] += p.evaluations
+        b = p.best
+        reach = np.minimum(s_p, s_e)
+        got = b <= reach  # then b is the row's minimum B
+        self.u[rows] = np.minimum(self.u[rows], b)
+        self.low[rows[got]] = b[got]
+        g = _ladder(b, self.s_goal[rows], self.s_cap)
+        limit = b * (1.0 + _REL_MARGIN) + slack
+        clean = (self.ctx.crossings is None) & (g >= limit) & (s_p >= limit)
+        plain = self.plain[rows]
+        done = got & np.where(plain, True, (s_e >= limit) & ((s_p == g) | clean))
+        r = rows[done]
+        out.best[r], out.arg[r] = b[done], p.arg[done]
+        out.seeds[r], out.seed_size[r] = p.seeds[done], p.seed_size[done]
+        if p.crossings is not None:
+            keep = done[p.crossings[0]]
+            self.cross.append((rows[p.crossings[0][keep]], *(a[keep] for a in p.crossings[1:])))
+        self.open[r] = False
+        self.open[rows[~got & (reach >= self.s_cap)]] = False  # nothing up to s_cap: unbounded
+        up = ~got & plain  # a failed trial of the plain scan
+        self.rung[rows[up]] = np.minimum(s_p[up] * _GROW, self.s_cap)
+        # a bound that did not hold (impossible with sound regions) leaves the row to the plain
+        # scan
+        self.plain[rows[~got & sure & (reach < self.s_cap)]] = True
+
+    def step(self, rows: np.ndarray) -> None:
+        """One pass over the open `rows`: plain rows take the plain scan's next trial, rows with
+        a bound x (or B) the candidates of G(x) evaluated up to L(x), the others everything up
+        to s_cap."""
+        x = np.where(np.isnan(self.low[rows]), self.u[rows], self.low[rows])
+        x = np.where(x <= self.s_cap, x, np.nan)
+        s_e = np.where(np.isnan(x), self.s_cap, x * (1.0 + _REL_MARGIN) + self.ctx.slack)
+        s_p = np.where(np.isnan(x), self.s_cap, _ladder(x, self.s_goal[rows], self.s_cap))
+        if self.ctx.crossings is None:
+            s_p = np.minimum(s_p, s_e)
+        plain = self.plain[rows]
+        s_p[plain], s_e[plain] = self.rung[rows[plain]], np.inf
+        self.settle(rows, self.ctx.run(rows, s_p, s_e), s_p, s_e, ~np.isnan(x) & ~plain)
+
+    def finish(self, rows: np.ndarray) -> None:
+        """Passes over `rows` until all are complete."""
+        rows = rows[self.open[rows]]
+        while rows.size:
+            self.step(rows)
+            rows = rows[self.open[rows]]
+
+    def add_bounds(self, rows: np.ndarray, bound) -> None:
+        """Lower the bounds of `rows` by `bound(rows)` (bounds, evaluations spent)."""
+        if rows.size:
+            u, spent = bound(rows)
+            self.u[rows] = np.minimum(self.u[rows], u)
+            self.out.evaluations[rows] += spent
 
 
 def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: float,
          slack: float, m: int, knn: np.ndarray, crossings: tuple[int, float] | None = None,
          rot: np.ndarray | None = None, first: np.ndarray | None = None) -> Scan:
-    """Exact sampled minimum per row from finite trial sizes `s_start (N,)`. A row with trial
-    size s looks at every test point within `slack` mm (half the sample spacing) of the disc,
-    slab and ball of s (family.py); when its minimum is <= s it is the minimum over all test
-    points (any point below s lies there), otherwise s grows by 4 up to `s_cap` (beyond it the
-    row is unbounded). Seeds: see `_basins`. `crossings` (count, separation mm): also collect
-    that many bottom-plane contour crossings per row (contour.py) from the final candidates.
+    """Exact sampled minimum per row, the minimum over all test points up to `s_cap` (beyond it
+    the row is unbounded), with its seeds, those of a growing scan from the finite trial sizes
+    `s_start (N,)` (module docstring). `crossings` (count, separation mm): also that many
+    bottom-plane contour crossings per row (contour.py) from the candidates C(G).
     `rot (N, 3, 3)`: each row's tool frame seen from the grid's (default: the grid's frame).
-    `first (N,)`: smaller first trial sizes for rows whose `s_start` is an upper bound of their
-    minimum: such a row stops below s_start only once its disc holds every point up to its seed
-    limit (or s_start), so best, arg and seeds are those of a start at s_start."""
+    `first (N,)`: a first trial size per row whose candidates are all evaluated before anything
+    else (cheap where the minimum is small); the result does not depend on it."""
     n = len(s_start)
-    best = np.full(n, np.inf)
-    arg = np.full(n, -1, dtype=np.int64)
-    seeds = np.full((n, m), -1, dtype=np.int64)
-    seed_size = np.full((n, m), np.inf)
-    evals = np.zeros(n, dtype=np.int64)
-    s_goal = np.minimum(s_start, s_cap)
-    s_try = s_goal.copy() if first is None else np.minimum(first, s_goal)
-    s_next = np.empty(n)
-    active = np.arange(n)
-    fam = frame.fam
-    plane = np.column_stack([frame.n, np.einsum("ij,ij->i", frame.n, frame.cc) - slack])
-    cross: list[tuple] = []
-    while active.size:
-        still = []
-        for c0 in range(0, active.size, _CHUNK_ROWS):
-            rows = active[c0:c0 + _CHUNK_ROWS]
-            s = s_try[rows]
-            sub = fam.take(rows)
-            rot_rows = None if rot is None else rot[rows]
-            sphere, zeq = sub.lower_ball(s, slack)
-            indptr, idx = disc_candidates(grid, sub.centre(s), sub.radius(s) + slack,
-                                          sub.z_low(s) - slack, sub.z_top + slack, sphere, zeq,
-                                          plane[rows], rot_rows)
-            counts = np.diff(indptr)
-            vals = csr_sizes(cutter, frame, rows, grid.xyz, indptr, idx, rot_rows)
-            evals[rows] += counts
-            b = np.full(len(rows), np.inf)
-            a = np.full(len(rows), -1, dtype=np.int64)
-            sd = np.full((len(rows), m), -1, dtype=np.int64)
-            ss = np.full((len(rows), m), np.inf)
-            _basins(indptr, idx, vals, knn, m, _REL_MARGIN, slack, b, a, sd, ss)
-            done = (b <= s) | (s >= s_cap)
-            early = s < s_goal[rows]  # below the given start: stop only with complete seeds
-            target = np.minimum(b * (1.0 + _REL_MARGIN) + slack, s_goal[rows])
-            done = np.where(early, (b <= s) & (s >= target), done)
-            s_next[rows] = np.where(early, target, s * _GROW)
-            keep = done & (b <= s)
-            best[rows[keep]], arg[rows[keep]] = b[keep], a[keep]
-            seeds[rows[keep]], seed_size[rows[keep]] = sd[keep], ss[keep]
-            if crossings is not None:
-                r, p, q, f, _ = contour_seeds(cutter, frame.cc[rows], frame.n[rows],
-                                              frame.e[rows], fam.z0[rows], grid.xyz, knn,
-                                              indptr, idx, *crossings, rot=rot_rows)
-                ok = keep[r]
-                cross.append((rows[r[ok]], p[ok], q[ok], f[ok]))
-            still.append(rows[~done])
-        active = np.concatenate(still) if still else active[:0]
-        s_try[active] = np.minimum(s_next[active], s_cap)
-    found = tuple(np.concatenate([c[t] for c in cross]) for t in range(4)) if cross else None
-    return Scan(best, arg, seeds, seed_size, evals, found)
+    rot = identity_rows(n) if rot is None else np.ascontiguousarray(rot)
+    extra = None if crossings is None else (*crossings, edge_data(grid, knn))
+    ctx = _Rows(cutter, frame, grid, rot, slack, m, knn, extra)
+    st = _State(ctx, s_start, s_cap)
+    rows = np.arange(n)
+    if first is not None:
+        some = rows[~st.plain]
+        s1 = np.minimum(first[some], st.s_goal[some])
+        st.settle(some, ctx.run(some, s1, s1), s1, s1)
+    todo = rows[st.open & np.isnan(st.low) & ~st.plain]
+    anchors = todo[::_ANCHOR_STEP]
+    st.add_bounds(anchors, lambda r: ctx.coarse(r, np.minimum(st.u[r], s_cap)))
+    st.finish(anchors)
+    rest = np.setdiff1d(todo, anchors)
+    if rest.size:
+        k = np.searchsorted(anchors, rest)  # the anchors on either side
+        near = np.column_stack([anchors[np.maximum(k - 1, 0)],
+                                anchors[np.minimum(k, len(anchors) - 1)]])
+        starts = np.concatenate([st.out.arg[near], st.out.seeds[near].reshape(len(rest), -1)],
+                                axis=1)
+        st.add_bounds(rest, lambda r: ctx.warm(r, starts))
+        cold = rest[~np.isfinite(st.u[rest])]
+        st.add_bounds(cold, lambda r: ctx.coarse(r, np.full(len(r), s_cap)))
+    st.finish(rows)
+    out = st.out
+    if st.cross:
+        out.crossings = tuple(np.concatenate([c[t] for c in st.cross]) for t in range(4))
+    return out

@@ -11,9 +11,7 @@ import numpy as np
 
 from checker import kernels
 from checker.cutter import BALL_FAMILY
-from checker.engine.candidates import SERIAL_ROWS
 from checker.engine.family import FamilyBounds
-from checker.engine.frames import identity_rows, rotated
 
 _EPS_H = 1e-9
 
@@ -59,50 +57,37 @@ def pair_sizes(cutter, frame: RowFrame, rows: np.ndarray, p: np.ndarray) -> np.n
     return np.where(near | too_high, np.inf, size)
 
 
-@nb.njit(cache=True)
-def _csr_row(i, p, rot, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out):
-    """Sizes of row i against its candidates, each grid point seen in the row's frame."""
-    for k in range(indptr[i], indptr[i + 1]):
-        x, y, z = rotated(rot, i, p, indices[k])
-        qx = x - cc[i, 0]
-        qy = y - cc[i, 1]
-        qz = z - cc[i, 2]
-        if qx * qx + qy * qy + qz * qz < excl2:
-            out[k] = np.inf
-            continue
-        if ball:
-            s = kernels.ball_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], prm)
-        else:
-            s = kernels.apt_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], e[i, 0], e[i, 1], True,
-                                 prm)
-        if s < np.inf and z - (z0[i] - t[i] * s) > length:
-            s = np.inf
-        out[k] = s
-
-
-@nb.njit(cache=True, parallel=True)
-def _csr_par(p, rot, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out):
-    for i in nb.prange(indptr.shape[0] - 1):
-        _csr_row(i, p, rot, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out)
-
-
-@nb.njit(cache=True)
-def _csr_ser(p, rot, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out):
-    for i in range(indptr.shape[0] - 1):
-        _csr_row(i, p, rot, cc, n, e, ball, prm, z0, t, length, excl2, indptr, indices, out)
-
-
-def csr_sizes(cutter, frame: RowFrame, rows: np.ndarray, p: np.ndarray, indptr: np.ndarray,
-              indices: np.ndarray, rot: np.ndarray | None = None) -> np.ndarray:
-    """Sizes (K,) for rows `rows (N,)` of `frame` against their candidate points
-    `p[indices[indptr[i]:indptr[i + 1]]]` (grid frame, mm; row i sees a point as `rot[i] @ p`,
-    default the grid's frame is the tool frame); the rules of `pair_sizes`."""
-    out = np.empty(len(indices))
+def size_args(cutter, frame: RowFrame, rows: np.ndarray) -> tuple:
+    """The rows `rows (N,)` of `frame` and the cutter's constants as one tuple for
+    `point_size`: (cc, n, e, z0, t, kernel params, ball family?, length, exclusion^2)."""
     fam = frame.fam
-    rot = identity_rows(len(rows)) if rot is None else np.ascontiguousarray(rot)
-    kernel = _csr_ser if len(rows) < SERIAL_ROWS else _csr_par
-    kernel(p, rot, np.ascontiguousarray(frame.cc[rows]), np.ascontiguousarray(frame.n[rows]),
-           np.ascontiguousarray(frame.e[rows]), cutter.kind in BALL_FAMILY, cutter.kernel_params(),
-           np.ascontiguousarray(fam.z0[rows]), np.ascontiguousarray(fam.t[rows]),
-           float(fam.length), frame.exclusion ** 2, indptr, indices, out)
-    return out
+    return (np.ascontiguousarray(frame.cc[rows]), np.ascontiguousarray(frame.n[rows]),
+            np.ascontiguousarray(frame.e[rows]), np.ascontiguousarray(fam.z0[rows]),
+            np.ascontiguousarray(fam.t[rows]), cutter.kernel_params(),
+            cutter.kind in BALL_FAMILY, float(fam.length), frame.exclusion ** 2)
+
+
+@nb.njit(cache=True, inline="always")
+def point_size(sz, i, x, y, z):
+    """Size (mm) of row i (of the tuple `sz` from `size_args`) at the point (x, y, z) of its
+    tool frame; the rules of `pair_sizes`."""
+    cc, n, e, z0, t, prm, ball, length, excl2 = sz
+    qx = x - cc[i, 0]
+    qy = y - cc[i, 1]
+    qz = z - cc[i, 2]
+    if qx * qx + qy * qy + qz * qz < excl2:
+        return np.inf
+    if ball:
+        s = kernels.ball_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], prm)
+    else:
+        s = kernels.apt_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], e[i, 0], e[i, 1], True, prm)
+    if s < np.inf and z - (z0[i] - t[i] * s) > length:
+        return np.inf
+    return s
+
+
+def untouchable(cutter, n: np.ndarray) -> np.ndarray:
+    """(N,) rows whose CC point no cutter of the family touches tangentially (unit tool-frame
+    normals `n (N, 3)` with n_z <= 0 or n_z < sin(theta)): every size is 0 there (kernels.py)."""
+    nz = n[:, 2]
+    return (nz <= 0.0) | (nz < np.sin(float(cutter.theta)) - kernels.EPS_N)

@@ -1,0 +1,146 @@
+"""Cheap upper bounds of each CC row's sampled minimum (numba). Any evaluated size bounds the
+minimum over all test points from above, so the scan's next pass needs only the points that can
+lie below it. Two ways in: the size at about one test point per grid cell of the row's trial
+region (`coarse_bounds`), or at given start points, e.g. the minima of nearby rows
+(`warm_bounds`); both then descend along the sample graph from the smallest."""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from checker.engine.candidates import (
+    SERIAL_ROWS,
+    CellGrid,
+    cell_misses,
+    cell_range,
+    grid_view,
+    inside,
+)
+from checker.engine.frames import rotated
+from checker.engine.sizes import point_size
+
+_COARSE_POINTS = 512  # at most about this many cells per row are sampled by `coarse_bounds`
+
+
+@nb.njit(cache=True)
+def _descend(i, xyz, rot, sz, knn, best, p):
+    """Row i: steepest descent along the sample graph `knn` from test point p (-1: none) of
+    size `best` (`xyz` the grid's points); returns (size reached, evaluations)."""
+    ne = 0
+    while p >= 0:
+        here = p
+        p = -1
+        for t in range(knn.shape[1]):
+            q = knn[here, t]
+            if q < 0:
+                continue
+            x, y, z = rotated(rot, i, xyz, q)
+            v = point_size(sz, i, x, y, z)
+            ne += 1
+            if v < best:
+                best = v
+                p = q
+    return best, ne
+
+
+@nb.njit(cache=True)
+def _coarse_row(i, grid, xyz, rot, reg, sz, knn, u, evals):
+    """Row i: the first point of every k-th cell column and row under its region (k from
+    `_COARSE_POINTS`), where in the region, then the descent from the smallest."""
+    xyz_c, order, start, ny = grid[0], grid[1], grid[2], grid[7]
+    i0, i1, j0, j1 = cell_range(reg, i, grid)
+    cells = max(i1 - i0 + 1, 0) * max(j1 - j0 + 1, 0)
+    k = max(1, int(math.ceil(math.sqrt(cells / _COARSE_POINTS))))
+    view = grid_view(reg, i, rot)
+    best = np.inf
+    arg = -1
+    ne = 0
+    for a in range(i0, i1 + 1, k):
+        for c in range(a * ny + j0, a * ny + j1 + 1, k):
+            t = start[c]
+            if t == start[c + 1] or cell_misses(reg, i, view, grid, c):
+                continue
+            x, y, z = rotated(rot, i, xyz_c, t)
+            if not inside(reg, i, x, y, z):
+                continue
+            v = point_size(sz, i, x, y, z)
+            ne += 1
+            if v < best:
+                best = v
+                arg = order[t]
+    u[i], more = _descend(i, xyz, rot, sz, knn, best, arg)
+    evals[i] = ne + more
+
+
+@nb.njit(cache=True)
+def _warm_row(i, xyz, rot, sz, knn, starts, u, evals):
+    """Row i: the sizes at its start points, then the descent from the smallest (from the
+    first start when none is finite)."""
+    best = np.inf
+    arg = -1
+    ne = 0
+    for k in range(starts.shape[1]):
+        p = starts[i, k]
+        if p < 0:
+            continue
+        x, y, z = rotated(rot, i, xyz, p)
+        v = point_size(sz, i, x, y, z)
+        ne += 1
+        if v < best or arg < 0:
+            best = v
+            arg = p
+    u[i], more = _descend(i, xyz, rot, sz, knn, best, arg)
+    evals[i] = ne + more
+
+
+@nb.njit(cache=True, parallel=True)
+def _coarse_par(grid, xyz, rot, reg, sz, knn, u, evals):
+    for i in nb.prange(reg.shape[0]):
+        _coarse_row(i, grid, xyz, rot, reg, sz, knn, u, evals)
+
+
+@nb.njit(cache=True)
+def _coarse_ser(grid, xyz, rot, reg, sz, knn, u, evals):
+    for i in range(reg.shape[0]):
+        _coarse_row(i, grid, xyz, rot, reg, sz, knn, u, evals)
+
+
+@nb.njit(cache=True, parallel=True)
+def _warm_par(xyz, rot, sz, knn, starts, u, evals):
+    for i in nb.prange(starts.shape[0]):
+        _warm_row(i, xyz, rot, sz, knn, starts, u, evals)
+
+
+@nb.njit(cache=True)
+def _warm_ser(xyz, rot, sz, knn, starts, u, evals):
+    for i in range(starts.shape[0]):
+        _warm_row(i, xyz, rot, sz, knn, starts, u, evals)
+
+
+def coarse_bounds(grid: CellGrid, rot: np.ndarray, reg: np.ndarray, sz: tuple,
+                  knn: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per row (N,): an upper bound (mm, inf: none found) of the smallest size over all test
+    points, from about one point per cell (at most about `_COARSE_POINTS` cells) of the region
+    array `reg` (candidates.py) and a descent along the sample graph `knn`; and the kernel
+    evaluations spent. `rot (N, 3, 3)`: each row's frame seen from the grid's; `sz`:
+    sizes.size_args of the rows."""
+    n = len(reg)
+    u, evals = np.empty(n), np.empty(n, dtype=np.int64)
+    kernel = _coarse_ser if n < SERIAL_ROWS else _coarse_par
+    kernel(grid.kernel_args(), grid.xyz, rot, reg, sz, knn, u, evals)
+    return u, evals
+
+
+def warm_bounds(grid: CellGrid, rot: np.ndarray, starts: np.ndarray, sz: tuple,
+                knn: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per row (N,): an upper bound (mm, inf: none found) of the smallest size over all test
+    points from the test points `starts (N, S)` (-1: none) and a descent along the sample
+    graph `knn`; and the kernel evaluations spent (arguments as `coarse_bounds`)."""
+    n = len(starts)
+    u, evals = np.empty(n), np.empty(n, dtype=np.int64)
+    kernel = _warm_ser if n < SERIAL_ROWS else _warm_par
+    kernel(grid.xyz, rot, sz, knn, np.ascontiguousarray(starts, dtype=np.int64), u, evals)
+    return u, evals

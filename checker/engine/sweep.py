@@ -1,0 +1,154 @@
+"""One pass of the global scan over many CC rows (numba): per row, a single traversal of the cell
+grid over its trial region gives the imaginary sizes of its test points, the row's sampled
+minimum and seeds (basins.py) and, for flat-bottomed cutters, its contour crossings
+(contour.py). Tool frame of each row, mm."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba as nb
+import numpy as np
+
+from checker.engine.basins import row_seeds
+from checker.engine.candidates import (
+    SERIAL_ROWS,
+    CellGrid,
+    cell_misses,
+    cell_range,
+    column_span,
+    grid_view,
+    inside,
+)
+from checker.engine.contour import row_crossings, straddles
+from checker.engine.frames import rotated
+from checker.engine.sizes import point_size
+
+_BLOCKS_PER_THREAD = 4  # rows are dealt round-robin to this many blocks per thread
+
+
+@dataclass
+class Pass:
+    """Per row (N,): `best` smallest evaluated size (mm, inf: none), `arg` its test point (-1),
+    `seeds (N, m)`, `seed_size (N, m)` (basins.row_seeds, limit `rel * best + slack` above the
+    best), `evaluations`; `crossings` (rows, p, q, fraction) of the contour or None."""
+
+    best: np.ndarray
+    arg: np.ndarray
+    seeds: np.ndarray
+    seed_size: np.ndarray
+    evaluations: np.ndarray
+    crossings: tuple | None
+
+
+@nb.njit(cache=True)
+def _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, ids, vals, cand):
+    """Row i: the sizes `vals` of its candidates (the points of its region `reg[i]`) that also
+    lie in `lim[i]`, with their ids `ids`, in grid order; with crossings `on`, the candidates at
+    or above the row's bottom plane (z0 in `sz`) in cells that straddle it go to `cand` (boxes
+    `nb_lo`, `nb_hi` from contour.edge_data). Returns both counts."""
+    xyz, order, start, ny = grid[0], grid[1], grid[2], grid[7]
+    floor = sz[3][i]
+    view, view_lim = grid_view(reg, i, rot), grid_view(lim, i, rot)
+    i0, i1, j0, j1 = cell_range(reg, i, grid)
+    k0, k1, l0, l1 = cell_range(lim, i, grid)
+    if not on:  # then only the cells that meet `lim` matter
+        i0, i1, j0, j1 = max(i0, k0), min(i1, k1), max(j0, l0), min(j1, l1)
+    ne = 0
+    nc = 0
+    for a in range(i0, i1 + 1):
+        ja, jb = column_span(reg, i, grid, a, j0, j1)
+        la, lb = column_span(lim, i, grid, a, l0, l1) if k0 <= a <= k1 else (l0, l0 - 1)
+        if not on:
+            ja, jb = max(ja, la), min(jb, lb)
+        for j in range(ja, jb + 1):
+            c = a * ny + j
+            if start[c] == start[c + 1]:
+                continue
+            evaluate = la <= j <= lb and not cell_misses(lim, i, view_lim, grid, c)
+            crossing = on and straddles(view, grid, nb_lo, nb_hi, c, floor)
+            if not (evaluate or crossing) or cell_misses(reg, i, view, grid, c):
+                continue
+            for t in range(start[c], start[c + 1]):
+                x, y, z = rotated(rot, i, xyz, t)
+                if not inside(reg, i, x, y, z):
+                    continue
+                p = order[t]
+                if crossing and z >= floor:
+                    cand[nc] = p
+                    nc += 1
+                if evaluate and inside(lim, i, x, y, z):
+                    ids[ne] = p
+                    vals[ne] = point_size(sz, i, x, y, z)
+                    ne += 1
+    return ne, nc
+
+
+@nb.njit(cache=True)
+def _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, found):
+    """The rows b, b + nblocks, ... of a pass, with scratch arrays of their own: `out` (best,
+    arg, seeds, seed_size, evaluations), `cross` (on, nb_lo, nb_hi, edges, separation mm) and
+    `found` (the crossings' p, q, fraction, size, x-y) as in `sweep`."""
+    best, arg, seeds, seed_size, evals = out
+    on, nb_lo, nb_hi, edges, sep = cross
+    npts = knn.shape[0]
+    ids = np.empty(npts, dtype=np.int64)
+    vals = np.empty(npts)
+    cand = np.empty(npts if on else 0, dtype=np.int64)
+    stamp = np.full(npts, -1, dtype=np.int64)
+    pos = np.empty(npts, dtype=np.int64)
+    for i in range(b, reg.shape[0], nblocks):
+        ne, nc = _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, ids, vals, cand)
+        evals[i] = ne
+        for k in range(ne):
+            if vals[k] < best[i]:
+                best[i] = vals[k]
+                arg[i] = ids[k]
+        if best[i] < np.inf:
+            row_seeds(i, ids, vals, ne, knn, best[i] * (1.0 + rel) + slack, stamp, pos, seeds,
+                      seed_size)
+        if on:
+            row_crossings(i, cand, nc, grid[9 + 1], rot, knn, edges, sz, sep, *found)
+
+
+@nb.njit(cache=True, parallel=True)
+def _sweep_par(nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, found):
+    for b in nb.prange(nblocks):
+        _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, found)
+
+
+@nb.njit(cache=True)
+def _sweep_ser(nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, found):
+    for b in range(nblocks):
+        _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, found)
+
+
+def sweep(grid: CellGrid, rot: np.ndarray, reg: np.ndarray, lim: np.ndarray, sz: tuple,
+          knn: np.ndarray, m: int, rel: float, slack: float,
+          crossings: tuple | None = None) -> Pass:
+    """One pass over N rows: the test points of each row's region `reg` (candidates.py region
+    array) are its candidates, and those also in the region `lim` are evaluated (sizes.py, `sz`
+    from `size_args`); seeds up to m per row within `rel * best + slack` mm of the best.
+    `rot (N, 3, 3)`: each row's frame seen from the grid's. `crossings` (count, separation mm,
+    contour.edge_data): also up to that many contour crossings per row from all candidates."""
+    n = len(reg)
+    out = (np.full(n, np.inf), np.full(n, -1, dtype=np.int64), np.full((n, m), -1, dtype=np.int64),
+           np.full((n, m), np.inf), np.zeros(n, dtype=np.int64))
+    if crossings is None:
+        none = np.zeros((0, 3))
+        mc, cross = 1, (False, none, none, np.zeros((0, 2)), 0.0)
+    else:
+        mc, sep, (edges, nb_lo, nb_hi) = crossings
+        cross = (True, nb_lo, nb_hi, edges, float(sep))
+    rows_c = 0 if crossings is None else n
+    found = (np.full((rows_c, mc), -1, dtype=np.int64), np.full((rows_c, mc), -1, dtype=np.int64),
+             np.zeros((rows_c, mc)), np.full((rows_c, mc), np.inf), np.zeros((rows_c, mc, 2)))
+    kernel, nblocks = ((_sweep_ser, 1) if n < SERIAL_ROWS else
+                       (_sweep_par, min(n, _BLOCKS_PER_THREAD * nb.get_num_threads())))
+    kernel(nblocks, grid.kernel_args(), rot, reg, lim, sz, knn, rel, slack, out, cross, found)
+    crossed = None
+    if crossings is not None:
+        out_p, out_q, out_f, out_v, _ = found
+        r, c = np.nonzero(np.isfinite(out_v))
+        crossed = (r, out_p[r, c], out_q[r, c], out_f[r, c])
+    return Pass(*out, crossed)
