@@ -47,7 +47,7 @@ def _descend(i, xyz, rot, sz, knn, best, p):
 
 
 @nb.njit(cache=True)
-def _coarse_row(i, grid, xyz, rot, reg, sz, knn, u, evals):
+def _coarse_row(i, grid, rot, reg, sz, knn, u, evals):
     """Row i: the first point of every k-th cell column and row under its region (k from
     `_COARSE_POINTS`), where in the region, then the descent from the smallest."""
     xyz_c, order, start, ny = grid[0], grid[1], grid[2], grid[7]
@@ -71,7 +71,7 @@ def _coarse_row(i, grid, xyz, rot, reg, sz, knn, u, evals):
             if v < best:
                 best = v
                 arg = order[t]
-    u[i], more = _descend(i, xyz, rot, sz, knn, best, arg)
+    u[i], more = _descend(i, grid[10], rot, sz, knn, best, arg)
     evals[i] = ne + more
 
 
@@ -97,15 +97,15 @@ def _warm_row(i, xyz, rot, sz, knn, starts, u, evals):
 
 
 @nb.njit(cache=True, parallel=True)
-def _coarse_par(grid, xyz, rot, reg, sz, knn, u, evals):
+def _coarse_par(grid, rot, reg, sz, knn, u, evals):
     for i in nb.prange(reg.shape[0]):
-        _coarse_row(i, grid, xyz, rot, reg, sz, knn, u, evals)
+        _coarse_row(i, grid, rot, reg, sz, knn, u, evals)
 
 
 @nb.njit(cache=True)
-def _coarse_ser(grid, xyz, rot, reg, sz, knn, u, evals):
+def _coarse_ser(grid, rot, reg, sz, knn, u, evals):
     for i in range(reg.shape[0]):
-        _coarse_row(i, grid, xyz, rot, reg, sz, knn, u, evals)
+        _coarse_row(i, grid, rot, reg, sz, knn, u, evals)
 
 
 @nb.njit(cache=True, parallel=True)
@@ -130,7 +130,7 @@ def coarse_bounds(grid: CellGrid, rot: np.ndarray, reg: np.ndarray, sz: tuple,
     n = len(reg)
     u, evals = np.empty(n), np.empty(n, dtype=np.int64)
     kernel = _coarse_ser if n < SERIAL_ROWS else _coarse_par
-    kernel(grid.kernel_args(), grid.xyz, rot, reg, sz, knn, u, evals)
+    kernel(grid.kernel_args(), rot, reg, sz, knn, u, evals)
     return u, evals
 
 

@@ -1,7 +1,9 @@
 """Candidate test points per CC row: all points inside a vertical disc and a height slab (tool
-frame), found through a uniform 2-D cell grid. A row's trial region is one row of a region array
-(see `region_rows`); `inside` and `cell_range` are the numba pieces every traversal shares, and
-`disc_candidates` returns the plain CSR lists."""
+frame), above a plane and, below an equator, inside a ball, found through a uniform 2-D cell grid.
+A row's trial region is one row of a region array (`regions`, `region_rows`). The numba pieces
+every traversal shares: `cell_range` and `column_span` (the cells under the region's grid-frame
+disc), `cell_misses` (a cell whose bounding box misses the region is passed over) and `inside`
+(the exact test of a point); `disc_candidates` returns the plain CSR lists."""
 
 from __future__ import annotations
 
@@ -48,9 +50,10 @@ class CellGrid:
 
     def kernel_args(self) -> tuple:
         """The grid as one tuple for the numba kernels: (xyz_cells, order, start, x0, y0, cell,
-        nx, ny, box_lo, box_hi)."""
+        nx, ny, box_lo, box_hi, xyz)."""
         return (self.xyz_cells, self.order, self.start, float(self.origin[0]),
-                float(self.origin[1]), self.cell, self.nx, self.ny, self.box_lo, self.box_hi)
+                float(self.origin[1]), self.cell, self.nx, self.ny, self.box_lo, self.box_hi,
+                self.xyz)
 
 
 def build_grid(xyz: np.ndarray, per_cell: float = 6.0) -> CellGrid:
@@ -141,13 +144,17 @@ def grid_view(reg, i, rot):
 
 
 @nb.njit(cache=True, inline="always")
+def _box(lo, hi, c):
+    """Centre and half-sizes (mx, my, mz, hx, hy, hz) of the box `lo[c]`, `hi[c]`."""
+    return (0.5 * (hi[c, 0] + lo[c, 0]), 0.5 * (hi[c, 1] + lo[c, 1]), 0.5 * (hi[c, 2] + lo[c, 2]),
+            0.5 * (hi[c, 0] - lo[c, 0]), 0.5 * (hi[c, 1] - lo[c, 1]), 0.5 * (hi[c, 2] - lo[c, 2]))
+
+
+@nb.njit(cache=True, inline="always")
 def cell_heights(view, lo, hi, c):
     """Lowest and highest row-frame height (mm, widened by _CULL_EPS_MM) over the box `lo[c]`,
     `hi[c]` (grid frame; `view` from `grid_view`)."""
-    hx, hy = 0.5 * (hi[c, 0] - lo[c, 0]), 0.5 * (hi[c, 1] - lo[c, 1])
-    hz = 0.5 * (hi[c, 2] - lo[c, 2])
-    mx, my = 0.5 * (hi[c, 0] + lo[c, 0]), 0.5 * (hi[c, 1] + lo[c, 1])
-    mz = 0.5 * (hi[c, 2] + lo[c, 2])
+    mx, my, mz, hx, hy, hz = _box(lo, hi, c)
     zc = view[0] * mx + view[1] * my + view[2] * mz
     zh = abs(view[0]) * hx + abs(view[1]) * hy + abs(view[2]) * hz
     return zc - zh - _CULL_EPS_MM, zc + zh + _CULL_EPS_MM
@@ -158,25 +165,20 @@ def cell_misses(reg, i, view, grid, c):
     """Whether no point of cell c can lie in row i's region (`view` from `grid_view`): the
     cell's bounding box is outside the grid-frame disc, or (row frame) above or below the slab,
     below the plane, or below the equator and outside the ball, by more than _CULL_EPS_MM."""
-    lo, hi = grid[8], grid[9]
-    hx, hy = 0.5 * (hi[c, 0] - lo[c, 0]), 0.5 * (hi[c, 1] - lo[c, 1])
-    hz = 0.5 * (hi[c, 2] - lo[c, 2])
-    mx, my = 0.5 * (hi[c, 0] + lo[c, 0]), 0.5 * (hi[c, 1] + lo[c, 1])
-    mz = 0.5 * (hi[c, 2] + lo[c, 2])
+    mx, my, mz, hx, hy, hz = _box(grid[8], grid[9], c)
     dx = max(abs(mx - reg[i, BX]) - hx, 0.0)
     dy = max(abs(my - reg[i, BY]) - hy, 0.0)
     far = reg[i, BRAD] + _CULL_EPS_MM
     if dx * dx + dy * dy > far * far:
         return True
-    zc = view[0] * mx + view[1] * my + view[2] * mz
-    zh = abs(view[0]) * hx + abs(view[1]) * hy + abs(view[2]) * hz
-    if zc + zh < reg[i, ZLO] - _CULL_EPS_MM or zc - zh > reg[i, ZHI] + _CULL_EPS_MM:
+    z_lo, z_hi = cell_heights(view, grid[8], grid[9], c)
+    if z_hi < reg[i, ZLO] or z_lo > reg[i, ZHI]:
         return True
     top = view[3] * mx + view[4] * my + view[5] * mz + abs(view[3]) * hx + abs(view[4]) * hy \
         + abs(view[5]) * hz
     if top < reg[i, PD] - _CULL_EPS_MM:
         return True
-    if zc + zh < reg[i, ZEQ] - _CULL_EPS_MM:
+    if z_hi < reg[i, ZEQ]:
         ex = max(abs(mx - view[6]) - hx, 0.0)
         ey = max(abs(my - view[7]) - hy, 0.0)
         ez = max(abs(mz - view[8]) - hz, 0.0)
@@ -257,14 +259,15 @@ def regions(grid: CellGrid, centre: np.ndarray, radius: np.ndarray, zlo: np.ndar
     return reg
 
 
-def region_rows(grid: CellGrid, fam: FamilyBounds, s: np.ndarray, slack: float,
+def region_rows(grid: CellGrid, fam: FamilyBounds, s: np.ndarray, margin: float,
                 plane: np.ndarray, rot: np.ndarray) -> np.ndarray:
     """Region array of the trial sizes `s (N,)` (finite, mm) of rows with bounds `fam`: every
-    test point whose size can be <= s lies in it (family.py), with every bound grown by `slack`
-    mm (half the sample spacing); `plane (N, 4)` the tangent plane lowered by the slack."""
-    sphere, zeq = fam.lower_ball(s, slack)
-    return regions(grid, fam.centre(s), fam.radius(s) + slack, fam.z_low(s) - slack,
-                   fam.z_top + slack, sphere, zeq, plane, rot)
+    test point whose size can be <= s lies in it (family.py), with every bound grown by
+    `margin` mm; `plane (N, 4)` the tangent plane lowered by the margin; `rot (N, 3, 3)` as in
+    `disc_candidates`."""
+    sphere, zeq = fam.lower_ball(s, margin)
+    return regions(grid, fam.centre(s), fam.radius(s) + margin, fam.z_low(s) - margin,
+                   fam.z_top + margin, sphere, zeq, plane, rot)
 
 
 def disc_candidates(grid: CellGrid, centre: np.ndarray, radius: np.ndarray, zlo: np.ndarray,

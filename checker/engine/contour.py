@@ -83,14 +83,15 @@ def _may_cross(i, rot, xyz, p, zp, floor, edges):
 
 
 @nb.njit(cache=True)
-def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, m, sep, out_p, out_q, out_f, out_v,
+def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, sep, out_p, out_q, out_f, out_v,
                   out_x):
-    """Up to m crossings of row i, at least `sep` mm apart (the best of each place), from its
-    candidate points `cand[:count]` (ids into `xyz`, the grid's frame; the row sees
-    `rot[i] @ xyz[p]`), into row i of the `out_*` arrays: p, q, fraction, size and (x, y) of
-    the crossing. The bottom plane is at the height `z0` of the row in `sz` (sizes.size_args);
-    `edges` from `edge_data`."""
+    """Up to m = `out_p.shape[1]` crossings of row i, at least `sep` mm apart (the best of each
+    place), from its candidate points `cand[:count]` (ids into `xyz`, the grid's frame; the row
+    sees `rot[i] @ xyz[p]`), into row i of the `out_*` arrays: p, q, fraction, size and (x, y)
+    of the crossing. The bottom plane is at the height z0 of the row in `sz`
+    (sizes.size_args); `edges` from `edge_data`."""
     cc, n, e, floor, prm = sz[0], sz[1], sz[2], sz[3], sz[5]
+    m = out_p.shape[1]
     for k in range(count):
         p = cand[k]
         xp, yp, zp = rotated(rot, i, xyz, p)

@@ -1,22 +1,22 @@
 """The global scan: the exact minimum of the imaginary size over all test points of the part
 per CC row, with sound pruning (family.py), then up to m seed points per row in distinct basins
-for the local refinement.
+for the local refinement. Tool frame of each row, mm.
 
-The result is that of a plain growing scan: trial sizes s_goal, 4 s_goal, ... (capped at s_cap,
-s_goal = min(s_start, s_cap)) until the smallest size B over the candidates C(s) of the trial
-(the test points of the region, grown by the slack, where a size <= s can lie; candidates.py) is
-<= s; call that trial size G(B). The seeds are the sampled local minima (basins.py) up to the
-limit L(B) = (1 + rel) B + slack among C(G), and so those among all test points when G >= L
-(C(s) holds every point of size <= s); the contour crossings come from C(G).
+The result is that of a plain growing scan: trial sizes s_goal, 4 s_goal, ... (capped at s_cap;
+s_goal = min(s_start, s_cap)) until the smallest size B over the candidates C(s) of a trial
+(the test points of the region where a size <= s can lie, grown by the slack; candidates.py) is
+<= s, at the trial size G(B). The seeds are the sampled local minima (basins.py) up to the limit
+L(B) = (1 + rel) B + slack among C(G); the contour crossings (contour.py) come from C(G). As
+C(s) holds every point of size <= s, when G >= L the seeds are those among all points up to L.
 
-This scan gets there from fewer evaluations. A bound u >= B comes first, from the minima of
-nearby rows (every `_ANCHOR_STEP`-th row is scanned first, from a coarse bound) through
-bound.py; then a pass takes the candidates C(G(u)) (C(min(G(u), L(u))) without crossings) and
-evaluates only those in the region of L(u) grown by `_EVAL_MARGIN_MM` alone, which holds every
-point of size <= L(u). That pass finds B, and it completes the row unless G(B) < L(B) with
-G(B) != G(u) (or G(B) != G(u) with crossings); then a second pass at B does. Rows without a
-bound, and rows no cutter of the family can touch (every size 0, no sound region), take the
-plain growing scan itself.
+This scan gets there from fewer evaluations. Each row first gets an upper bound u >= B: every
+`_ANCHOR_STEP`-th row from a coarse sample of its region, the rows between from the minima of
+the two anchors around them (bound.py). One pass (sweep.py) then takes the candidates C(G(u))
+(C(min(G(u), L(u))) without crossings) and evaluates only those in the region of L(u) grown
+by `_EVAL_MARGIN_MM` alone, which holds every point of size <= L(u): that finds B, and the
+row's result unless G(B) < L(B) or crossings are wanted, and G(B) != G(u); then a pass at
+G(B) and L(B) gives it. Rows without a bound take a pass at s_cap. Rows that no cutter of the
+family can touch (every size 0: no sound region) take the plain growing scan itself.
 """
 
 from __future__ import annotations
@@ -134,15 +134,19 @@ class _State:
         out, slack = self.out, self.ctx.slack
         out.evaluations[rows] += p.evaluations
         b = p.best
-        reach = np.minimum(s_p, s_e)
-        got = b <= reach  # then b is the row's minimum B
+        upto = np.minimum(s_p, s_e)
+        got = b <= upto  # then b is the row's minimum B
         self.u[rows] = np.minimum(self.u[rows], b)
         self.low[rows[got]] = b[got]
         g = _ladder(b, self.s_goal[rows], self.s_cap)
         limit = b * (1.0 + _REL_MARGIN) + slack
-        clean = (self.ctx.crossings is None) & (g >= limit) & (s_p >= limit)
+        # complete where the pass evaluated every point the result depends on: those up to
+        # L(B) among C(G(B)) (a pass at s_p = G(B)), or those up to L(B) among all points where
+        # G(B) >= L(B) and no crossings are wanted; a plain row at its first trial that finds B
+        at_g = s_p == g
+        among_all = (self.ctx.crossings is None) & (g >= limit) & (s_p >= limit)
         plain = self.plain[rows]
-        done = got & np.where(plain, True, (s_e >= limit) & ((s_p == g) | clean))
+        done = got & (plain | ((s_e >= limit) & (at_g | among_all)))
         r = rows[done]
         out.best[r], out.arg[r] = b[done], p.arg[done]
         out.seeds[r], out.seed_size[r] = p.seeds[done], p.seed_size[done]
@@ -150,12 +154,12 @@ class _State:
             keep = done[p.crossings[0]]
             self.cross.append((rows[p.crossings[0][keep]], *(a[keep] for a in p.crossings[1:])))
         self.open[r] = False
-        self.open[rows[~got & (reach >= self.s_cap)]] = False  # nothing up to s_cap: unbounded
+        self.open[rows[~got & (upto >= self.s_cap)]] = False  # nothing up to s_cap: unbounded
         up = ~got & plain  # a failed trial of the plain scan
         self.rung[rows[up]] = np.minimum(s_p[up] * _GROW, self.s_cap)
         # a bound that did not hold (impossible with sound regions) leaves the row to the plain
         # scan
-        self.plain[rows[~got & sure & (reach < self.s_cap)]] = True
+        self.plain[rows[~got & sure & (upto < self.s_cap)]] = True
 
     def step(self, rows: np.ndarray) -> None:
         """One pass over the open `rows`: plain rows take the plain scan's next trial, rows with
@@ -194,8 +198,9 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
     `s_start (N,)` (module docstring). `crossings` (count, separation mm): also that many
     bottom-plane contour crossings per row (contour.py) from the candidates C(G).
     `rot (N, 3, 3)`: each row's tool frame seen from the grid's (default: the grid's frame).
-    `first (N,)`: a first trial size per row whose candidates are all evaluated before anything
-    else (cheap where the minimum is small); the result does not depend on it."""
+    `first (N,)`: a first trial size per row, tried before anything else: the points up to it
+    are evaluated, and rows whose minimum is far enough below it finish there (cheap where the
+    minima are small); the result does not depend on it."""
     n = len(s_start)
     rot = identity_rows(n) if rot is None else np.ascontiguousarray(rot)
     extra = None if crossings is None else (*crossings, edge_data(grid, knn))
@@ -207,8 +212,12 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
         s1 = np.minimum(first[some], st.s_goal[some])
         st.settle(some, ctx.run(some, s1, s1), s1, s1)
     todo = rows[st.open & np.isnan(st.low) & ~st.plain]
+
+    def coarse(r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return ctx.coarse(r, np.minimum(st.u[r], s_cap))
+
     anchors = todo[::_ANCHOR_STEP]
-    st.add_bounds(anchors, lambda r: ctx.coarse(r, np.minimum(st.u[r], s_cap)))
+    st.add_bounds(anchors, coarse)
     st.finish(anchors)
     rest = np.setdiff1d(todo, anchors)
     if rest.size:
@@ -218,8 +227,7 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
         starts = np.concatenate([st.out.arg[near], st.out.seeds[near].reshape(len(rest), -1)],
                                 axis=1)
         st.add_bounds(rest, lambda r: ctx.warm(r, starts))
-        cold = rest[~np.isfinite(st.u[rest])]
-        st.add_bounds(cold, lambda r: ctx.coarse(r, np.full(len(r), s_cap)))
+        st.add_bounds(rest[~np.isfinite(st.u[rest])], coarse)
     st.finish(rows)
     out = st.out
     if st.cross:

@@ -108,7 +108,7 @@ def _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, fou
             row_seeds(i, ids, vals, ne, knn, best[i] * (1.0 + rel) + slack, stamp, pos, seeds,
                       seed_size)
         if on:
-            row_crossings(i, cand, nc, grid[9 + 1], rot, knn, edges, sz, sep, *found)
+            row_crossings(i, cand, nc, grid[10], rot, knn, edges, sz, sep, *found)
 
 
 @nb.njit(cache=True, parallel=True)
