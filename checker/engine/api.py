@@ -260,11 +260,7 @@ def _seed_starts(tp: TestPoints, part: Part, sc, spacing: float):
     srow, idx = srow[keep], idx[keep]
     sid = tp.surface[idx].astype(np.int64)
     uv = tp.uv[idx]
-    ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
-    half = 0.5 * tp.spacing[idx]
-    step = np.column_stack([half / np.maximum(np.linalg.norm(ev.du, axis=1), 1e-12),
-                            half / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
-    return srow, sid, uv, step
+    return srow, sid, uv, _per_parameter(part, sid, uv, 0.5 * tp.spacing[idx])
 
 
 def _contour_starts(tp: TestPoints, part: Part, crossings: tuple):
@@ -273,11 +269,24 @@ def _contour_starts(tp: TestPoints, part: Part, crossings: tuple):
     rows, p, q, f = crossings
     sid = tp.surface[p].astype(np.int64)
     uv = tp.uv[p] + f[:, None] * (tp.uv[q] - tp.uv[p])
+    return rows, sid, uv, _per_parameter(part, sid, uv, 0.25 * tp.spacing[p])
+
+
+def _per_parameter(part: Part, sid: np.ndarray, uv: np.ndarray, mm: np.ndarray) -> np.ndarray:
+    """(K, 2) lengths `mm (K,)` expressed in u and in v at the surface points (sid, uv):
+    mm / |S_u|, mm / |S_v|."""
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
-    half = 0.25 * tp.spacing[p]
-    step = np.column_stack([half / np.maximum(np.linalg.norm(ev.du, axis=1), 1e-12),
-                            half / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
-    return rows, sid, uv, step
+    return np.column_stack([mm / np.maximum(np.linalg.norm(ev.du, axis=1), 1e-12),
+                            mm / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
+
+
+def _nearest_of_surface(sid: np.ndarray) -> np.ndarray:
+    """(N, k) mask of the entries of sorted nearest-neighbour rows whose surface `sid (N, k)`
+    no nearer entry of the row has: the nearest test point of each surface."""
+    first = np.ones(sid.shape, dtype=bool)
+    for j in range(1, sid.shape[1]):
+        first[:, j] = (sid[:, :j] != sid[:, j:j + 1]).all(axis=1)
+    return first
 
 
 def _contact_pairs(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray,
@@ -288,12 +297,8 @@ def _contact_pairs(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray,
     inversion from that test point)."""
     has = (own >= 0) & np.isfinite(uv_own).all(axis=1)
     rows, sids, uvs = [np.flatnonzero(has)], [own[has]], [uv_own[has]]
-    n, k = knn.shape
     sid = tp.surface[knn]
-    first = np.ones((n, k), dtype=bool)  # nearest test point of its surface in the row
-    for j in range(1, k):
-        first[:, j] = (sid[:, :j] != sid[:, j:j + 1]).all(axis=1)
-    r, j = np.nonzero(first & (sid != own[:, None]) & (sid >= 0))
+    r, j = np.nonzero(_nearest_of_surface(sid) & (sid != own[:, None]) & (sid >= 0))
     idx = knn[r, j]
     for s in np.unique(tp.surface[idx]):
         sel = np.flatnonzero(tp.surface[idx] == s)
@@ -308,22 +313,17 @@ def _contact_pairs(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray,
 
 def _seam_starts(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray, spacing: float):
     """Where the CC point lies on or near a seam: among its nearest test points, the nearest one
-    on each other surface within one spacing starts a refinement (the rings stay on the CC
-    point's own surface)."""
+    on each other surface within one spacing starts a refinement (the rings cover the surfaces
+    the CC point lies on, these the ones it only comes near)."""
     n, k = knn.shape
     sid = tp.surface[knn]
     rows = np.repeat(np.arange(n), k)
     d = np.linalg.norm(tp.points[knn] - tp.points[knn[:, :1]], axis=2)  # from the nearest one
-    first = np.ones((n, k), dtype=bool)  # nearest of its surface in the row (knn is sorted)
-    for j in range(1, k):
-        first[:, j] = (sid[:, :j] != sid[:, j:j + 1]).all(axis=1)
-    pick = (first & (sid != own[:, None]) & (sid >= 0) & (d <= spacing)).ravel()
+    pick = (_nearest_of_surface(sid) & (sid != own[:, None]) & (sid >= 0) & (d <= spacing)).ravel()
     idx = knn.ravel()[pick]
-    ev = evaluate_mixed(part, tp.surface[idx].astype(np.int64), tp.uv[idx, 0], tp.uv[idx, 1])
-    half = 0.25 * tp.spacing[idx]
-    step = np.column_stack([half / np.maximum(np.linalg.norm(ev.du, axis=1), 1e-12),
-                            half / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
-    return rows[pick], tp.surface[idx].astype(np.int64), tp.uv[idx], step
+    sid = tp.surface[idx].astype(np.int64)
+    return rows[pick], sid, tp.uv[idx], _per_parameter(part, sid, tp.uv[idx],
+                                                       0.25 * tp.spacing[idx])
 
 
 def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
@@ -332,9 +332,7 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.nd
     8 points on each ring of `radii` (mm): the first ring probes the curvature limit at the CC
     point, the wider ones the narrow valleys near it that the samples do not resolve. The best
     point of each ring is a refinement start (stencil half-width: half the ring radius)."""
-    ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
-    per_mm = 1.0 / np.maximum(np.column_stack([np.linalg.norm(ev.du, axis=1),
-                                                np.linalg.norm(ev.dv, axis=1)]), 1e-12)
+    per_mm = _per_parameter(part, sid, uv, np.ones(len(sid)))
     dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
     out = []
