@@ -1,14 +1,17 @@
 """Batched local refinement in (u, v): every start (a CC row and a point on one surface) takes
 the same few quadratic-model steps at once. Each step evaluates a 3x3 stencil, fits the
 quadratic (central differences), takes the bounded Newton step when the model is convex (the
-best stencil point otherwise), and shrinks the stencil as it converges. Steps stay inside the
-surface domain; points outside a trim count as inf. The answer is the best point evaluated.
+best stencil point otherwise) with backtracking to the first fraction that improves, and
+shrinks the stencil as it converges. Steps stay inside the surface domain; points outside a
+trim count as inf. The answer is the best point evaluated. Starts far above their row's best
+are dropped, and starts that meet (same row, surface and _SAME cell) go on as one.
 
-Surface evaluation is the expensive part and the imaginary-size kernels are cheap, so each step
-evaluates the surface once per start: exactly, with second derivatives, at the point the step
-picks. The stencil, the Newton step and its backtracking run on the second-order Taylor model
-of the surface about the start's best point (error O(h^3) for a stencil of width h, so the
-model becomes exact as the steps converge); only exact values are ever reported."""
+Surface evaluation is the expensive part, so each step evaluates the surface once per start:
+exactly, with second derivatives, at the point the step picks. The stencil, the Newton step
+and its backtracking run on the second-order Taylor model of the surface about the start's best
+point (error O(h^3) for a stencil of width h, so the model becomes exact as the steps
+converge), in one compiled parallel kernel over all starts (`_steps`); only exact values are
+ever reported."""
 
 from __future__ import annotations
 
@@ -21,6 +24,7 @@ from checker.cutter import BALL_FAMILY
 from checker.engine.frames import heights, rotate_rows
 from checker.engine.sizes import RowFrame, pair_sizes, point_size, size_args
 from checker.geometry.evaluate import SurfaceEval, evaluate_mixed
+from checker.geometry.trims import kept, pack_trims
 from checker.part import Part
 
 _ABOVE = 1e-9  # mm above the bottom plane: on it the kernels already count a point as uncut
@@ -33,7 +37,8 @@ _PRUNE_REL, _PRUNE_ABS = 0.01, 0.02  # 'far above': more than 1 % + 0.02 mm
 _CONVERGED = 1e-5  # a start stops when its stencil is this fraction of the initial one
 _OFFS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.float64)
 _CENTRE = 4  # index of the stencil centre in _OFFS
-_CHUNK = 256  # model queries per parallel task
+_SAME = 1e-3  # mm: starts whose best points are this close have met
+_CHUNK = 256  # starts per parallel task
 
 
 @dataclass
@@ -68,47 +73,173 @@ def _free(g, x, lo, hi):
     return 0.0 if (x >= hi and g > 0.0) or (x <= lo and g < 0.0) else g
 
 
-@nb.njit(cache=True)
-def _model_range(d, uv0, starts, rows, Q, floor, snap, lo, hi, u, v, pts, f, sz, k0, k1):
-    """`_model_sizes` for the queries k0 <= k < k1."""
-    e = np.empty((3, 3))
-    for k in range(k0, k1):
-        s, r = starts[k], rows[k]
-        _taylor_at(d, uv0, s, u[k], v[k], e)
-        for _ in range(_FLOOR_STEPS if floor.shape[0] else 0):
-            z = Q[r, 2, 0] * e[0, 0] + Q[r, 2, 1] * e[0, 1] + Q[r, 2, 2] * e[0, 2]
-            if z >= floor[r] and not (snap and z - floor[r] > _ON_FLOOR):
-                break
-            gu = Q[r, 2, 0] * e[1, 0] + Q[r, 2, 1] * e[1, 1] + Q[r, 2, 2] * e[1, 2]
-            gv = Q[r, 2, 0] * e[2, 0] + Q[r, 2, 1] * e[2, 1] + Q[r, 2, 2] * e[2, 2]
-            gu = _free(gu, u[k], lo[k, 0], hi[k, 0])
-            gv = _free(gv, v[k], lo[k, 1], hi[k, 1])
-            g2 = gu * gu + gv * gv
-            if g2 <= 1e-24:
-                break
-            t = (floor[r] - z) / g2
-            u[k] = min(max(u[k] + t * gu, lo[k, 0]), hi[k, 0])
-            v[k] = min(max(v[k] + t * gv, lo[k, 1]), hi[k, 1])
-            _taylor_at(d, uv0, s, u[k], v[k], e)
-        for m in range(3):
-            pts[k, m] = e[0, m]
-        x = Q[r, 0, 0] * e[0, 0] + Q[r, 0, 1] * e[0, 1] + Q[r, 0, 2] * e[0, 2]
-        y = Q[r, 1, 0] * e[0, 0] + Q[r, 1, 1] * e[0, 1] + Q[r, 1, 2] * e[0, 2]
+@nb.njit(cache=True, inline="always")
+def _model_value(M, s, r, sd, u, v, snap, e):
+    """(size, u, v) of start s's Taylor model at (u, v) for CC row r, surface sd (rules of
+    `sizes.point_size`, tool frame through Q, inf outside the trim). With a floor (per row,
+    tool-frame height; empty: none) a point below it (with `snap`: any point) first moves onto
+    it by Newton steps on the model's height, clipped to the domain; (u, v) come back moved."""
+    d, uv0, Q, floor, dom, sz, T = M
+    lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
+    _taylor_at(d, uv0, s, u, v, e)
+    for _ in range(_FLOOR_STEPS if floor.shape[0] else 0):
         z = Q[r, 2, 0] * e[0, 0] + Q[r, 2, 1] * e[0, 1] + Q[r, 2, 2] * e[0, 2]
-        f[k] = point_size(sz, r, x, y, z)
+        if z >= floor[r] and not (snap and z - floor[r] > _ON_FLOOR):
+            break
+        gu = _free(Q[r, 2, 0] * e[1, 0] + Q[r, 2, 1] * e[1, 1] + Q[r, 2, 2] * e[1, 2], u, lo_u,
+                   hi_u)
+        gv = _free(Q[r, 2, 0] * e[2, 0] + Q[r, 2, 1] * e[2, 1] + Q[r, 2, 2] * e[2, 2], v, lo_v,
+                   hi_v)
+        g2 = gu * gu + gv * gv
+        if g2 <= 1e-24:
+            break
+        t = (floor[r] - z) / g2
+        u = min(max(u + t * gu, lo_u), hi_u)
+        v = min(max(v + t * gv, lo_v), hi_v)
+        _taylor_at(d, uv0, s, u, v, e)
+    x = Q[r, 0, 0] * e[0, 0] + Q[r, 0, 1] * e[0, 1] + Q[r, 0, 2] * e[0, 2]
+    y = Q[r, 1, 0] * e[0, 0] + Q[r, 1, 1] * e[0, 1] + Q[r, 1, 2] * e[0, 2]
+    z = Q[r, 2, 0] * e[0, 0] + Q[r, 2, 1] * e[0, 1] + Q[r, 2, 2] * e[0, 2]
+    f = point_size(sz, r, x, y, z) if kept(T, sd, u, v) else np.inf
+    return f, u, v
+
+
+@nb.njit(cache=True, inline="always")
+def _newton_target(F, cu, cv, hu, hv):
+    """Newton point (u, v) of the quadratic through the 3x3 stencil values F (9,) about
+    (cu, cv) (central differences, half-widths hu, hv), at most _REACH half-widths per
+    coordinate; ok False where the model is not finite or not convex."""
+    for j in range(9):
+        if not np.isfinite(F[j]):
+            return False, cu, cv
+    gu = (F[7] - F[1]) / (2 * hu)
+    gv = (F[5] - F[3]) / (2 * hv)
+    huu = (F[7] - 2 * F[4] + F[1]) / hu**2
+    hvv = (F[5] - 2 * F[4] + F[3]) / hv**2
+    huv = (F[8] - F[6] - F[2] + F[0]) / (4 * hu * hv)
+    det = huu * hvv - huv * huv
+    if not (huu > 0 and det > 0):
+        return False, cu, cv
+    du = -(hvv * gu - huv * gv) / det
+    dv = -(huu * gv - huv * gu) / det
+    du = du if np.isfinite(du) else 0.0
+    dv = dv if np.isfinite(dv) else 0.0
+    scale = 1.0
+    if abs(du) > _REACH * hu:
+        scale = _REACH * hu / abs(du)
+    if abs(dv) > _REACH * hv:
+        scale = min(scale, _REACH * hv / abs(dv))
+    return True, cu + du * scale, cv + dv * scale
+
+
+@nb.njit(cache=True)
+def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h, cand,
+                flags, k0, k1):
+    """`_steps` for the active starts a[k0:k1]."""
+    M = (d, uv0, Q, floor, dom, sz, T)
+    e = np.empty((3, 3))
+    F = np.empty(9)
+    U = np.empty((9, 2))
+    vals = np.empty(2 + _FRACTIONS.shape[0])
+    uvs = np.empty((2 + _FRACTIONS.shape[0], 2))
+    for k in range(k0, k1):
+        s = a[k]
+        r, sd = rows[s], sid[s]
+        hu, hv = h[s, 0], h[s, 1]
+        lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
+        cu = min(max(best_uv[s, 0], lo_u + hu), hi_u - hu)
+        cv = min(max(best_uv[s, 1], lo_v + hv), hi_v - hv)
+        for j in range(9):  # the stencil, row-major over du in -1, 0, 1 then dv
+            F[j], U[j, 0], U[j, 1] = _model_value(M, s, r, sd, cu + _OFFS[j, 0] * hu,
+                                                  cv + _OFFS[j, 1] * hv, False, e)
+        jbest = _CENTRE  # the centre unless a point is lower, else the first lowest
+        for j in range(9):
+            if F[j] < F[jbest]:
+                jbest = j
+        ok, tu, tv = _newton_target(F, cu, cv, hu, hv)
+        if not ok:
+            tu, tv = U[jbest, 0], U[jbest, 1]
+        fc, nu, nv = F[jbest], U[jbest, 0], U[jbest, 1]
+        newton = False
+        probes = 9
+        for t in range(_FRACTIONS.shape[0]):  # backtracking along the step
+            x = min(max(cu + _FRACTIONS[t] * (tu - cu), lo_u), hi_u)
+            y = min(max(cv + _FRACTIONS[t] * (tv - cv), lo_v), hi_v)
+            ft, x, y = _model_value(M, s, r, sd, x, y, False, e)
+            probes += 1
+            if ft < fc:
+                fc, nu, nv, newton = ft, x, y, True
+                break
+        along = False
+        if floor.shape[0]:
+            zb = Q[r, 2, 0] * best_p[s, 0] + Q[r, 2, 1] * best_p[s, 1] + Q[r, 2, 2] * best_p[s, 2]
+            if zb - floor[r] <= _ON_FLOOR:
+                n = _contour_probes(M, s, r, sd, best_f[s], fc, hu, hv, vals, uvs, e)
+                probes += n
+                for j in range(n):
+                    if vals[j] < fc:
+                        fc, nu, nv, along = vals[j], uvs[j, 0], uvs[j, 1], True
+        cand[s, 0], cand[s, 1] = nu, nv
+        flags[s, 0], flags[s, 1], flags[s, 2] = newton, along, jbest == _CENTRE
+        flags[s, 3] = probes
+
+
+@nb.njit(cache=True)
+def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
+    """Model values `vals` and (u, v) `uvs` along the bottom-plane contour through start s's
+    model centre (value f0), every point snapped onto the plane: at -tau and +tau mm (tau from
+    the stencil half-widths), then at the fractions of the parabola's vertex. Returns their
+    count."""
+    d, uv0, Q, floor, dom, sz, T = M
+    lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
+    gu = Q[r, 2, 0] * d[s, 1, 0] + Q[r, 2, 1] * d[s, 1, 1] + Q[r, 2, 2] * d[s, 1, 2]
+    gv = Q[r, 2, 0] * d[s, 2, 0] + Q[r, 2, 1] * d[s, 2, 1] + Q[r, 2, 2] * d[s, 2, 2]
+    mm, nu, nv = 0.0, 0.0, 0.0
+    for m in range(3):
+        mm += (-gv * d[s, 1, m] + gu * d[s, 2, m]) ** 2  # the contour tangent, mm per unit
+        nu += d[s, 1, m] ** 2
+        nv += d[s, 2, m] ** 2
+    mm = max(np.sqrt(mm), 1e-300)
+    tu, tv = -gv / mm, gu / mm  # (u, v) per mm along the contour
+    tau = 0.5 * (hu * np.sqrt(nu) + hv * np.sqrt(nv))
+    n = 0
+    for t in (-tau, tau):
+        x = min(max(uv0[s, 0] + t * tu, lo_u), hi_u)
+        y = min(max(uv0[s, 1] + t * tv, lo_v), hi_v)
+        vals[n], uvs[n, 0], uvs[n, 1] = _model_value(M, s, r, sd, x, y, True, e)
+        n += 1
+    fm, fp = vals[0], vals[1]
+    curv = fm - 2.0 * f0 + fp
+    if curv > 0:
+        vertex = tau * (fm - fp) / (2.0 * curv)
+    elif fm != fp:
+        vertex = (1.0 if fm > fp else -1.0) * _REACH * tau
+    else:
+        vertex = 0.0
+    vertex = min(max(vertex if np.isfinite(vertex) else 0.0, -_REACH * tau), _REACH * tau)
+    for j in range(_FRACTIONS.shape[0]):
+        x = min(max(uv0[s, 0] + vertex * _FRACTIONS[j] * tu, lo_u), hi_u)
+        y = min(max(uv0[s, 1] + vertex * _FRACTIONS[j] * tv, lo_v), hi_v)
+        vals[n], uvs[n, 0], uvs[n, 1] = _model_value(M, s, r, sd, x, y, True, e)
+        n += 1
+        if vals[n - 1] < min(fc, fm, fp):
+            break
+    return n
 
 
 @nb.njit(cache=True, parallel=True)
-def _model_sizes(d, uv0, starts, rows, Q, floor, snap, lo, hi, u, v, pts, f, sz):
-    """Model points `pts (K, 3)` (part frame) and their sizes `f (K,)` (rules of
-    `sizes.point_size`, tool frame of each row through `Q`) of starts `starts (K,)` at (u, v)
-    (K,); with `floor` (per row, tool-frame height; empty: no floor) points below it (with
-    `snap`: every point) move onto it first by Newton steps on the model's height (u, v updated
-    in place, clipped to [lo, hi] (K, 2)). Parallel over chunks of queries."""
-    n = u.shape[0]
+def _steps(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h, cand, flags):
+    """One model step of each active start `a (A,)`, in parallel chunks: the 3x3 stencil of
+    half-widths h about its best (u, v) (moved inside the domain), the Newton step of the
+    stencil's quadratic (the best stencil point where that is not finite or not convex) with
+    backtracking over _FRACTIONS, and for flat-bottomed cutters, where the start's best point
+    lies on the bottom plane, the steps along its contour; all on the start's Taylor model
+    (the model arguments from `_Objective.model_args`). Writes the best point found, `cand[s]`, and
+    `flags[s]` = (a Newton step won, a contour step won, the stencil centre was best)."""
+    n = a.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
-        _model_range(d, uv0, starts, rows, Q, floor, snap, lo, hi, u, v, pts, f, sz, c * _CHUNK,
-                     min(n, (c + 1) * _CHUNK))
+        _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h,
+                    cand, flags, c * _CHUNK, min(n, (c + 1) * _CHUNK))
 
 
 class _Taylor:
@@ -141,6 +272,7 @@ class _Objective:
         flat = cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0
         self.floor = frame.fam.z0 + _ABOVE if flat else None
         self.sz = size_args(cutter, frame, np.arange(len(frame.cc)))
+        self.trims = pack_trims([s.trim for s in part.surfaces])
 
     def exact(self, rows, sid, u, v, order: int = 2):
         """(f (K,), points (K, 3) part frame, uv (K, 2), evaluation of that order) on the
@@ -151,17 +283,11 @@ class _Objective:
             self._onto_floor(rows, sid, u, v, ev, order)
         return (*self._sizes(rows, sid, u, v, ev.points), ev)
 
-    def model(self, taylor: _Taylor, starts, rows, sid, u, v, snap: bool = False):
-        """(f (K,), points (K, 3), uv (K, 2)) on the Taylor models of `starts (K,)`; `snap`:
-        move every point onto the bottom plane (to walk along the contour)."""
-        u, v = u.copy(), v.copy()
-        pts, f = np.empty((len(u), 3)), np.empty(len(u))
+    def model_args(self, taylor: _Taylor) -> tuple:
+        """What the compiled steps need: (Taylor terms, their centres, Q, floor (empty: none),
+        domains (surfaces, 2, 2), `sizes.size_args`, packed trims)."""
         floor = np.zeros(0) if self.floor is None else self.floor
-        d = self.dom[sid]
-        _model_sizes(taylor.d, taylor.uv0, starts, rows, self.Q, floor, snap,
-                     np.ascontiguousarray(d[:, :, 0]), np.ascontiguousarray(d[:, :, 1]), u, v,
-                     pts, f, self.sz)
-        return self._trimmed(sid, u, v, f, pts)
+        return (taylor.d, taylor.uv0, self.Q, floor, self.dom, self.sz, self.trims)
 
     def _sizes(self, rows, sid, u, v, pts):
         """(f (K,), points, uv (K, 2)): sizes of the part-frame points, inf outside trims."""
@@ -221,45 +347,29 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
     evals = np.ones(len(rows), dtype=np.int64)
     active = np.ones(len(rows), dtype=bool)
     nrow = int(rows.max()) + 1 if rows.size else 0
-    nt = len(_FRACTIONS)
+    cand = np.empty_like(best_uv)
+    flags = np.zeros((len(rows), 4), dtype=np.int64)
     for it in range(iterations):
         if it >= _PRUNE_AFTER:  # drop starts clearly above the best of their row
             row_best = np.full(nrow, np.inf)
             np.minimum.at(row_best, rows, best_f)
             active &= ~(best_f > row_best[rows] * (1.0 + _PRUNE_REL) + _PRUNE_ABS)
+            _drop_duplicates(active, rows, sid, best_p, best_f)
         a = np.flatnonzero(active)
         if a.size == 0:
             break
-        ha, la, ua, ra, sa = h[a], lo[a], hi[a], rows[a], sid[a]
-        ar = np.arange(a.size)
-        c = np.clip(best_uv[a], la + ha, ua - ha)
-        UV = (c[:, None, :] + _OFFS[None] * ha[:, None, :]).reshape(-1, 2)
-        F, _, UV = obj.model(taylor, np.repeat(a, 9), np.repeat(ra, 9), np.repeat(sa, 9),
-                             UV[:, 0], UV[:, 1])
-        F, UV = F.reshape(-1, 9), UV.reshape(-1, 9, 2)
-        k = np.where(F[:, _CENTRE] <= F.min(axis=1), _CENTRE, np.argmin(F, axis=1))
-        g, Hm = _quadratic(F, ha)
-        move = _newton(c, g, Hm, ha, UV[ar, k], np.isfinite(F).all(axis=1)) - c
-        # backtracking along the step: fractions 1, 1/2, 1/4, 1/8 evaluated at once
-        trial = np.clip(c[:, None, :] + _FRACTIONS[None, :, None] * move[:, None, :],
-                        la[:, None, :], ua[:, None, :]).reshape(-1, 2)
-        ft, _, trial = obj.model(taylor, np.repeat(a, nt), np.repeat(ra, nt), np.repeat(sa, nt),
-                                 trial[:, 0], trial[:, 1])
-        pick = ar * nt + np.argmin(ft.reshape(-1, nt), axis=1)
-        newton = ft[pick] < F[ar, k]
-        cand = np.where(newton[:, None], trial[pick], UV[ar, k])
-        along = np.zeros(a.size, dtype=bool)
-        if obj.floor is not None:
-            along = _along_contour(obj, taylor, a, ra, sa, best_f[a], best_p[a], ha,
-                                   np.minimum(ft[pick], F[ar, k]), cand)
-            evals[a] += along.astype(np.int64) * (2 + nt)
-        fe, pe, ue, eve = obj.exact(ra, sa, cand[:, 0], cand[:, 1])
-        evals[a] += 9 + nt + 1
+        _steps(*obj.model_args(taylor), a, rows, sid, best_uv, best_f, best_p, h, cand, flags)
+        newton, along, centre = (flags[a, j].astype(bool) for j in range(3))
+        evals[a] += flags[a, 3]
+        ra, sa, ha = rows[a], sid[a], h[a]
+        c = np.clip(best_uv[a], lo[a] + ha, hi[a] - ha)
+        fe, pe, ue, eve = obj.exact(ra, sa, cand[a, 0], cand[a, 1])
+        evals[a] += 1
         won = fe < best_f[a]
         t = a[won]
         best_f[t], best_uv[t], best_p[t] = fe[won], ue[won], pe[won]
         taylor.move(t, ue[won], _rows_of(eve, won))
-        shrink = np.where(k == _CENTRE, 0.25, 0.5)[:, None] * ha
+        shrink = np.where(centre, 0.25, 0.5)[:, None] * ha
         # a Newton step sets the stencil to its length, a step along the contour may grow it
         reach = np.where(along, _REACH, 1.0)[:, None] * ha
         jump = np.clip(2.0 * np.abs(ue - c), 0.125 * ha, reach)
@@ -269,91 +379,22 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
     return Refined(best_f, best_uv, best_p, evals)
 
 
-def _along_contour(obj: _Objective, taylor: _Taylor, a: np.ndarray, rows: np.ndarray,
-                   sid: np.ndarray, f0: np.ndarray, p0: np.ndarray, h: np.ndarray, fc: np.ndarray,
-                   cand: np.ndarray) -> np.ndarray:
-    """A 1-D step along the bottom-plane contour for the starts `a` (CC rows `rows`, surfaces
-    `sid`) whose best point (value f0, part-frame point p0) lies on it (flat-bottomed cutters):
-    on the Taylor model, the values at +-tau mm along the contour (tau from the stencil
-    half-widths h), the parabola's vertex and its fractions, every point snapped onto the
-    plane. Where one beats the 2-D candidate's model value `fc`, it replaces `cand` (in
-    place); returns that mask."""
-    on = np.flatnonzero(heights(obj.Q, p0, rows) - obj.floor[rows] <= _ON_FLOOR)
-    found = np.zeros(len(a), dtype=bool)
-    if on.size == 0:
-        return found
-    s, r, d = a[on], rows[on], taylor.d[a[on]]
-    qz = obj.Q[r, 2]
-    gu, gv = np.einsum("ij,ij->i", qz, d[:, 1]), np.einsum("ij,ij->i", qz, d[:, 2])
-    mm = np.linalg.norm(-gv[:, None] * d[:, 1] + gu[:, None] * d[:, 2], axis=1)  # mm per unit
-    t_uv = np.column_stack([-gv, gu]) / np.maximum(mm, 1e-300)[:, None]  # uv per mm along it
-    tau = 0.5 * (h[on, 0] * np.linalg.norm(d[:, 1], axis=1) +
-                 h[on, 1] * np.linalg.norm(d[:, 2], axis=1))
-    ts = np.column_stack([-tau, tau])
-    fm_fp, uv_pm = _on_contour(obj, taylor, s, r, sid[on], ts, t_uv)
-    fm, fp = fm_fp[:, 0], fm_fp[:, 1]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        curv = fm - 2.0 * f0[on] + fp
-        vertex = np.where(curv > 0, tau * (fm - fp) / (2.0 * curv),
-                          np.sign(fm - fp) * _REACH * tau)
-    vertex = np.clip(np.nan_to_num(vertex), -_REACH * tau, _REACH * tau)
-    ft, uv_t = _on_contour(obj, taylor, s, r, sid[on], vertex[:, None] * _FRACTIONS, t_uv)
-    vals = np.concatenate([fm_fp, ft], axis=1)
-    uvs = np.concatenate([uv_pm, uv_t], axis=1)
-    j = np.argmin(vals, axis=1)
-    better = vals[np.arange(on.size), j] < fc[on]
-    cand[on[better]] = uvs[np.arange(on.size), j][better]
-    found[on[better]] = True
-    return found
-
-
-def _on_contour(obj: _Objective, taylor: _Taylor, s: np.ndarray, rows: np.ndarray,
-                sid: np.ndarray, t: np.ndarray, t_uv: np.ndarray):
-    """Model values (K, m) and uv (K, m, 2) at t (K, m) mm along the contour tangents
-    `t_uv (K, 2)` from the model centres of starts `s (K,)` (rows, surfaces), snapped onto the
-    plane."""
-    m = t.shape[1]
-    d = obj.dom[sid]
-    uv = np.clip(taylor.uv0[s, None, :] + t[:, :, None] * t_uv[:, None, :], d[:, None, :, 0],
-                 d[:, None, :, 1]).reshape(-1, 2)
-    f, _, uv = obj.model(taylor, np.repeat(s, m), np.repeat(rows, m), np.repeat(sid, m),
-                         uv[:, 0], uv[:, 1], snap=True)
-    return f.reshape(-1, m), uv.reshape(-1, m, 2)
+def _drop_duplicates(active: np.ndarray, rows: np.ndarray, sid: np.ndarray, best_p: np.ndarray,
+                     best_f: np.ndarray) -> None:
+    """Of the active starts of one row and surface whose best points (part frame) share a cell of
+    _SAME mm, only the lowest stays active (in place): they have met, and go on as one."""
+    a = np.flatnonzero(active)
+    if _SAME <= 0 or a.size == 0:
+        return
+    cell = np.floor(best_p[a] / _SAME).astype(np.int64)
+    order = np.lexsort((best_f[a], cell[:, 2], cell[:, 1], cell[:, 0], sid[a], rows[a]))
+    key = np.column_stack([rows[a], sid[a], cell])[order]
+    same = np.zeros(a.size, dtype=bool)
+    same[1:] = (key[1:] == key[:-1]).all(axis=1)
+    active[a[order[same]]] = False
 
 
 def _rows_of(ev: SurfaceEval, mask: np.ndarray) -> SurfaceEval:
     """The evaluation of the points `mask` selects."""
     return SurfaceEval(ev.points[mask], ev.du[mask], ev.dv[mask], ev.normals[mask],
                        ev.duu[mask], ev.duv[mask], ev.dvv[mask])
-
-
-def _quadratic(F: np.ndarray, h: np.ndarray):
-    """Gradient (S, 2) and Hessian (S, 2, 2) of the quadratic through the 3x3 stencil values
-    F (S, 9) (row-major over du in -1, 0, 1 then dv), half-widths h (S, 2)."""
-    with np.errstate(invalid="ignore"):
-        f = F.reshape(-1, 3, 3)
-        hu, hv = h[:, 0], h[:, 1]
-        gu = (f[:, 2, 1] - f[:, 0, 1]) / (2 * hu)
-        gv = (f[:, 1, 2] - f[:, 1, 0]) / (2 * hv)
-        huu = (f[:, 2, 1] - 2 * f[:, 1, 1] + f[:, 0, 1]) / hu**2
-        hvv = (f[:, 1, 2] - 2 * f[:, 1, 1] + f[:, 1, 0]) / hv**2
-        huv = (f[:, 2, 2] - f[:, 2, 0] - f[:, 0, 2] + f[:, 0, 0]) / (4 * hu * hv)
-    g = np.stack([gu, gv], axis=1)
-    Hm = np.stack([np.stack([huu, huv], axis=1), np.stack([huv, hvv], axis=1)], axis=1)
-    return g, Hm
-
-
-def _newton(c, g, Hm, h, fallback, finite):
-    """Newton point from the stencil centre, at most _REACH half-widths per coordinate; the best
-    stencil point where the model is not finite or not convex."""
-    with np.errstate(invalid="ignore", over="ignore"):
-        det = Hm[:, 0, 0] * Hm[:, 1, 1] - Hm[:, 0, 1] ** 2
-        du = -(Hm[:, 1, 1] * g[:, 0] - Hm[:, 0, 1] * g[:, 1])
-        dv = -(Hm[:, 0, 0] * g[:, 1] - Hm[:, 0, 1] * g[:, 0])
-    ok = finite & (Hm[:, 0, 0] > 0) & (det > 0)
-    safe = np.where(ok, det, 1.0)
-    d = np.stack([du / safe, dv / safe], axis=1)
-    d = np.where(np.isfinite(d), d, 0.0)
-    big = np.abs(d) > _REACH * h
-    scale = np.min(np.where(big, _REACH * h / np.maximum(np.abs(d), 1e-300), 1.0), axis=1)
-    return np.where(ok[:, None], c + d * scale[:, None], fallback)
