@@ -21,7 +21,7 @@ import numba as nb
 import numpy as np
 
 from checker.cutter import BALL_FAMILY
-from checker.engine.frames import heights, rotate_rows
+from checker.engine.frames import heights, rotate_rows, rotated
 from checker.engine.sizes import RowFrame, pair_sizes, point_size, size_args
 from checker.geometry.evaluate import SurfaceEval, evaluate_mixed
 from checker.geometry.trims import kept, pack_trims
@@ -83,13 +83,11 @@ def _model_value(M, s, r, sd, u, v, snap, e):
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
     _taylor_at(d, uv0, s, u, v, e)
     for _ in range(_FLOOR_STEPS if floor.shape[0] else 0):
-        z = Q[r, 2, 0] * e[0, 0] + Q[r, 2, 1] * e[0, 1] + Q[r, 2, 2] * e[0, 2]
+        z = rotated(Q, r, e, 0)[2]
         if z >= floor[r] and not (snap and z - floor[r] > _ON_FLOOR):
             break
-        gu = _free(Q[r, 2, 0] * e[1, 0] + Q[r, 2, 1] * e[1, 1] + Q[r, 2, 2] * e[1, 2], u, lo_u,
-                   hi_u)
-        gv = _free(Q[r, 2, 0] * e[2, 0] + Q[r, 2, 1] * e[2, 1] + Q[r, 2, 2] * e[2, 2], v, lo_v,
-                   hi_v)
+        gu = _free(rotated(Q, r, e, 1)[2], u, lo_u, hi_u)
+        gv = _free(rotated(Q, r, e, 2)[2], v, lo_v, hi_v)
         g2 = gu * gu + gv * gv
         if g2 <= 1e-24:
             break
@@ -97,9 +95,7 @@ def _model_value(M, s, r, sd, u, v, snap, e):
         u = min(max(u + t * gu, lo_u), hi_u)
         v = min(max(v + t * gv, lo_v), hi_v)
         _taylor_at(d, uv0, s, u, v, e)
-    x = Q[r, 0, 0] * e[0, 0] + Q[r, 0, 1] * e[0, 1] + Q[r, 0, 2] * e[0, 2]
-    y = Q[r, 1, 0] * e[0, 0] + Q[r, 1, 1] * e[0, 1] + Q[r, 1, 2] * e[0, 2]
-    z = Q[r, 2, 0] * e[0, 0] + Q[r, 2, 1] * e[0, 1] + Q[r, 2, 2] * e[0, 2]
+    x, y, z = rotated(Q, r, e, 0)
     f = point_size(sz, r, x, y, z) if kept(T, sd, u, v) else np.inf
     return f, u, v
 
@@ -171,14 +167,12 @@ def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, bes
                 fc, nu, nv, newton = ft, x, y, True
                 break
         along = False
-        if floor.shape[0]:
-            zb = Q[r, 2, 0] * best_p[s, 0] + Q[r, 2, 1] * best_p[s, 1] + Q[r, 2, 2] * best_p[s, 2]
-            if zb - floor[r] <= _ON_FLOOR:
-                n = _contour_probes(M, s, r, sd, best_f[s], fc, hu, hv, vals, uvs, e)
-                probes += n
-                for j in range(n):
-                    if vals[j] < fc:
-                        fc, nu, nv, along = vals[j], uvs[j, 0], uvs[j, 1], True
+        if floor.shape[0] and rotated(Q, r, best_p, s)[2] - floor[r] <= _ON_FLOOR:
+            n = _contour_probes(M, s, r, sd, best_f[s], fc, hu, hv, vals, uvs, e)
+            probes += n
+            for j in range(n):
+                if vals[j] < fc:
+                    fc, nu, nv, along = vals[j], uvs[j, 0], uvs[j, 1], True
         cand[s, 0], cand[s, 1] = nu, nv
         flags[s, 0], flags[s, 1], flags[s, 2] = newton, along, jbest == _CENTRE
         flags[s, 3] = probes
@@ -192,8 +186,8 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     count."""
     d, uv0, Q, floor, dom, sz, T = M
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
-    gu = Q[r, 2, 0] * d[s, 1, 0] + Q[r, 2, 1] * d[s, 1, 1] + Q[r, 2, 2] * d[s, 1, 2]
-    gv = Q[r, 2, 0] * d[s, 2, 0] + Q[r, 2, 1] * d[s, 2, 1] + Q[r, 2, 2] * d[s, 2, 2]
+    gu = rotated(Q, r, d[s], 1)[2]  # the height's derivatives in u and v
+    gv = rotated(Q, r, d[s], 2)[2]
     mm, nu, nv = 0.0, 0.0, 0.0
     for m in range(3):
         mm += (-gv * d[s, 1, m] + gu * d[s, 2, m]) ** 2  # the contour tangent, mm per unit
@@ -232,10 +226,11 @@ def _steps(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, 
     """One model step of each active start `a (A,)`, in parallel chunks: the 3x3 stencil of
     half-widths h about its best (u, v) (moved inside the domain), the Newton step of the
     stencil's quadratic (the best stencil point where that is not finite or not convex) with
-    backtracking over _FRACTIONS, and for flat-bottomed cutters, where the start's best point
-    lies on the bottom plane, the steps along its contour; all on the start's Taylor model
-    (the model arguments from `_Objective.model_args`). Writes the best point found, `cand[s]`, and
-    `flags[s]` = (a Newton step won, a contour step won, the stencil centre was best)."""
+    backtracking to the first of _FRACTIONS that improves, and for flat-bottomed cutters, where
+    the start's best point lies on the bottom plane, the steps along its contour; all on the
+    start's Taylor model (the model arguments from `_Objective.model_args`). Writes the best
+    point found, `cand[s]`, and `flags[s]` = (a Newton step won, a contour step won, the
+    stencil centre was best, model values computed)."""
     n = a.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
         _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h,
@@ -384,7 +379,7 @@ def _drop_duplicates(active: np.ndarray, rows: np.ndarray, sid: np.ndarray, best
     """Of the active starts of one row and surface whose best points (part frame) share a cell of
     _SAME mm, only the lowest stays active (in place): they have met, and go on as one."""
     a = np.flatnonzero(active)
-    if _SAME <= 0 or a.size == 0:
+    if a.size == 0:
         return
     cell = np.floor(best_p[a] / _SAME).astype(np.int64)
     order = np.lexsort((best_f[a], cell[:, 2], cell[:, 1], cell[:, 0], sid[a], rows[a]))
