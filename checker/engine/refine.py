@@ -6,12 +6,19 @@ shrinks the stencil as it converges. Steps stay inside the surface domain; point
 trim count as inf. The answer is the best point evaluated. Starts far above their row's best
 are dropped, and starts that meet (same row, surface and _SAME cell) go on as one.
 
+Near the CC point the size can have narrow curved valleys: a point a few microns off the
+valley floor has a much larger size, while the floor falls slowly over a millimetre. The
+stencil cannot follow them. Where it stalls, the start walks instead (`_walk`): trust-region
+Newton steps with derivatives from differences a _DELTA wide, each followed by Newton steps
+across the valley (along the Hessian's steep direction), so that steps of a tenth of a
+millimetre stay on the floor.
+
 Surface evaluation is the expensive part, so each step evaluates the surface once per start:
-exactly, with second derivatives, at the point the step picks. The stencil, the Newton step
-and its backtracking run on the second-order Taylor model of the surface about the start's best
-point (error O(h^3) for a stencil of width h, so the model becomes exact as the steps
-converge), in one compiled parallel kernel over all starts (`_steps`); only exact values are
-ever reported."""
+exactly, with second derivatives, at the point the step picks. The stencil, the Newton step,
+its backtracking and the walk run on the second-order Taylor model of the surface about the
+start's best point (error O(h^3) for a step of length h, so the model becomes exact as the
+steps converge), in one compiled parallel kernel over all starts (`_steps`); only exact values
+are ever reported."""
 
 from __future__ import annotations
 
@@ -39,6 +46,13 @@ _OFFS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.floa
 _CENTRE = 4  # index of the stencil centre in _OFFS
 _SAME = 1e-3  # mm: starts whose best points are this close have met
 _CHUNK = 256  # starts per parallel task
+_DELTA = 1e-4  # mm: difference step of the walk's derivatives
+_GROW, _SHRINK = 2.0, 0.25  # trust radius and reach factors after good and poor predictions
+_RADIUS_CAP, _CAP_MM = 64.0, 1.0  # longest walk and trust radius: initial radii, at least mm
+_WALK_STEPS = 4  # trust-region steps of a walk
+_ACROSS = 2  # Newton steps across the valley after each of them
+_STILL = 1e-7  # mm: a walk whose model predicts less decrease than this has arrived
+_MOVED = 1e-3  # mm: a start that arrived walks again once it has moved this far
 
 
 @dataclass
@@ -104,10 +118,11 @@ def _model_value(M, s, r, sd, u, v, snap, e):
 def _newton_target(F, cu, cv, hu, hv):
     """Newton point (u, v) of the quadratic through the 3x3 stencil values F (9,) about
     (cu, cv) (central differences, half-widths hu, hv), at most _REACH half-widths per
-    coordinate; ok False where the model is not finite or not convex."""
+    coordinate; ok False where the model is not finite or not convex; clipped True where the
+    step was cut to that length."""
     for j in range(9):
         if not np.isfinite(F[j]):
-            return False, cu, cv
+            return False, False, cu, cv
     gu = (F[7] - F[1]) / (2 * hu)
     gv = (F[5] - F[3]) / (2 * hv)
     huu = (F[7] - 2 * F[4] + F[1]) / hu**2
@@ -115,7 +130,7 @@ def _newton_target(F, cu, cv, hu, hv):
     huv = (F[8] - F[6] - F[2] + F[0]) / (4 * hu * hv)
     det = huu * hvv - huv * huv
     if not (huu > 0 and det > 0):
-        return False, cu, cv
+        return False, False, cu, cv
     du = -(hvv * gu - huv * gv) / det
     dv = -(huu * gv - huv * gu) / det
     du = du if np.isfinite(du) else 0.0
@@ -125,12 +140,173 @@ def _newton_target(F, cu, cv, hu, hv):
         scale = _REACH * hu / abs(du)
     if abs(dv) > _REACH * hv:
         scale = min(scale, _REACH * hv / abs(dv))
-    return True, cu + du * scale, cv + dv * scale
+    return True, scale < 1.0, cu + du * scale, cv + dv * scale
+
+
+@nb.njit(cache=True, inline="always")
+def _derivatives(M, s, r, sd, u0, v0, f0, su, sv, e):
+    """(ok, gradient (gu, gv), Hessian (huu, huv, hvv)) of start s's model size at (u0, v0)
+    (value f0 there), per mm along u and v (su, sv: mm per parameter unit): central differences
+    of width _DELTA, the cross term forward; ok False where a value is not finite."""
+    du, dv = _DELTA / su, _DELTA / sv
+    fup = _model_value(M, s, r, sd, u0 + du, v0, False, e)[0]
+    fum = _model_value(M, s, r, sd, u0 - du, v0, False, e)[0]
+    fvp = _model_value(M, s, r, sd, u0, v0 + dv, False, e)[0]
+    fvm = _model_value(M, s, r, sd, u0, v0 - dv, False, e)[0]
+    fpp = _model_value(M, s, r, sd, u0 + du, v0 + dv, False, e)[0]
+    if not np.isfinite(fup + fum + fvp + fvm + fpp + f0):
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0
+    return (True, (fup - fum) / (2 * _DELTA), (fvp - fvm) / (2 * _DELTA),
+            (fup - 2 * f0 + fum) / _DELTA**2, (fpp - fup - fvp + f0) / _DELTA**2,
+            (fvp - 2 * f0 + fvm) / _DELTA**2)
+
+
+@nb.njit(cache=True, inline="always")
+def _steep_direction(huu, huv, hvv):
+    """Unit eigenvector (mm per mm along u, v) of the Hessian's larger eigenvalue: across a
+    valley."""
+    half = 0.5 * (huu - hvv)
+    l2 = 0.5 * (huu + hvv) + np.sqrt(half * half + huv * huv)
+    x, y = huv, l2 - huu
+    if (l2 - hvv) ** 2 + huv * huv > x * x + y * y:
+        x, y = l2 - hvv, huv
+    nrm = np.sqrt(x * x + y * y)
+    return (x / nrm, y / nrm) if nrm > 1e-300 else (1.0, 0.0)
+
+
+@nb.njit(cache=True, inline="always")
+def _trust_region(gu, gv, huu, huv, hvv, radius):
+    """The step (pu, pv) that minimises the quadratic g.p + p.H.p / 2 over |p| <= radius (2D,
+    through H's eigenvectors: the Newton step where H is positive definite and the step is
+    short enough, else H + lambda I on the boundary, found by bisection on lambda)."""
+    half, mid = 0.5 * (huu - hvv), 0.5 * (huu + hvv)
+    root = np.sqrt(half * half + huv * huv)
+    l1, l2 = mid - root, mid + root  # l1 <= l2
+    x1, y1 = huv, l1 - huu  # an eigenvector of l1 (either form, the longer one)
+    if (l1 - hvv) ** 2 + huv * huv > x1 * x1 + y1 * y1:
+        x1, y1 = l1 - hvv, huv
+    nrm = np.sqrt(x1 * x1 + y1 * y1)
+    x1, y1 = (x1 / nrm, y1 / nrm) if nrm > 1e-300 else (1.0, 0.0)
+    x2, y2 = -y1, x1
+    g1, g2 = gu * x1 + gv * y1, gu * x2 + gv * y2
+    lam = 0.0
+    if not (l1 > 0.0 and (g1 / l1) ** 2 + (g2 / l2) ** 2 <= radius * radius):
+        lo = max(0.0, -l1)
+        lam = lo + np.sqrt(gu * gu + gv * gv) / radius + 1e-300  # |step| <= radius here
+        for _ in range(60):
+            mid = 0.5 * (lo + lam)
+            if mid > -l1 and (g1 / (l1 + mid)) ** 2 + (g2 / (l2 + mid)) ** 2 > radius * radius:
+                lo = mid
+            else:
+                lam = mid
+    a1, a2 = l1 + lam, l2 + lam
+    c1, c2 = -g1 / a1 if a1 > 0.0 else 0.0, -g2 / a2 if a2 > 0.0 else 0.0
+    if l1 < 0.0:  # the hard case: the rest of the radius along the negative curvature
+        c1 += (1.0 if c1 >= 0.0 else -1.0) * np.sqrt(max(radius * radius - c1 * c1 - c2 * c2, 0.0))
+    return c1 * x1 + c2 * x2, c1 * y1 + c2 * y2
+
+
+@nb.njit(cache=True, inline="always")
+def _line_step(g, hh, radius):
+    """The step along one coordinate that minimises g p + hh p^2 / 2 over |p| <= radius."""
+    if hh > 0.0:
+        return min(max(-g / hh, -radius), radius)
+    return -radius if g > 0.0 else radius
+
+
+@nb.njit(cache=True, inline="always")
+def _fraction_inside(p, lo, hi):
+    """The largest fraction (<= 1) of a step p that stays within [lo, hi] (lo <= 0 <= hi)."""
+    if p < lo:
+        return max(lo, 0.0) / p
+    if p > hi:
+        return max(hi, 0.0) / p
+    return 1.0
+
+
+@nb.njit(cache=True, inline="always")
+def _boxed_step(gu, gv, huu, huv, hvv, radius, box):
+    """`_trust_region`'s step kept inside the domain `box` = (u lo, u hi, v lo, v hi), offsets
+    from the centre in mm: a coordinate whose bound the centre lies on and the step would
+    cross is held there and the other takes its own line step; a step that crosses a bound
+    from inside stops at it. Returns (pu, pv, the decrease the quadratic predicts)."""
+    pu, pv = _trust_region(gu, gv, huu, huv, hvv, radius)
+    if (pu < box[0] and box[0] > -_DELTA) or (pu > box[1] and box[1] < _DELTA):
+        pu, pv = 0.0, _line_step(gv, hvv, radius)
+    elif (pv < box[2] and box[2] > -_DELTA) or (pv > box[3] and box[3] < _DELTA):
+        pu, pv = _line_step(gu, huu, radius), 0.0
+    t = min(_fraction_inside(pu, box[0], box[1]), _fraction_inside(pv, box[2], box[3]))
+    pu, pv = t * pu, t * pv
+    pred = -(gu * pu + gv * pv + 0.5 * (huu * pu * pu + 2.0 * huv * pu * pv + hvv * pv * pv))
+    return pu, pv, pred
 
 
 @nb.njit(cache=True)
-def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h, cand,
-                flags, k0, k1):
+def _walk(M, s, r, sd, f0, radius, box, e):
+    """Trust-region Newton steps on start s's model from its centre (value f0; derivatives
+    from `_derivatives`), each followed by up to _ACROSS Newton steps across the valley (along
+    the Hessian's steep direction), which keeps long steps on the floor of narrow curved
+    valleys. Up to _WALK_STEPS steps while they improve, in all at most radius[s, 1] mm; the
+    trust radius radius[s, 0] mm grows after a good prediction and shrinks after a poor one,
+    and turns negative where the model predicts no more decrease (in place). A step that
+    reaches below the bottom plane of a flat-bottomed cutter ends the walk (the contour steps
+    go on from there). Returns (value, u, v, the distance walked in mm, model values
+    computed)."""
+    d, uv0, dom = M[0], M[1], M[4]
+    lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
+    su = max(np.sqrt(d[s, 1, 0] ** 2 + d[s, 1, 1] ** 2 + d[s, 1, 2] ** 2), 1e-300)
+    sv = max(np.sqrt(d[s, 2, 0] ** 2 + d[s, 2, 1] ** 2 + d[s, 2, 2] ** 2), 1e-300)
+    u, v = uv0[s, 0], uv0[s, 1]
+    f, walked, probes = f0, 0.0, 0  # f: the value at (u, v), where the walk stands
+    for _ in range(_WALK_STEPS):
+        ok, gu, gv, huu, huv, hvv = _derivatives(M, s, r, sd, u, v, f, su, sv, e)
+        probes += 5
+        step = min(radius[s, 0], radius[s, 1] - walked)
+        if not ok or step < _DELTA:
+            break
+        box[0], box[1] = (lo_u - u) * su, (hi_u - u) * su
+        box[2], box[3] = (lo_v - v) * sv, (hi_v - v) * sv
+        pu, pv, pred = _boxed_step(gu, gv, huu, huv, hvv, step, box)
+        if not pred > _STILL:  # the model's minimum: walks end here until the start moves
+            radius[s, 0] = -radius[s, 0]
+            break
+        x = min(max(u + pu / su, lo_u), hi_u)
+        y = min(max(v + pv / sv, lo_v), hi_v)
+        ft, xs, ys = _model_value(M, s, r, sd, x, y, False, e)
+        probes += 1
+        if xs != x or ys != y:  # moved onto the bottom plane: the contour steps go on from here
+            if ft < f:
+                u, v, f = xs, ys, ft
+            break
+        tu, tv = _steep_direction(huu, huv, hvv)
+        for _ in range(_ACROSS):  # Newton steps across the valley, back onto its floor
+            fp = _model_value(M, s, r, sd, x + _DELTA * tu / su, y + _DELTA * tv / sv, False, e)[0]
+            fm = _model_value(M, s, r, sd, x - _DELTA * tu / su, y - _DELTA * tv / sv, False, e)[0]
+            probes += 3
+            curv = (fp - 2.0 * ft + fm) / _DELTA**2
+            if not (curv > 0.0 and np.isfinite(fp + fm)):
+                break
+            c = min(max(-(fp - fm) / (2.0 * _DELTA * curv), -step), step)
+            xc = min(max(x + c * tu / su, lo_u), hi_u)
+            yc = min(max(y + c * tv / sv, lo_v), hi_v)
+            fc, xc, yc = _model_value(M, s, r, sd, xc, yc, False, e)
+            if not fc < ft:
+                break
+            ft, x, y = fc, xc, yc
+        length = np.sqrt(pu * pu + pv * pv)
+        if not ft < f:
+            radius[s, 0] = max(_SHRINK * length, _DELTA)
+            break
+        if length > 0.99 * radius[s, 0]:  # the quadratic's along-valley curvature is noise:
+            radius[s, 0] = min(_GROW * radius[s, 0], radius[s, 2])  # success alone grows it
+        walked += np.sqrt(((x - u) * su) ** 2 + ((y - v) * sv) ** 2)
+        u, v, f = x, y, ft
+    return f, u, v, walked, probes
+
+
+@nb.njit(cache=True)
+def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h, radius,
+                walked, cand, flags, k0, k1):
     """`_steps` for the active starts a[k0:k1]."""
     M = (d, uv0, Q, floor, dom, sz, T)
     e = np.empty((3, 3))
@@ -138,6 +314,7 @@ def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, bes
     U = np.empty((9, 2))
     vals = np.empty(2 + _FRACTIONS.shape[0])
     uvs = np.empty((2 + _FRACTIONS.shape[0], 2))
+    box = np.empty(4)
     for k in range(k0, k1):
         s = a[k]
         r, sd = rows[s], sid[s]
@@ -152,7 +329,7 @@ def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, bes
         for j in range(9):
             if F[j] < F[jbest]:
                 jbest = j
-        ok, tu, tv = _newton_target(F, cu, cv, hu, hv)
+        ok, clipped, tu, tv = _newton_target(F, cu, cv, hu, hv)
         if not ok:
             tu, tv = U[jbest, 0], U[jbest, 1]
         fc, nu, nv = F[jbest], U[jbest, 0], U[jbest, 1]
@@ -166,16 +343,21 @@ def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, bes
             if ft < fc:
                 fc, nu, nv, newton = ft, x, y, True
                 break
-        along = False
+        along, trust = False, False
         if floor.shape[0] and rotated(Q, r, best_p, s)[2] - floor[r] <= _ON_FLOOR:
             n = _contour_probes(M, s, r, sd, best_f[s], fc, hu, hv, vals, uvs, e)
             probes += n
             for j in range(n):
                 if vals[j] < fc:
                     fc, nu, nv, along = vals[j], uvs[j, 0], uvs[j, 1], True
+        elif (clipped or not newton) and radius[s, 0] > 0.0:  # smooth, the stencil stuck: walk
+            ft, x, y, walked[s], n = _walk(M, s, r, sd, best_f[s], radius, box, e)
+            probes += n
+            if ft < fc:
+                fc, nu, nv, trust = ft, x, y, True
         cand[s, 0], cand[s, 1] = nu, nv
-        flags[s, 0], flags[s, 1], flags[s, 2] = newton, along, jbest == _CENTRE
-        flags[s, 3] = probes
+        flags[s, 0], flags[s, 1], flags[s, 2] = newton or trust, along, jbest == _CENTRE
+        flags[s, 3], flags[s, 4] = probes, trust
 
 
 @nb.njit(cache=True)
@@ -222,19 +404,23 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
 
 
 @nb.njit(cache=True, parallel=True)
-def _steps(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h, cand, flags):
+def _steps(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h, radius, walked,
+           cand, flags):
     """One model step of each active start `a (A,)`, in parallel chunks: the 3x3 stencil of
     half-widths h about its best (u, v) (moved inside the domain), the Newton step of the
     stencil's quadratic (the best stencil point where that is not finite or not convex) with
     backtracking to the first of _FRACTIONS that improves, and for flat-bottomed cutters, where
-    the start's best point lies on the bottom plane, the steps along its contour; all on the
-    start's Taylor model (the model arguments from `_Objective.model_args`). Writes the best
-    point found, `cand[s]`, and `flags[s]` = (a Newton step won, a contour step won, the
-    stencil centre was best, model values computed)."""
+    the start's best point lies on the bottom plane, the steps along its contour, elsewhere,
+    where the stencil stalled, a `_walk`; all on the start's Taylor model (the model arguments
+    from `_Objective.model_args`). `radius (S, 3)` per start: the walk's trust radius, its
+    reach and their cap, mm (a negative trust radius: the walk has arrived). Writes the best
+    point found, `cand[s]`, the distance walked `walked[s]` mm, and `flags[s]` = (a Newton
+    step or the walk won, a contour step won, the stencil centre was best, model values
+    computed, the walk won)."""
     n = a.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
         _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h,
-                    cand, flags, c * _CHUNK, min(n, (c + 1) * _CHUNK))
+                    radius, walked, cand, flags, c * _CHUNK, min(n, (c + 1) * _CHUNK))
 
 
 class _Taylor:
@@ -343,7 +529,11 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
     active = np.ones(len(rows), dtype=bool)
     nrow = int(rows.max()) + 1 if rows.size else 0
     cand = np.empty_like(best_uv)
-    flags = np.zeros((len(rows), 4), dtype=np.int64)
+    flags = np.zeros((len(rows), 5), dtype=np.int64)
+    r0 = np.maximum(h[:, 0] * np.linalg.norm(ev.du, axis=1),
+                    h[:, 1] * np.linalg.norm(ev.dv, axis=1))  # the stencil's half-width, mm
+    radius = np.column_stack([r0, _REACH * r0, np.maximum(_RADIUS_CAP * r0, _CAP_MM)])
+    walked = np.zeros(len(rows))
     for it in range(iterations):
         if it >= _PRUNE_AFTER:  # drop starts clearly above the best of their row
             row_best = np.full(nrow, np.inf)
@@ -353,8 +543,10 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
         a = np.flatnonzero(active)
         if a.size == 0:
             break
-        _steps(*obj.model_args(taylor), a, rows, sid, best_uv, best_f, best_p, h, cand, flags)
+        _steps(*obj.model_args(taylor), a, rows, sid, best_uv, best_f, best_p, h, radius, walked,
+               cand, flags)
         newton, along, centre = (flags[a, j].astype(bool) for j in range(3))
+        trust = flags[a, 4].astype(bool)
         evals[a] += flags[a, 3]
         ra, sa, ha = rows[a], sid[a], h[a]
         c = np.clip(best_uv[a], lo[a] + ha, hi[a] - ha)
@@ -362,8 +554,14 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
         evals[a] += 1
         won = fe < best_f[a]
         t = a[won]
+        moved = t[np.linalg.norm(pe[won] - best_p[t], axis=1) > _MOVED]
+        radius[moved, 0] = np.abs(radius[moved, 0])  # a start that moved may walk again
         best_f[t], best_uv[t], best_p[t] = fe[won], ue[won], pe[won]
         taylor.move(t, ue[won], _rows_of(eve, won))
+        far = a[trust & won & (walked[a] >= 0.99 * radius[a, 1])]
+        radius[far, 1] = np.minimum(_GROW * radius[far, 1], radius[far, 2])
+        misled = a[trust & ~won]  # the model misled the walk: shorter walks
+        radius[misled, 1] = np.maximum(_SHRINK * walked[misled], _DELTA)
         shrink = np.where(centre, 0.25, 0.5)[:, None] * ha
         # a Newton step sets the stencil to its length, a step along the contour may grow it
         reach = np.where(along, _REACH, 1.0)[:, None] * ha
