@@ -17,6 +17,8 @@ from checker.four_axis.axes import axis_for_b
 
 SAMPLE = "samples/compressor/compressor"
 SAME = 1e-9  # mm
+# mm: along a valley floor flat to SAME the limiting point itself is only fixed to microns
+SAME_POINT = 1e-5
 
 
 def _tilted(rng, axis, n, max_deg):
@@ -120,7 +122,7 @@ def _assert_same(res, singles, rows):
     size = np.array([r.size[0] for r in singles])
     np.testing.assert_allclose(res.size[rows], size, atol=SAME, rtol=0)
     point = np.array([r.limiting_point[0] for r in singles])
-    np.testing.assert_allclose(res.limiting_point[rows], point, atol=1e-6, rtol=0)
+    np.testing.assert_allclose(res.limiting_point[rows], point, atol=SAME_POINT, rtol=0)
     assert list(res.verdict[rows]) == [r.verdict[0] for r in singles]
 
 

@@ -344,7 +344,8 @@ def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, bes
                 fc, nu, nv, newton = ft, x, y, True
                 break
         along, trust = False, False
-        if floor.shape[0] and rotated(Q, r, best_p, s)[2] - floor[r] <= _ON_FLOOR:
+        span = abs(rotated(Q, r, d[s], 1)[2]) * hu + abs(rotated(Q, r, d[s], 2)[2]) * hv
+        if floor.shape[0] and rotated(Q, r, best_p, s)[2] - floor[r] <= max(_ON_FLOOR, span):
             n = _contour_probes(M, s, r, sd, best_f[s], fc, hu, hv, vals, uvs, e)
             probes += n
             for j in range(n):
