@@ -162,16 +162,18 @@ def _derivatives(M, s, r, sd, u0, v0, f0, su, sv, e):
 
 
 @nb.njit(cache=True, inline="always")
-def _steep_direction(huu, huv, hvv):
-    """Unit eigenvector (mm per mm along u, v) of the Hessian's larger eigenvalue: across a
-    valley."""
-    half = 0.5 * (huu - hvv)
-    l2 = 0.5 * (huu + hvv) + np.sqrt(half * half + huv * huv)
-    x, y = huv, l2 - huu
-    if (l2 - hvv) ** 2 + huv * huv > x * x + y * y:
-        x, y = l2 - hvv, huv
-    nrm = np.sqrt(x * x + y * y)
-    return (x / nrm, y / nrm) if nrm > 1e-300 else (1.0, 0.0)
+def _eigen(huu, huv, hvv):
+    """Eigenvalues l1 <= l2 of the symmetric 2x2 matrix [[huu, huv], [huv, hvv]] and the unit
+    eigenvector (x1, y1) of l1 (the one of l2 is (-y1, x1))."""
+    half, mid = 0.5 * (huu - hvv), 0.5 * (huu + hvv)
+    root = np.sqrt(half * half + huv * huv)
+    l1, l2 = mid - root, mid + root
+    x1, y1 = huv, l1 - huu  # either form of the eigenvector, the longer one
+    if (l1 - hvv) ** 2 + huv * huv > x1 * x1 + y1 * y1:
+        x1, y1 = l1 - hvv, huv
+    nrm = np.sqrt(x1 * x1 + y1 * y1)
+    x1, y1 = (x1 / nrm, y1 / nrm) if nrm > 1e-300 else (1.0, 0.0)
+    return l1, l2, x1, y1
 
 
 @nb.njit(cache=True, inline="always")
@@ -179,14 +181,7 @@ def _trust_region(gu, gv, huu, huv, hvv, radius):
     """The step (pu, pv) that minimises the quadratic g.p + p.H.p / 2 over |p| <= radius (2D,
     through H's eigenvectors: the Newton step where H is positive definite and the step is
     short enough, else H + lambda I on the boundary, found by bisection on lambda)."""
-    half, mid = 0.5 * (huu - hvv), 0.5 * (huu + hvv)
-    root = np.sqrt(half * half + huv * huv)
-    l1, l2 = mid - root, mid + root  # l1 <= l2
-    x1, y1 = huv, l1 - huu  # an eigenvector of l1 (either form, the longer one)
-    if (l1 - hvv) ** 2 + huv * huv > x1 * x1 + y1 * y1:
-        x1, y1 = l1 - hvv, huv
-    nrm = np.sqrt(x1 * x1 + y1 * y1)
-    x1, y1 = (x1 / nrm, y1 / nrm) if nrm > 1e-300 else (1.0, 0.0)
+    l1, l2, x1, y1 = _eigen(huu, huv, hvv)
     x2, y2 = -y1, x1
     g1, g2 = gu * x1 + gv * y1, gu * x2 + gv * y2
     lam = 0.0
@@ -278,7 +273,8 @@ def _walk(M, s, r, sd, f0, radius, box, e):
             if ft < f:
                 u, v, f = xs, ys, ft
             break
-        tu, tv = _steep_direction(huu, huv, hvv)
+        _, _, x1, y1 = _eigen(huu, huv, hvv)
+        tu, tv = -y1, x1  # across the valley: the eigenvector of the larger eigenvalue
         for _ in range(_ACROSS):  # Newton steps across the valley, back onto its floor
             fp = _model_value(M, s, r, sd, x + _DELTA * tu / su, y + _DELTA * tv / sv, False, e)[0]
             fm = _model_value(M, s, r, sd, x - _DELTA * tu / su, y - _DELTA * tv / sv, False, e)[0]
