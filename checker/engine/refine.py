@@ -47,7 +47,7 @@ _CENTRE = 4  # index of the stencil centre in _OFFS
 _SAME = 1e-3  # mm: starts whose best points are this close have met
 _CHUNK = 256  # starts per parallel task
 _DELTA = 1e-4  # mm: difference step of the walk's derivatives
-_GROW, _SHRINK = 2.0, 0.25  # trust radius and reach factors after good and poor predictions
+_GROW, _SHRINK = 2.0, 0.25  # trust radius and reach factors after a success and a failure
 _RADIUS_CAP, _CAP_MM = 64.0, 1.0  # longest walk and trust radius: initial radii, at least mm
 _WALK_STEPS = 4  # trust-region steps of a walk
 _ACROSS = 2  # Newton steps across the valley after each of them
@@ -115,6 +115,14 @@ def _model_value(M, s, r, sd, u, v, snap, e):
 
 
 @nb.njit(cache=True, inline="always")
+def _near_floor(Q, r, d, s, best_p, floor, hu, hv):
+    """Whether start s's best point lies on row r's bottom plane or within the height range of
+    its stencil (half-widths hu, hv) above it: the contour steps apply."""
+    span = abs(rotated(Q, r, d[s], 1)[2]) * hu + abs(rotated(Q, r, d[s], 2)[2]) * hv
+    return rotated(Q, r, best_p, s)[2] - floor[r] <= max(_ON_FLOOR, span)
+
+
+@nb.njit(cache=True, inline="always")
 def _newton_target(F, cu, cv, hu, hv):
     """Newton point (u, v) of the quadratic through the 3x3 stencil values F (9,) about
     (cu, cv) (central differences, half-widths hu, hv), at most _REACH half-widths per
@@ -141,6 +149,13 @@ def _newton_target(F, cu, cv, hu, hv):
     if abs(dv) > _REACH * hv:
         scale = min(scale, _REACH * hv / abs(dv))
     return True, scale < 1.0, cu + du * scale, cv + dv * scale
+
+
+@nb.njit(cache=True, inline="always")
+def _speeds(d, s):
+    """|S_u|, |S_v| (mm per parameter unit) at start s's model centre."""
+    return (np.sqrt(d[s, 1, 0] ** 2 + d[s, 1, 1] ** 2 + d[s, 1, 2] ** 2),
+            np.sqrt(d[s, 2, 0] ** 2 + d[s, 2, 1] ** 2 + d[s, 2, 2] ** 2))
 
 
 @nb.njit(cache=True, inline="always")
@@ -242,15 +257,15 @@ def _walk(M, s, r, sd, f0, radius, box, e):
     from `_derivatives`), each followed by up to _ACROSS Newton steps across the valley (along
     the Hessian's steep direction), which keeps long steps on the floor of narrow curved
     valleys. Up to _WALK_STEPS steps while they improve, in all at most radius[s, 1] mm; the
-    trust radius radius[s, 0] mm grows after a good prediction and shrinks after a poor one,
-    and turns negative where the model predicts no more decrease (in place). A step that
-    reaches below the bottom plane of a flat-bottomed cutter ends the walk (the contour steps
-    go on from there). Returns (value, u, v, the distance walked in mm, model values
-    computed)."""
+    trust radius radius[s, 0] mm grows after a full-length step that improved, shrinks after
+    one that did not, and turns negative where the model predicts no more decrease (in
+    place). A step that reaches below the bottom plane of a flat-bottomed cutter ends the walk
+    (the contour steps go on from there). Returns (value, u, v, the distance walked in mm,
+    model values computed)."""
     d, uv0, dom = M[0], M[1], M[4]
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
-    su = max(np.sqrt(d[s, 1, 0] ** 2 + d[s, 1, 1] ** 2 + d[s, 1, 2] ** 2), 1e-300)
-    sv = max(np.sqrt(d[s, 2, 0] ** 2 + d[s, 2, 1] ** 2 + d[s, 2, 2] ** 2), 1e-300)
+    su, sv = _speeds(d, s)
+    su, sv = max(su, 1e-300), max(sv, 1e-300)
     u, v = uv0[s, 0], uv0[s, 1]
     f, walked, probes = f0, 0.0, 0  # f: the value at (u, v), where the walk stands
     for _ in range(_WALK_STEPS):
@@ -282,7 +297,7 @@ def _walk(M, s, r, sd, f0, radius, box, e):
             curv = (fp - 2.0 * ft + fm) / _DELTA**2
             if not (curv > 0.0 and np.isfinite(fp + fm)):
                 break
-            c = min(max(-(fp - fm) / (2.0 * _DELTA * curv), -step), step)
+            c = _line_step((fp - fm) / (2.0 * _DELTA), curv, step)
             xc = min(max(x + c * tu / su, lo_u), hi_u)
             yc = min(max(y + c * tv / sv, lo_v), hi_v)
             fc, xc, yc = _model_value(M, s, r, sd, xc, yc, False, e)
@@ -340,8 +355,7 @@ def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, bes
                 fc, nu, nv, newton = ft, x, y, True
                 break
         along, trust = False, False
-        span = abs(rotated(Q, r, d[s], 1)[2]) * hu + abs(rotated(Q, r, d[s], 2)[2]) * hv
-        if floor.shape[0] and rotated(Q, r, best_p, s)[2] - floor[r] <= max(_ON_FLOOR, span):
+        if floor.shape[0] and _near_floor(Q, r, d, s, best_p, floor, hu, hv):
             n = _contour_probes(M, s, r, sd, best_f[s], fc, hu, hv, vals, uvs, e)
             probes += n
             for j in range(n):
@@ -367,14 +381,13 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
     gu = rotated(Q, r, d[s], 1)[2]  # the height's derivatives in u and v
     gv = rotated(Q, r, d[s], 2)[2]
-    mm, nu, nv = 0.0, 0.0, 0.0
+    mm = 0.0
     for m in range(3):
         mm += (-gv * d[s, 1, m] + gu * d[s, 2, m]) ** 2  # the contour tangent, mm per unit
-        nu += d[s, 1, m] ** 2
-        nv += d[s, 2, m] ** 2
     mm = max(np.sqrt(mm), 1e-300)
     tu, tv = -gv / mm, gu / mm  # (u, v) per mm along the contour
-    tau = 0.5 * (hu * np.sqrt(nu) + hv * np.sqrt(nv))
+    su, sv = _speeds(d, s)
+    tau = 0.5 * (hu * su + hv * sv)
     n = 0
     for t in (-tau, tau):
         x = min(max(uv0[s, 0] + t * tu, lo_u), hi_u)
