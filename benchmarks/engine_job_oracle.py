@@ -14,12 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from checker.apt import read_cl
 from checker.cutter import parse_cutter
 from checker.engine import allowable
-from checker.geometry import load_part
-from checker.geometry.contact import cl_to_cc
-from checker.geometry.sampling import sample_part
 
 ROOT = Path(__file__).resolve().parents[1]
 JOB = ROOT / "samples" / "mould" / "mould.apt"
@@ -29,6 +25,7 @@ CUTTERS = ("CUTTER/10,5", "CUTTER/10,2", "CUTTER/10")
 def main() -> None:
     sys.path.insert(0, str(ROOT / "tests"))
     from engine_oracle import oracle_sizes
+    from job_contacts import job_contacts
 
     args = sys.argv[1:]
     dense = 150
@@ -36,12 +33,7 @@ def main() -> None:
         k = args.index("--dense")
         dense = int(args[k + 1])
         del args[k:k + 2]
-    tp = read_cl(JOB)
-    ma = tp.motion_arrays()
-    cut = ~ma.rapid
-    part = load_part(JOB.with_suffix(".json"))
-    samples = sample_part(part)
-    con = cl_to_cc(part, samples, tp.operations[0].cutter, ma.tip[cut], ma.axis[cut])
+    part, samples, con = job_contacts(JOB)
     kw = dict(cc_surface=con.surface, cc_uv=con.uv)
     print(f"mould: {len(con.cc)} CC points, oracle dense {dense}")
     for text in args or CUTTERS:

@@ -16,14 +16,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from engine_oracle import _row_min
+from job_contacts import job_contacts
 
-from checker.apt import read_cl
 from checker.cutter import parse_cutter
 from checker.engine import allowable
-from checker.geometry import load_part
-from checker.geometry.contact import cl_to_cc
 from checker.geometry.evaluate import evaluate
-from checker.geometry.sampling import sample_part
 
 JOB = Path(__file__).resolve().parents[1] / "samples" / "mould" / "mould.apt"
 CUTTER = "CUTTER/10,2"
@@ -57,12 +54,7 @@ def _local_minimum(part, cutter, cc: np.ndarray, n: np.ndarray) -> float:
 def job_rows():
     if not JOB.is_file():
         pytest.skip("samples/mould not built (samples/make_samples.py)")
-    tp = read_cl(JOB)
-    ma = tp.motion_arrays()
-    cut = ~ma.rapid
-    part = load_part(JOB.with_suffix(".json"))
-    samples = sample_part(part)
-    con = cl_to_cc(part, samples, tp.operations[0].cutter, ma.tip[cut], ma.axis[cut])
+    part, samples, con = job_contacts(JOB)
     rows = np.array(ROWS)
     return part, samples, con.cc[rows], con.normal[rows], con.surface[rows], con.uv[rows]
 
