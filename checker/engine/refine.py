@@ -18,7 +18,9 @@ exactly, with second derivatives, at the point the step picks. The stencil, the 
 its backtracking and the walk run on the second-order Taylor model of the surface about the
 start's best point (error O(h^3) for a step of length h, so the model becomes exact as the
 steps converge), in one compiled parallel kernel over all starts (`_steps`); only exact values
-are ever reported."""
+are ever reported. The model's value (`_model_value`) is a called function, not inlined: its
+dozen call sites inlined took two minutes to compile; its arguments are few flat arrays
+(`trims.PackedTrims` is two), so that the call costs little."""
 
 from __future__ import annotations
 
@@ -87,7 +89,7 @@ def _free(g, x, lo, hi):
     return 0.0 if (x >= hi and g > 0.0) or (x <= lo and g < 0.0) else g
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True)
 def _model_value(M, s, r, sd, u, v, snap, e):
     """(size, u, v) of start s's Taylor model at (u, v) for CC row r, surface sd (rules of
     `sizes.point_size`, tool frame through Q, inf outside the trim). With a floor (per row,
@@ -158,7 +160,7 @@ def _speeds(d, s):
             np.sqrt(d[s, 2, 0] ** 2 + d[s, 2, 1] ** 2 + d[s, 2, 2] ** 2))
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True)
 def _derivatives(M, s, r, sd, u0, v0, f0, su, sv, e):
     """(ok, gradient (gu, gv), Hessian (huu, huv, hvv)) of start s's model size at (u0, v0)
     (value f0 there), per mm along u and v (su, sv: mm per parameter unit): central differences

@@ -106,19 +106,18 @@ class UVTrim:
 
 
 class PackedTrims(NamedTuple):
-    """The trims of a list of surfaces for compiled code (`kept`): loop set 2s is surface s's
-    outer loops, 2s + 1 its holes; `used[k]` whether set k has loops, its edges are
-    `edges[eo[k]:eo[k + 1]]` (x0, y0, x1, y1 per row), its v buckets `bstart[bo[k]:...]` into
-    `bedges[go[k]:...]` (local indices), `grid[k]` = (vmin, dv, buckets)."""
+    """The trims of a list of surfaces for compiled code (`kept`), in two flat arrays so that
+    compiled calls pass them cheaply. Loop set k = 2s is surface s's outer loops, 2s + 1 its
+    holes. `ints[_HEAD * k:]` holds (used, first edge, edge count, first bucket start, bucket
+    count, first bucketed edge) of set k; `reals[3 * k:]` its (vmin, dv); its edges are rows of
+    4 (x0, y0, x1, y1) in `reals` from its first edge; bucket b's edges are the local indices
+    `ints[bedge + ints[start + b]:bedge + ints[start + b + 1]]`."""
 
-    used: np.ndarray
-    edges: np.ndarray
-    eo: np.ndarray
-    bstart: np.ndarray
-    bo: np.ndarray
-    bedges: np.ndarray
-    go: np.ndarray
-    grid: np.ndarray
+    ints: np.ndarray
+    reals: np.ndarray
+
+
+_HEAD = 6  # ints per loop set in the header of PackedTrims.ints
 
 
 def pack_trims(trims: list) -> PackedTrims:
@@ -126,35 +125,42 @@ def pack_trims(trims: list) -> PackedTrims:
     sets = []
     for t in trims:
         sets += [t._outer, t._holes] if t is not None else [LoopSet([]), LoopSet([])]
-    edges = [np.column_stack([s._x0, s._y0, s._x1, s._y1]) for s in sets]
-    return PackedTrims(
-        used=np.array([bool(s.loops) for s in sets], dtype=np.bool_),
-        edges=np.concatenate(edges + [np.zeros((0, 4))]),
-        eo=np.cumsum([0] + [len(e) for e in edges]).astype(np.int64),
-        bstart=np.concatenate([s._bstart for s in sets] + [np.zeros(0, np.int64)]),
-        bo=np.cumsum([0] + [len(s._bstart) for s in sets]).astype(np.int64),
-        bedges=np.concatenate([s._bedges for s in sets] + [np.zeros(0, np.int64)]),
-        go=np.cumsum([0] + [len(s._bedges) for s in sets]).astype(np.int64),
-        grid=np.array([(s._vmin, s._dv, s._nb) for s in sets] + [(0.0, 1.0, 0)], dtype=np.float64),
-    )
+    k = len(sets)
+    head, body = np.zeros((k, _HEAD), dtype=np.int64), []
+    grid = np.array([(s._vmin, s._dv) for s in sets], dtype=np.float64).reshape(k, 2)
+    edges = [np.column_stack([s._x0, s._y0, s._x1, s._y1]).ravel() for s in sets]
+    reals_at = 2 * k + np.cumsum([0] + [len(e) for e in edges])
+    ints_at = _HEAD * k
+    for j, s in enumerate(sets):
+        head[j] = (bool(s.loops), reals_at[j], len(s._x0), ints_at, s._nb, ints_at + s._nb + 1)
+        body += [s._bstart, s._bedges]
+        ints_at += len(s._bstart) + len(s._bedges)
+    ints = np.concatenate([head.ravel()] + body + [np.zeros(0, np.int64)]).astype(np.int64)
+    reals = np.concatenate([grid.ravel()] + edges + [np.zeros(0)])
+    return PackedTrims(ints, reals)
 
 
 @nb.njit(cache=True, inline="always")
 def _odd(T, k, u, v):
     """Whether (u, v) lies inside an odd number of the loops of set k of `PackedTrims` T."""
-    e0, e1 = T.eo[k], T.eo[k + 1]
-    if e1 == e0:
-        return False
-    E = T.edges[e0:e1]
-    n = _crossing_count(u, v, E[:, 0], E[:, 1], E[:, 2], E[:, 3], T.grid[k, 0], T.grid[k, 1],
-                        int(T.grid[k, 2]), T.bstart[T.bo[k]:T.bo[k + 1]],
-                        T.bedges[T.go[k]:T.go[k + 1]])
-    return n % 2 == 1
+    I, R = T
+    h = _HEAD * k
+    e0, nb_, start, bedge = I[h + 1], I[h + 4], I[h + 3], I[h + 5]
+    b = int((v - R[2 * k]) / R[2 * k + 1])
+    cnt = 0
+    if I[h + 2] and 0 <= b < nb_:
+        for t in range(I[start + b], I[start + b + 1]):
+            e = e0 + 4 * I[bedge + t]
+            ya, yb = R[e + 1], R[e + 3]
+            if (ya > v) != (yb > v) and R[e] + (v - ya) * (R[e + 2] - R[e]) / (yb - ya) > u:
+                cnt += 1
+    return cnt % 2 == 1
 
 
 @nb.njit(cache=True, inline="always")
 def kept(T, s, u, v):
     """`UVTrim.contains` of surface s at one (u, v), from `pack_trims`."""
-    if T.used[2 * s] and not _odd(T, 2 * s, u, v):
+    I = T[0]
+    if I[_HEAD * 2 * s] and not _odd(T, 2 * s, u, v):
         return False
-    return not (T.used[2 * s + 1] and _odd(T, 2 * s + 1, u, v))
+    return not (I[_HEAD * (2 * s + 1)] and _odd(T, 2 * s + 1, u, v))
