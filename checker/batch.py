@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from checker.errors import PathcheckError
+from checker.extras import require
 from checker.results import ResultsDocument
 from checker.store import ResultsStore
 
@@ -99,6 +100,7 @@ def _dask(
     paths: list[str], scheduler: object, job_function: str, connect_timeout_s: float
 ) -> Iterator[JobOutcome]:
     """Jobs on a Dask cluster: `scheduler` is an address ('tcp://host:8786') or a Client."""
+    require("distributed", "dask", "running jobs on a Dask cluster")
     from distributed import Client
     from distributed import as_completed as dask_completed
 

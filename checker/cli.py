@@ -5,6 +5,7 @@ format. Subcommands live in `checker.commands.*` and are imported only when used
 from __future__ import annotations
 
 import importlib
+import signal
 import sys
 
 import click
@@ -57,8 +58,15 @@ def cli() -> None:
     """
 
 
+def _terminated(signum: int, frame: object) -> None:
+    """SIGTERM ends the run like an interrupt: files being written are removed, not left
+    half-written (`checker.atomic`); exit code 128 + the signal number."""
+    raise SystemExit(128 + signum)
+
+
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: bad input is one line on stderr and exit code 2, never a traceback."""
+    signal.signal(signal.SIGTERM, _terminated)
     try:
         cli.main(args=argv, prog_name="pathcheck", standalone_mode=False)
     except PathcheckError as err:

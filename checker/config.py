@@ -1,5 +1,6 @@
-"""The one validated configuration: defaults from `config/defaults.toml`, overridden by a user
-file (`--config`) and, for the store path, the environment variable PATHCHECK_STORE."""
+"""The one validated configuration: the shipped defaults (`checker/resources/defaults.toml`),
+overridden by a user file (`--config`) and, for the store path, the environment variable
+PATHCHECK_STORE."""
 
 from __future__ import annotations
 
@@ -11,9 +12,9 @@ from pathlib import Path
 from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, PositiveInt, ValidationError
 
 from checker.errors import PathcheckError
+from checker.resources import resource
 
-CONFIG_DIR = Path(__file__).resolve().parents[1] / "config"
-DEFAULTS_FILE = CONFIG_DIR / "defaults.toml"
+DEFAULTS_FILE = resource("defaults.toml")
 
 
 class _Section(BaseModel):
@@ -140,5 +141,5 @@ def load_config(user_file: str | Path | None = None) -> Config:
 
 @lru_cache(maxsize=1)
 def default_config() -> Config:
-    """The defaults from config/defaults.toml (cached)."""
+    """The shipped defaults (cached)."""
     return load_config()

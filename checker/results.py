@@ -138,7 +138,8 @@ class ResultsDocument(_Model):
 
 
 def json_schema() -> dict:
-    """The published JSON schema of the results document (schemas/results.schema.json)."""
+    """The published JSON schema of the results document
+    (checker/resources/schemas/results.schema.json)."""
     schema = ResultsDocument.model_json_schema()
     schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
     schema["$id"] = f"https://pathcheck.invalid/schemas/results-{SCHEMA_VERSION}.json"

@@ -1,4 +1,4 @@
-"""The library of standard cutters (`config/tools.toml`), validated on load.
+"""The library of standard cutters (`checker/resources/tools.toml`), validated on load.
 
 Each `[[tool]]` gives `name`, `kind` (flat | ball | bullnose | apt | tapered_ball), `d` (APT
 diameter), `r` (corner radius; a ball's defaults to d/2), optional `bottom_angle` / `taper_angle`
@@ -19,8 +19,9 @@ from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, ValidationErro
 
 from checker.cutter import BALL_FAMILY, Cutter, diameter_from
 from checker.errors import PathcheckError
+from checker.resources import resource
 
-DEFAULT_TOOLS = Path(__file__).resolve().parents[1] / "config" / "tools.toml"
+DEFAULT_TOOLS = resource("tools.toml")
 _INCH = 25.4
 
 
@@ -168,7 +169,7 @@ class ToolLibrary:
 
 
 def load_tool_library(path: str | Path | None = None) -> ToolLibrary:
-    """Read and validate a tool library (default `config/tools.toml`); a bad entry raises
+    """Read and validate a tool library (default: the shipped one); a bad entry raises
     PathcheckError naming the tool and the field."""
     path = Path(path) if path is not None else DEFAULT_TOOLS
     try:

@@ -1,7 +1,8 @@
 """pathcheck post-processor: machine definitions, part <-> machine kinematics, G-code writer and
 reader.
 
-- `machine`: `Machine` (pydantic, `config/machines/*.toml`), `load_machine(name_or_path)`;
+- `machine`: `Machine` (pydantic, `checker/resources/machines/*.toml`),
+  `load_machine(name_or_path)`;
 - `kinematics`: part frame <-> machine X Y Z B, tip path length relative to the part;
 - `wrap`: B words per rotary wrap mode, and back;
 - `dialects`: Fanuc-style ISO and LinuxCNC as tables (modal groups, codes) plus hooks;

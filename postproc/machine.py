@@ -1,5 +1,5 @@
 """Machine definitions: a horizontal 4-axis machining centre with a B table about machine Y,
-read from TOML (`config/machines/NAME.toml`) and validated by pydantic.
+read from TOML (`checker/resources/machines/NAME.toml`) and validated by pydantic.
 
 Frames and units: linear values in mm in the program's work frame (G54); B in degrees. Commanding
 ``B = w`` turns the part by ``b = b_direction * w`` about +Y through ``table_center`` (DESIGN.md).
@@ -22,8 +22,9 @@ from pydantic import (
 )
 
 from checker.errors import PathcheckError
+from checker.resources import resource
 
-MACHINES_DIR = Path(__file__).resolve().parents[1] / "config" / "machines"
+MACHINES_DIR = resource("machines")
 DEFAULT_MACHINE = "fanuc-hmc"
 
 WrapMode = Literal["limited", "shortest", "0_360", "-180_180", "signed"]
@@ -180,13 +181,13 @@ def load_machine_file(path: str | Path) -> Machine:
 
 
 def available_machines() -> list[str]:
-    """Names of the machines shipped in config/machines."""
+    """Names of the shipped machines."""
     return sorted(p.stem for p in MACHINES_DIR.glob("*.toml"))
 
 
 def load_machine(name_or_path: str | Path | None = None) -> Machine:
-    """A machine by name (``config/machines/NAME.toml``) or by file path; the default machine
-    (``fanuc-hmc``) when None."""
+    """A machine by name (a shipped one, ``checker/resources/machines/NAME.toml``) or by file
+    path; the default machine (``fanuc-hmc``) when None."""
     target = DEFAULT_MACHINE if name_or_path is None else str(name_or_path)
     candidate = Path(target)
     if candidate.suffix == ".toml" or candidate.exists():

@@ -1,18 +1,16 @@
 """G-code writer: machine rows (already in machine coordinates and B words) to program text in a
 dialect, with modal words suppressed, block numbers, header and footer; and the atomic file
-write (temporary file + os.replace) so a failed run never leaves half a program."""
+write (`checker.atomic`) so a failed run never leaves half a program."""
 
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from checker.errors import PathcheckError
+from checker.atomic import write_file
 from postproc.dialects import Dialect
 from postproc.machine import Machine
 
@@ -172,24 +170,6 @@ def _significant(values: np.ndarray, digits: int) -> list[str]:
 
 
 def write_program(text: str, path: str | Path) -> Path:
-    """Write ``text`` to ``path`` atomically: a temporary file in the same folder, then
-    ``os.replace``; on failure the old file (if any) is left untouched."""
-    path = Path(path)
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-    except OSError as err:
-        raise PathcheckError(
-            f"cannot write G-code: {err.strerror}", path=path, code="output"
-        ) from err
-    try:
-        with os.fdopen(fd, "w", encoding="ascii", newline="\n") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException as err:
-        Path(tmp).unlink(missing_ok=True)
-        if isinstance(err, OSError):
-            raise PathcheckError(
-                f"cannot write G-code: {err.strerror}", path=path, code="output"
-            ) from err
-        raise
-    return path
+    """Write ``text`` to ``path`` atomically (`checker.atomic.write_file`, ASCII); on failure
+    the old file (if any) is left untouched."""
+    return write_file(path, text, what="G-code", encoding="ascii")

@@ -11,7 +11,7 @@ from typing import TextIO
 import numpy as np
 
 from checker.apt.lexer import FREE_TEXT
-from checker.errors import PathcheckError
+from checker.atomic import write_file
 from checker.toolpath import Record, ToolPath, Value
 
 MAX_LINE = 72
@@ -72,9 +72,4 @@ def write_apt(toolpath: ToolPath, path_or_stream: str | Path | TextIO) -> None:
     if isinstance(path_or_stream, io.TextIOBase) or hasattr(path_or_stream, "write"):
         path_or_stream.write(text)  # type: ignore[union-attr]
         return
-    p = Path(path_or_stream)  # type: ignore[arg-type]
-    try:
-        p.write_text(text, encoding="utf-8")
-    except OSError as err:
-        raise PathcheckError(f"cannot write APT file: {err.strerror or err}", path=p,
-                             code="io") from err
+    write_file(Path(path_or_stream), text, what="APT file")  # type: ignore[arg-type]

@@ -10,6 +10,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from checker.atomic import write_file
 from checker.errors import PathcheckError
 
 CC_COLUMNS = ("x", "y", "z", "nx", "ny", "nz")
@@ -121,4 +122,4 @@ def allowable(part_path, cc_path, cutter_text, axis_text, method, seed, json_out
     click.echo(f"{len(cc)} CC points; load {t1 - t0:.3f} s, sample {t2 - t1:.3f} s, "
                f"search {t3 - t2:.3f} s")
     if json_out is not None:
-        json_out.write_text(json.dumps(doc, indent=2), encoding="utf-8")
+        write_file(json_out, json.dumps(doc, indent=2), what="results JSON")

@@ -9,6 +9,7 @@ from typing import Any
 
 import click
 
+from checker.atomic import write_file
 from checker.errors import PathcheckError
 
 
@@ -60,10 +61,10 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     if gcode_out is not None:
         if not reply.get("gcode"):
             raise PathcheckError("the reply has no G-code (ask with post=true)", code="usage")
-        gcode_out.write_text(reply["gcode"])
+        write_file(gcode_out, reply["gcode"], what="G-code")
     text = json.dumps(reply, indent=1)
     if out is not None:
-        out.write_text(text + "\n")
+        write_file(out, text + "\n", what="reply JSON")
     else:
         click.echo(text)
 

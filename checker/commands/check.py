@@ -86,20 +86,20 @@ def record(doc, console) -> None:
               help="part file (default: the file beside JOB with the same stem)")
 @click.option("--cutter", "cutter_text", default=None, help='override the cutter, "CUTTER/..."')
 @click.option("--config", "config_path", type=click.Path(dir_okay=False, path_type=Path),
-              default=None, help="configuration TOML overriding config/defaults.toml")
+              default=None, help="configuration TOML overriding the shipped defaults")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="write the results document (JSON) here")
 @click.option("-o", "gcode_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="write the corrected 4-axis G-code here (atomically)")
 @click.option("--machine", default=None,
-              help="machine name in config/machines or a TOML file (default: the CL file's "
+              help="a shipped machine's name or a machine TOML file (default: the CL file's "
                    "PPRINT/MACHINE, else fanuc-hmc)")
 @click.option("--b-range", "b_range", default=None, metavar="LO:HI",
               help="B range searched for the best table angle, degrees (default from config)")
 @click.option("--reorient", is_flag=True,
               help="plan the table angle B for a 3-axis path (run it on the 4-axis machine)")
 @click.option("--tool", "tool_name", default=None,
-              help="the real cutter from the tool library (config/tools.toml), with its shank "
+              help="the real cutter from the tool library, with its shank "
                    "and holder, e.g. BALL-D6")
 @click.option("--no-store", is_flag=True, help="do not record this check in the results store")
 def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine, b_range,
@@ -133,12 +133,14 @@ def finish(doc, json_out: Path | None, *, store: bool) -> None:
     """Print the summary, write the JSON, record the check; exit 1 when there are findings."""
     from rich.console import Console
 
+    from checker.atomic import write_file
+
     console = Console()
     for item in summary_view(doc):
         console.print(item)
     if json_out is not None:
         json_out.parent.mkdir(parents=True, exist_ok=True)
-        json_out.write_text(doc.model_dump_json(indent=1), encoding="utf-8")
+        write_file(json_out, doc.model_dump_json(indent=1), what="results JSON")
     if store:
         record(doc, console)
     c = doc.summary.counts

@@ -64,9 +64,9 @@ def check_gcode(
         click.echo(format_program_summary(doc))
         click.echo("give --part and --cutter to check the program for gouges and interference")
         if json_out is not None:
-            from postproc.writer import write_program
+            from checker.atomic import write_file
 
-            write_program(json.dumps(doc, indent=2) + "\n", json_out)
+            write_file(json_out, json.dumps(doc, indent=2) + "\n", what="program JSON")
         return
     from checker.commands.check import finish
     from checker.job import check_toolpath

@@ -1,4 +1,4 @@
-"""`pathcheck map PART --cutter ... [--grid 21x21] [--tools config/tools.toml] [--out DIR]`:
+"""`pathcheck map PART --cutter ... [--grid 21x21] [--tools TOOLS.toml] [--out DIR]`:
 allowable-cutter and standard-cutter maps of every surface (PNG + JSON)."""
 
 from __future__ import annotations
@@ -9,6 +9,7 @@ from pathlib import Path
 
 import click
 
+from checker.atomic import write_file
 from checker.errors import PathcheckError
 
 
@@ -26,7 +27,7 @@ def parse_grid(text: str) -> tuple[int, int]:
 @click.option("--grid", "grid_text", default="21x21", show_default=True,
               help="iso-parametric CC points per surface")
 @click.option("--tools", "tools_path", type=click.Path(dir_okay=False, path_type=Path),
-              default=None, help="tool library (default config/tools.toml)")
+              default=None, help="tool library (default: the shipped one)")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               default=Path("out/map"), show_default=True, help="folder for the PNG and JSON")
 def map_command(part_path, cutter_text, grid_text, tools_path, out_dir) -> None:
@@ -55,7 +56,7 @@ def map_command(part_path, cutter_text, grid_text, tools_path, out_dir) -> None:
     maps = allowable_maps(part, sample_part(part), cutter, grid, tools)
     files = draw_maps(maps, cutter, tools, out_dir)
     doc = maps_document(maps, cutter, tools)
-    (out_dir / "map.json").write_text(json.dumps(doc, indent=1), encoding="utf-8")
+    write_file(out_dir / "map.json", json.dumps(doc, indent=1), what="map JSON")
     sizes = np.concatenate([m.size[m.kept] for m in maps])
     fin = sizes[np.isfinite(sizes)]
     click.echo(f"{len(sizes)} CC points on {len(maps)} surfaces; allowable "

@@ -18,7 +18,7 @@ from checker.config import load_config
 @click.option("--workers", type=click.IntRange(min=1), default=None,
               help="worker processes [config: service.workers]")
 @click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path),
-              default=None, help="TOML file overriding config/defaults.toml")
+              default=None, help="TOML file overriding the shipped defaults")
 @click.option("--store", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="results store to record every request in [config: store.path]")
 @click.option("--no-store", is_flag=True, help="do not record requests")

@@ -4,11 +4,13 @@ that does not exceed it; pictures drawn with matplotlib (Agg) like thesis figs 3
 
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from checker.atomic import write_file
 from checker.engine.api import allowable
 from checker.geometry.evaluate import evaluate
 from checker.geometry.sampling import TestPoints
@@ -85,6 +87,13 @@ def maps_document(maps: list[SurfaceMap], cutter, tools: list) -> dict:
             "tools": [{"name": t.name, "size": t.size} for t in tools], "surfaces": surfaces}
 
 
+def _save_png(fig, path: Path) -> Path:
+    """The figure as a PNG file, written atomically."""
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=90, format="png")
+    return write_file(path, buf.getvalue(), what="map picture")
+
+
 def draw_maps(maps: list[SurfaceMap], cutter, tools: list, out_dir: Path) -> list[Path]:
     """`allowable_map.png` (per surface, the allowable size over (u, v), like thesis fig. 3-2)
     and `standard_map.png` (top view, the largest standard cutter per CC point, like figs. 4-2
@@ -114,8 +123,7 @@ def draw_maps(maps: list[SurfaceMap], cutter, tools: list, out_dir: Path) -> lis
         ax.axis("off")
     fig.colorbar(im, ax=axes.ravel().tolist(), label=f"allowable {var} (mm)")
     fig.suptitle(f"allowable {var} for {cutter.kind} cutters (unbounded shown at the top colour)")
-    f1 = out_dir / "allowable_map.png"
-    fig.savefig(f1, dpi=90)
+    f1 = _save_png(fig, out_dir / "allowable_map.png")
     plt.close(fig)
 
     colours = ["#1f2a6b"] + list(plt.get_cmap("turbo")(np.linspace(0.35, 0.95, max(len(tools), 1))))
@@ -135,7 +143,6 @@ def draw_maps(maps: list[SurfaceMap], cutter, tools: list, out_dir: Path) -> lis
     ax.set_ylabel("y (mm)")
     ax.set_title(f"largest standard {cutter.kind} cutter per CC point (top view)")
     fig.tight_layout()
-    f2 = out_dir / "standard_map.png"
-    fig.savefig(f2, dpi=90)
+    f2 = _save_png(fig, out_dir / "standard_map.png")
     plt.close(fig)
     return [f1, f2]

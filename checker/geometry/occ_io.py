@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from checker.errors import PathcheckError
+from checker.extras import require
 from checker.geometry.inverse import invert_points
 from checker.geometry.trims import UVTrim
 from checker.part import Surface
@@ -41,6 +42,7 @@ _MAP_TOL = 1e-9  # mm: trim loop points of converted faces must land this close
 
 def read_occ(path: Path, kind: str) -> tuple[list[Surface], int]:
     """(surfaces, number of faces) of a STEP (`kind` "step") or IGES ("iges") file."""
+    require("OCP", "cad", f"reading {kind.upper()} parts")
     from OCP.TopAbs import TopAbs_FACE
     from OCP.TopExp import TopExp_Explorer
     from OCP.TopoDS import TopoDS

@@ -4,6 +4,7 @@ beside it (same stem) for other systems. Pictures of many jobs are drawn in a fe
 from __future__ import annotations
 
 import csv
+import io
 import json
 import os
 import time
@@ -11,6 +12,7 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+from checker.atomic import write_file
 from checker.config import Config, default_config
 from checker.errors import PathcheckError
 from checker.report.page import render_page
@@ -137,7 +139,7 @@ def build_report(
     html = render_page(jobs, since, until, trend_png, compare(per_night))
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(html, encoding="utf-8")
+        write_file(out, html, what="report page")
         _write_json(out.with_suffix(".json"), jobs, since, until, per_night)
         _write_csv(out.with_suffix(".csv"), jobs)
     except OSError as err:
@@ -157,14 +159,15 @@ def _write_json(path: Path, jobs: list[dict], since: float, until: float, per_ni
         "totals": {s: sum(j["status"] == s for j in jobs) for s in ("ok", "findings", "failed")},
         "jobs": [_plain(j) for j in jobs], "nights": per_night,
     }
-    path.write_text(json.dumps(doc, indent=1), encoding="utf-8")
+    write_file(path, json.dumps(doc, indent=1), what="report JSON")
 
 
 def _write_csv(path: Path, jobs: list[dict]) -> None:
-    with path.open("w", newline="", encoding="utf-8") as fh:
-        writer = csv.DictWriter(fh, fieldnames=CSV_COLUMNS)
-        writer.writeheader()
-        for j in jobs:
-            row = _plain(j)
-            row["regions"] = " ".join(f"S{s}:{n}" for s, n in j["regions"])
-            writer.writerow(row)
+    text = io.StringIO(newline="")
+    writer = csv.DictWriter(text, fieldnames=CSV_COLUMNS)
+    writer.writeheader()
+    for j in jobs:
+        row = _plain(j)
+        row["regions"] = " ".join(f"S{s}:{n}" for s, n in j["regions"])
+        writer.writerow(row)
+    write_file(path, text.getvalue(), what="report CSV")

@@ -1,7 +1,7 @@
 """Standard cutters for the colour map of thesis figs 4-2 and 4-3: at each CC point the largest
 standard cutter of the job's family whose size does not exceed the allowable size. The cutters
-come from the tool library (`config/tools.toml`, same kind and corner radius); a family the
-library lacks falls back to `report.standard_diameters` of the config."""
+come from the tool library (`checker/resources/tools.toml`, same kind and corner radius); a
+family the library lacks falls back to `report.standard_diameters` of the config."""
 
 from __future__ import annotations
 

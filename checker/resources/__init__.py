@@ -1,0 +1,14 @@
+"""Data shipped inside the package (read with importlib.resources, so that an installed wheel
+has them): `defaults.toml` (configuration), `tools.toml` (tool library), `machines/*.toml`,
+`schemas/*.json` (published JSON Schemas) and `warmup/` (the small job that compiles the
+kernels once per install)."""
+
+from __future__ import annotations
+
+from importlib.resources import files
+from pathlib import Path
+
+
+def resource(*parts: str) -> Path:
+    """The path of a shipped data file or folder (package data is installed as plain files)."""
+    return Path(str(files(__name__).joinpath(*parts)))
