@@ -6,6 +6,7 @@ per source file and machine; a numba cache folder set by the user (`NUMBA_CACHE_
 from __future__ import annotations
 
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -44,4 +45,6 @@ def use_kernel_cache() -> Path:
         folder = Path(tempfile.gettempdir()) / f"pathcheck-{os.getuid()}" / "numba"
         folder.mkdir(parents=True, exist_ok=True)
     os.environ["NUMBA_CACHE_DIR"] = str(folder)
+    if "numba" in sys.modules:  # imported before pathcheck: make it read the folder again
+        sys.modules["numba"].core.config.reload_config()
     return folder

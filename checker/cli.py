@@ -23,6 +23,7 @@ SUBCOMMANDS: dict[str, str] = {
     "call": "checker.commands.call:call",
     "batch": "checker.commands.batch:batch",
     "report": "checker.commands.report:report",
+    "warm": "checker.commands.warm:warm",
 }
 
 

@@ -36,6 +36,10 @@ def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str
     from checker.store import ResultsStore, job_status
 
     paths = find_jobs(jobs)
+    if scheduler is not None:
+        from checker.extras import require
+
+        require("distributed", "dask", "running jobs on a Dask cluster")
     console = Console(stderr=True)
     counts = {"ok": 0, "findings": 0, "failed": 0}
     with ResultsStore(store_path) as store, Progress(

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# The package as a user gets it: build the wheel, install it without extras into a new venv
+# outside the repository, and from another directory, with an empty kernel cache, run
+# `pathcheck info` on a sample, the demo job (check, post, report), and a STEP part (which
+# must say, in one line, which extra to install). Prints the venv size and the times.
+set -euo pipefail
+repo=$(cd "$(dirname "$0")/.." && pwd)
+work=$(mktemp -d "${TMPDIR:-/tmp}/pathcheck-wheel.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+job="$repo/samples/compressor/compressor_small_d12.apt"
+
+"$repo/.venv/bin/python" -m build --wheel --outdir "$work/dist" "$repo" >"$work/build.log" 2>&1 \
+    || { cat "$work/build.log"; exit 1; }
+python3 -m venv "$work/venv"
+"$work/venv/bin/pip" install --quiet --no-compile "$work"/dist/pathcheck-*.whl >"$work/pip.log" 2>&1 \
+    || { cat "$work/pip.log"; exit 1; }
+pc="$work/venv/bin/pathcheck"
+cd "$work"
+export PATHCHECK_CACHE_DIR="$work/cache" PATHCHECK_STORE="$work/results.sqlite"
+unset NUMBA_CACHE_DIR
+
+"$pc" info "$job" | grep -q "4-axis-Y" || { echo "wheel-check: info failed" >&2; exit 1; }
+seconds() { printf "%d.%d" $(($1 / 1000000000)) $(($1 % 1000000000 / 100000000)); }
+start=$(date +%s%N)
+status=0
+"$pc" "$job" -o job.nc --json job.json >check.log 2>&1 || status=$?
+cold=$(seconds $(($(date +%s%N) - start)))
+[ "$status" -eq 1 ] || { cat check.log; echo "wheel-check: demo exit $status, expected 1" >&2; exit 1; }
+start=$(date +%s%N)
+"$pc" "$job" -o job.nc --json job.json >/dev/null 2>&1 || status=$?
+warm=$(seconds $(($(date +%s%N) - start)))
+"$pc" report --out report.html >/dev/null
+for f in job.nc job.json report.html; do
+    [ -s "$f" ] || { echo "wheel-check: $f not written" >&2; exit 1; }
+done
+echo "ISO-10303-21;" >part.step
+status=0
+"$pc" info part.step >step.out 2>&1 || status=$?
+if [ "$status" -ne 2 ] || [ "$(wc -l <step.out)" -ne 1 ] || ! grep -q "pathcheck\[cad\]" step.out; then
+    cat step.out; echo "wheel-check: a STEP part without the [cad] extra: exit $status" >&2; exit 1
+fi
+echo "wheel-check: $(basename "$work"/dist/*.whl) installed without extras ($(du -sh "$work/venv" | cut -f1) venv);" \
+     "demo from $work: cold cache $cold s, warm $warm s; STEP without [cad]: $(cat step.out)"
