@@ -24,6 +24,7 @@ from checker.geometry import load_part  # noqa: E402
 from checker.geometry.contact import Core, signed_distance  # noqa: E402
 from checker.geometry.evaluate import evaluate  # noqa: E402
 from checker.part import Part  # noqa: E402
+from checker.resources import resource  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 
@@ -396,9 +397,17 @@ def clearance(points: np.ndarray, core: Core, tips: np.ndarray, axes: np.ndarray
     return out
 
 
+def copy_warmup_job() -> None:
+    """The demo job, copied into the package as the job `pathcheck warm` compiles with."""
+    for suffix in (".apt", ".json"):
+        data = (HERE / "compressor" / f"compressor_small_d12{suffix}").read_bytes()
+        (resource("warmup") / f"warmup{suffix}").write_bytes(data)
+
+
 def main() -> None:
     comp = build_compressor(HERE / "compressor")
     mould = build_mould(HERE / "mould")
+    copy_warmup_job()
     for name, res in (("compressor", comp), ("mould", mould)):
         pts = dense_points(res["part"])
         core = Core.of(res["cutter"])
