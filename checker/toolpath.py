@@ -194,7 +194,9 @@ class MotionArrays:
     cycle (N,) bool (inside ``CYCLE/``...``CYCLE/OFF``: a canned-cycle position), arc (N,) index
     into `ToolPath.arcs` of the arc ending at that row, -1 for straight moves (arc-sampled rows
     from ``motion_arrays(arc_chord_tol=...)`` carry the arc index too), coolant (N,) in effect
-    (0 off, 7 mist, 8 flood, -1 not stated).
+    (0 off, 7 mist, 8 flood, -1 not stated), cycle_geometry (N, 3) the canned cycle's depth,
+    clearance and retract distances along the axis from the hole position (mm; nan outside a
+    cycle; None when the source gives none).
     """
 
     tip: np.ndarray
@@ -207,6 +209,7 @@ class MotionArrays:
     cycle: np.ndarray
     arc: np.ndarray
     coolant: np.ndarray
+    cycle_geometry: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.line)
@@ -225,11 +228,12 @@ class MotionArrays:
 
     def take(self, idx: np.ndarray) -> MotionArrays:
         """Rows ``idx`` (an index array) of every field."""
-        return MotionArrays(*(getattr(self, f)[idx] for f in _MOTION_FIELDS))
+        cols = (getattr(self, f) for f in _MOTION_FIELDS)
+        return MotionArrays(*(None if c is None else c[idx] for c in cols))
 
 
 _MOTION_FIELDS = ("tip", "axis", "rapid", "feed", "spindle", "line", "op", "cycle", "arc",
-                  "coolant")
+                  "coolant", "cycle_geometry")
 
 
 @dataclass(slots=True)
@@ -279,4 +283,5 @@ class ToolPath:
             out.cycle,
             out.arc,
             out.coolant,
+            out.cycle_geometry,
         )

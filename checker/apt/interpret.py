@@ -104,6 +104,33 @@ def _numbers(
     return rec.args  # type: ignore[return-value]
 
 
+_NO_CYCLE = (math.nan, math.nan, math.nan)
+_CYCLE_WORDS = ("FEDTO", "RAPTO", "RTRCTO")
+
+
+def cycle_geometry(rec: Record, path: str) -> tuple[float, float, float]:
+    """(depth, clearance, retract) of a canned cycle, distances along the tool axis from each
+    hole position (file units): the tool rapids to `clearance` above it, feeds to `depth` below
+    it and retracts to `retract` above it. Keyword form `CYCLE/DRILL,FEDTO,d,...,RAPTO,c,
+    RTRCTO,r` (SolidWorks CAM, NX; RTRCTO AUTO or absent: back to the clearance) or the ISO
+    4343 positional form `CYCLE/DRILL,d,MMPM,f,c`. Signs are ignored: a drill goes down."""
+    args = rec.args
+    found: dict[str, float] = {}
+    for word, value in zip(args, args[1:], strict=False):
+        if word in _CYCLE_WORDS and not isinstance(value, str):
+            found[word] = abs(float(value))
+    if "FEDTO" not in found:
+        nums = [a for a in args[1:] if not isinstance(a, str)]
+        if len(nums) >= 3:  # d, f, c
+            found = {"FEDTO": abs(nums[0]), "RAPTO": abs(nums[2])}
+        elif nums:
+            found = {"FEDTO": abs(nums[0])}
+        else:
+            raise _err(rec, "expected the cycle's depth (FEDTO,d or a first number)", path=path)
+    clear = found.get("RAPTO", 0.0)
+    return found["FEDTO"], clear, found.get("RTRCTO", clear)
+
+
 def circle_values(rec: Record, *, path: str) -> tuple[tuple[float, ...], int]:
     """``CIRCLE/xc,yc,zc,i,j,k[,r,...][,TIMES,n]`` -> (numbers, extra full turns n)."""
     args, turns = rec.args, 0
@@ -140,7 +167,7 @@ class _Reader:
         self.rapid: list[bool] = []
         self.line: list[int] = []
         self.sid: list[int] = []
-        self.states: list[tuple[float, float, float, int, int, bool, int]] = []
+        self.states: list[tuple[float, ...]] = []
         self.dirty = True
         # state
         self.default_axis = (0.0, 0.0, 1.0)
@@ -152,6 +179,7 @@ class _Reader:
         self.coolant = -1  # COOLNT in effect: 0 off, 7 mist, 8 flood, -1 not stated
         self.in_cycle = False
         self.cycle_feed = math.nan  # mm/min of the current canned cycle
+        self.cycle_geometry = _NO_CYCLE  # its depth, clearance and retract distances, mm
         self.world = False
         self.frame_now = -1
         self.matrices: list[np.ndarray | None] = []
@@ -202,11 +230,12 @@ class _Reader:
         feed = self.feed_now
         if self.in_cycle and not math.isnan(self.cycle_feed):
             feed, per_rev = self.cycle_feed, math.nan
+        geometry = self.cycle_geometry if self.in_cycle else _NO_CYCLE
         self.states.append((feed, per_rev, self.rpm, self.frame_now, len(self.ops) - 1,
-                            self.in_cycle, self.coolant))
+                            self.in_cycle, self.coolant, *geometry))
         self.dirty = False
 
-    def state_of(self, row: int) -> tuple[float, float, float, int, int, bool, int]:
+    def state_of(self, row: int) -> tuple[float, ...]:
         return self.states[self.sid[row]]
 
     def add_motion(self, rec: Record, xyz: tuple[float, float, float], rapid: bool) -> None:
@@ -317,6 +346,8 @@ class _Reader:
             self.unknown[word] += 1
 
     def fedrat(self, rec: Record) -> None:
+        """A feed for the moves that follow; it also ends a canned cycle that no CYCLE/OFF
+        closed (SolidWorks CAM writes none: its contouring moves start with a FEDRAT)."""
         nums = [a for a in rec.args if not isinstance(a, str)]
         words = [a for a in rec.args if isinstance(a, str)]
         bad = [w for w in words if w not in FEED_UNITS]
@@ -325,6 +356,7 @@ class _Reader:
             raise _err(rec, f"expected a feed value and an optional IPM/IPR/MMPM/MMPR, found "
                        f"{found!r}", path=self.path)
         f = nums[0]
+        self.in_cycle = False
         if f < 0:
             raise _err(rec, f"expected a feed >= 0, found {f:g}", path=self.path)
         unit = words[0] if words else ("IPM" if self.units == "inch" else "MMPM")
@@ -337,14 +369,16 @@ class _Reader:
 
     def cycle(self, rec: Record) -> None:
         """``CYCLE/OFF`` ends a canned cycle, ``CYCLE/INIT`` prepares one; anything else starts
-        one, with its feed from ``...,MMPM,f`` / ``IPM,f`` (per rev: times the rpm)."""
+        one, with its feed from ``...,MMPM,f`` / ``IPM,f`` (per rev: times the rpm) and its
+        geometry (`cycle_geometry`)."""
         first = rec.args[0] if rec.args else "ON"
         if first == "OFF":
             self.in_cycle = False
         elif first != "INIT":
             self.in_cycle = True
-            if first != "ON":  # a new cycle: its own feed or none
+            if first != "ON":  # a new cycle: its own feed, geometry or none
                 self.cycle_feed = math.nan
+                self.cycle_geometry = cycle_geometry(rec, self.path)
             for unit, value in zip(rec.args, rec.args[1:], strict=False):
                 if isinstance(unit, str) and unit in FEED_UNITS and not isinstance(value, str):
                     f = value * (MM_PER_INCH if unit.startswith("I") else 1.0)
@@ -472,7 +506,7 @@ class _Reader:
                 code="parse",
             )
         axis /= norm[:, None]
-        st = np.asarray(self.states, dtype=float).reshape(-1, 7)[self.sid]
+        st = np.asarray(self.states, dtype=float).reshape(-1, 10)[self.sid]
         frame = st[:, 3].astype(np.intp)
         fr.apply_frames(tip, axis, frame, self.matrices)
         rapid = np.asarray(self.rapid, dtype=bool)
@@ -490,6 +524,7 @@ class _Reader:
             cycle=st[:, 5].astype(bool),
             arc=np.full(n, -1, dtype=np.int64),
             coolant=st[:, 6].astype(np.int64),
+            cycle_geometry=st[:, 7:10] * self.scale,
         )
 
     def build_arcs(self, m: MotionArrays) -> list[Arc]:

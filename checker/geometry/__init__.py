@@ -27,11 +27,16 @@ __all__ = ["BESIDE_SUFFIXES", "find_part_beside", "load_part"]
 
 
 def find_part_beside(job_path: str | Path) -> Path | None:
-    """The part file beside a job with the same stem (first of BESIDE_SUFFIXES), or None."""
+    """The part file beside a job with the same stem (first of BESIDE_SUFFIXES, in any case:
+    SolidWorks writes `JOB.STL`), or None."""
     job = Path(job_path)
+    try:
+        beside = {p.name.lower(): p for p in job.parent.iterdir() if p.is_file()}
+    except OSError:
+        return None
     for suffix in BESIDE_SUFFIXES:
-        cand = job.with_suffix(suffix)
-        if cand.is_file():
+        cand = beside.get((job.stem + suffix).lower())
+        if cand is not None:
             return cand
     return None
 

@@ -95,7 +95,11 @@ def _grid(breaks: np.ndarray, counts: np.ndarray) -> np.ndarray:
     return np.append(breaks[span] + frac * np.diff(breaks)[span], breaks[-1])
 
 
-def _sample_surface(s: Surface, sag: float, cfg: GeometryConfig):
+def surface_grid(s: Surface, sag: float, cfg: GeometryConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Parameter grids (gu, gv) of surface s, uniform within each knot span and fine enough
+    that the grid lines stay within `sag` mm of the surface (h^2 |S''| / 8 <= sag, from probes
+    of the second derivatives) and `cfg.max_spacing` apart, at most
+    `cfg.max_samples_per_surface` points."""
     bu = _span_breaks(s.knots_u, s.degree_u)
     bv = _span_breaks(s.knots_v, s.degree_v)
     pu, pv = _probe(bu), _probe(bv)
@@ -114,7 +118,11 @@ def _sample_surface(s: Surface, sag: float, cfg: GeometryConfig):
     if total > cfg.max_samples_per_surface:
         f = np.sqrt(cfg.max_samples_per_surface / total)
         cu, cv = np.maximum(cu * f, 1.0), np.maximum(cv * f, 1.0)
-    gu, gv = _grid(bu, np.ceil(cu)), _grid(bv, np.ceil(cv))
+    return _grid(bu, np.ceil(cu)), _grid(bv, np.ceil(cv))
+
+
+def _sample_surface(s: Surface, sag: float, cfg: GeometryConfig):
+    gu, gv = surface_grid(s, sag, cfg)
     hu, hv = _local_step(gu), _local_step(gv)
     U, V = np.meshgrid(gu, gv, indexing="ij")
     HU, HV = np.meshgrid(hu, hv, indexing="ij")

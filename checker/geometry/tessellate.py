@@ -1,0 +1,120 @@
+"""The part as triangles, for the exact real-tool checks (`checker.mesh`): a mesh part as it
+is, and every surface of a NURBS part as the triangles of a (u, v) grid fine enough for a
+chord tolerance (`sampling.surface_grid`), trimmed-away cells left out. Each triangle keeps its
+surface id and each vertex its (u, v), so that a point found on the triangles can be refined
+on the exact surface. The deviation of the triangles from the surface they stand for is
+measured (NURBS: at the edge midpoints and centroids of all triangles) or estimated (a mesh:
+`checker.mesh.chord.chordal_deviation`) and becomes part of the tolerance. Part frame, mm."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.config import GeometryConfig
+from checker.geometry.evaluate import evaluate
+from checker.geometry.sampling import surface_grid
+from checker.part import Part, Surface
+
+_CACHE: dict[tuple, PartTriangles] = {}
+_CACHE_MAX = 4
+
+
+@dataclass(frozen=True)
+class PartTriangles:
+    """`vertices (V, 3)`, `triangles (T, 3)` vertex indices, `surface (T,)` surface id of each
+    triangle (-1 for a mesh part), `uv (V, 2)` parameters of each vertex on its surface (nan
+    for a mesh part), `deviation` mm between the triangles and the part's surfaces."""
+
+    vertices: np.ndarray
+    triangles: np.ndarray
+    surface: np.ndarray
+    uv: np.ndarray
+    deviation: float
+
+
+_REFINES = 3  # grid refinements at most to reach the deviation asked for
+
+
+def part_triangles(part: Part, deviation: float, cfg: GeometryConfig) -> PartTriangles:
+    """The part's triangles (see the module docstring); NURBS surfaces within `deviation` mm
+    (grids refined until the measured deviation is below it, or `cfg.max_samples_per_surface`
+    stops them). Cached by (content hash, deviation)."""
+    key = (part.content_hash, deviation, cfg.max_samples_per_surface)
+    hit = _CACHE.get(key)
+    if hit is not None:
+        return hit
+    if part.mesh is not None:
+        from checker.mesh.chord import chordal_deviation
+
+        m = part.mesh
+        tri = np.ascontiguousarray(m.triangles, dtype=np.int64)
+        out = PartTriangles(np.ascontiguousarray(m.vertices, dtype=float), tri,
+                            np.full(len(tri), -1, dtype=np.int64),
+                            np.full((len(m.vertices), 2), np.nan),
+                            float(chordal_deviation(m.vertices, tri)))
+    else:
+        grid_cfg = cfg.model_copy(update={"max_spacing": max(cfg.max_spacing, 1e3)})
+        pieces = [_within(s, deviation, grid_cfg) for s in part.surfaces]
+        offsets = np.cumsum([0] + [len(p[0]) for p in pieces])
+        out = PartTriangles(
+            np.concatenate([p[0] for p in pieces]),
+            np.concatenate([p[1] + o for p, o in zip(pieces, offsets, strict=False)]),
+            np.concatenate([np.full(len(p[1]), s.id, dtype=np.int64)
+                            for p, s in zip(pieces, part.surfaces, strict=True)]),
+            np.concatenate([p[2] for p in pieces]),
+            max([p[3] for p in pieces] + [0.0]),
+        )
+    if len(_CACHE) >= _CACHE_MAX:
+        _CACHE.pop(next(iter(_CACHE)))
+    _CACHE[key] = out
+    return out
+
+
+def _within(s: Surface, deviation: float, cfg: GeometryConfig):
+    """`_surface_triangles` of s refined until its measured deviation is below `deviation`.
+    The grid's chord tolerance starts at a quarter of it (the triangles' interiors and the
+    twist of the surface add to the grid lines' chord error)."""
+    chord = 0.25 * deviation
+    out = _surface_triangles(s, chord, cfg)
+    for _ in range(_REFINES):
+        if out[3] <= deviation:
+            break
+        chord *= 0.8 * deviation / out[3]
+        out = _surface_triangles(s, chord, cfg)
+    return out
+
+
+def _surface_triangles(s: Surface, chord: float, cfg: GeometryConfig):
+    """(vertices, triangles, uv, measured deviation) of one surface's grid, the cells whose
+    four corners are all kept by the trim."""
+    gu, gv = surface_grid(s, chord, cfg)
+    nu, nv = len(gu), len(gv)
+    U, V = np.meshgrid(gu, gv, indexing="ij")
+    uv = np.column_stack([U.ravel(), V.ravel()])
+    pts = evaluate(s, uv[:, 0], uv[:, 1]).points
+    idx = np.arange(nu * nv).reshape(nu, nv)
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    if s.trim is not None:
+        kept = s.trim.contains(uv[:, 0], uv[:, 1])
+        cell = kept[a] & kept[b] & kept[c] & kept[d]
+        a, b, c, d = a[cell], b[cell], c[cell], d[cell]
+    # (a, b, c) and (a, c, d): counter-clockwise in (u, v), so du x dv is their normal
+    tri = np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
+    if s.flip:
+        tri = tri[:, ::-1]
+    return pts, tri, uv, _deviation(s, pts, uv, tri)
+
+
+def _deviation(s: Surface, pts: np.ndarray, uv: np.ndarray, tri: np.ndarray) -> float:
+    """Largest distance between the triangles and the surface at their edge midpoints and
+    centroids (the surface evaluated at the mean parameters), mm."""
+    if len(tri) == 0:
+        return 0.0
+    probes = [(tri[:, 0], tri[:, 1]), (tri[:, 1], tri[:, 2]), (tri[:, 0], tri[:, 2])]
+    flat = [0.5 * (pts[i] + pts[j]) for i, j in probes] + [pts[tri].mean(axis=1)]
+    at = [0.5 * (uv[i] + uv[j]) for i, j in probes] + [uv[tri].mean(axis=1)]
+    p, q = np.concatenate(flat), np.concatenate(at)
+    return float(np.linalg.norm(evaluate(s, q[:, 0], q[:, 1]).points - p, axis=1).max())

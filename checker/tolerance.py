@@ -1,0 +1,57 @@
+"""How deep the real tool may go into the part before a pose is a finding, per operation: the
+job's own inside tolerance (APT `INTOL/t`, or `TOLER/t`), plus the stock it is told to cut
+below the part (a negative part-surface thickness `THICK/-s`: the CAM meant to go s into the
+part), else `check.depth_tolerance` from the config; plus what the geometry adds: the deviation
+of the part's triangles from the surface they stand for (a mesh's chordal deviation) and the
+chord error of arcs sampled into straight moves. mm."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.toolpath import ToolPath
+
+_WORDS = frozenset({"INTOL", "TOLER", "THICK"})
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Per operation (K,): the tolerance in effect (mm) and where it comes from ("INTOL",
+    "config"); the part's deviation and the arc chord error included in it (mm)."""
+
+    value: np.ndarray
+    source: list[str]
+    part_deviation: float
+    arc_chord: float
+
+
+def _number(rec) -> float | None:
+    nums = [a for a in rec.args if not isinstance(a, str)]
+    return float(nums[0]) if nums else None
+
+
+def operation_tolerances(toolpath: ToolPath, default: float, part_deviation: float,
+                         arc_chord: float) -> Tolerances:
+    """The tolerance of every operation of `toolpath` (see the module docstring): the words
+    written before an operation's first motion apply to all of it."""
+    scale = 25.4 if toolpath.units == "inch" else 1.0
+    words = [(rec.line, rec.word, _number(rec)) for rec in toolpath.records
+             if rec.word in _WORDS and _number(rec) is not None]
+    lines = toolpath.motions.line
+    values, sources = [], []
+    for op in toolpath.operations:
+        first = lines[op.first_motion] if op.first_motion < len(lines) else np.inf
+        intol, thick = None, 0.0
+        for line, word, value in words:
+            if line >= first:
+                break
+            if word == "THICK":
+                thick = value * scale
+            else:
+                intol = abs(value) * scale
+        values.append((default if intol is None else intol) + max(-thick, 0.0)
+                      + part_deviation + arc_chord)
+        sources.append("config" if intol is None else "INTOL")
+    return Tolerances(np.asarray(values, dtype=float), sources, part_deviation, arc_chord)

@@ -1,0 +1,55 @@
+"""The one verdict rule. A checked pose (or move) is a finding when the real tool at its real
+pose penetrates the part by more than the job's tolerance:
+- `crash`: a rapid move in which any part of the tool touches the part (penetration above the
+  tolerance);
+- `holder`: the shank or the holder penetrates (a feed move);
+- `gouge`: the cutter's body penetrates near the contact, on the surface being cut (within the
+  gouge neighbourhood of the contact point, on its surface where the part has surfaces);
+- `interference`: the cutter's body penetrates anywhere else.
+A penetration of at most the tolerance is `within_tolerance` (counted apart, never a finding).
+Where nothing penetrates, the pose is `ok`; `inaccessible` marks a cutting pose whose contact
+point the cutter cannot touch (advice, never a finding). The allowable cutter and the margin
+are advice about a pose and never decide a verdict."""
+
+from __future__ import annotations
+
+import numpy as np
+
+VERDICTS: tuple[str, ...] = ("ok", "within_tolerance", "gouge", "interference", "holder",
+                             "crash", "inaccessible")
+FINDINGS: tuple[str, ...] = ("gouge", "interference", "holder", "crash")
+BODY, SHANK, HOLDER = 0, 1, 2  # tool pieces, as `checker.mesh.tool` numbers them
+
+
+def decide(depth: np.ndarray, piece: np.ndarray, rapid: np.ndarray, near_contact: np.ndarray,
+           tolerance: np.ndarray | float, inaccessible: np.ndarray | None = None) -> np.ndarray:
+    """Verdicts (N,) (strings of VERDICTS) from, per pose or move: the deepest penetration of
+    the real tool `depth` (mm; <= 0: clear), the tool `piece` that reaches it (BODY, SHANK,
+    HOLDER), whether the move is a `rapid`, whether the deepest point is `near_contact` (on the
+    surface being cut, near the contact), the `tolerance` (mm), and optionally where the
+    contact cannot be touched at all (`inaccessible`)."""
+    depth = np.asarray(depth, dtype=float)
+    tol = np.broadcast_to(np.asarray(tolerance, dtype=float), depth.shape)
+    out = np.full(depth.shape, "ok", dtype=object)
+    if inaccessible is not None:
+        out[np.asarray(inaccessible, bool) & ~(depth > 0.0)] = "inaccessible"
+    out[depth > 0.0] = "within_tolerance"
+    beyond = depth > tol
+    body = np.asarray(piece) == BODY
+    near = np.asarray(near_contact, bool)
+    out[beyond & body & near] = "gouge"
+    out[beyond & body & ~near] = "interference"
+    out[beyond & ~body] = "holder"
+    out[beyond & np.asarray(rapid, bool)] = "crash"
+    return out
+
+
+def is_finding(verdicts: np.ndarray) -> np.ndarray:
+    """(N,) bool: the verdicts that are findings."""
+    return np.isin(np.asarray(verdicts, dtype=object), FINDINGS)
+
+
+def status(verdicts) -> str:
+    """'findings' when any verdict is a finding, else 'ok': the one status that the exit code,
+    the summary, the store, the report and the service reply all show."""
+    return "findings" if bool(is_finding(np.asarray(list(verdicts), dtype=object)).any()) else "ok"
