@@ -35,22 +35,39 @@ class Block:
 
     words: list[tuple[str, float]] = field(default_factory=list)
     assignments: list[tuple[str, float]] = field(default_factory=list)
+    keywords: list[tuple[str, list[float]]] = field(default_factory=list)  # TRAORI, CYCLE81(..)
     comments: list[str] = field(default_factory=list)
     deleted: bool = False
 
 
-def split_comments(raw: str, *, path: str | None, line: int) -> tuple[str, list[str]]:
-    """Code text without comments, and the comments: ``( ... )`` anywhere, ``;`` to the end of
-    the line (LinuxCNC comment, Fanuc end of block)."""
-    if "(" not in raw and ";" not in raw:
+def _closing(raw: str, pos: int, nested: bool) -> int:
+    """Index of the ')' closing the '(' at ``pos`` (-1: none); nested pairs count with
+    ``nested``."""
+    if not nested:
+        return raw.find(")", pos)
+    depth = 0
+    for k in range(pos, len(raw)):
+        depth += {"(": 1, ")": -1}.get(raw[k], 0)
+        if depth == 0:
+            return k
+    return -1
+
+
+def split_comments(
+    raw: str, *, path: str | None, line: int, parens: bool = True, nested: bool = False
+) -> tuple[str, list[str]]:
+    """Code text without comments, and the comments: ``( ... )`` anywhere (unless ``parens`` is
+    off: Sinumerik, whose parentheses hold arguments; ``nested`` pairs count), ``;`` to the end
+    of the line (LinuxCNC, Sinumerik and Heidenhain comment, Fanuc end of block)."""
+    if ("(" not in raw or not parens) and ";" not in raw:
         return raw, []
     comments: list[str] = []
     code: list[str] = []
     pos = 0
     while pos < len(raw):
         ch = raw[pos]
-        if ch == "(":
-            end = raw.find(")", pos)
+        if ch == "(" and parens:
+            end = _closing(raw, pos, nested)
             if end < 0:
                 raise PathcheckError(
                     f"comment opened with '(' at column {pos + 1} is not closed: expected ')'",
@@ -128,6 +145,10 @@ class _Cursor:
             return sign * value
         if ch == "#":
             return sign * self.params.get(self.param_name(), math.nan)
+        letter = self.dialect.parameter_letter
+        if letter != "#" and ch == letter and self.s[self.pos + 1 : self.pos + 2].isdigit():
+            self.pos += 1  # MillPlus E parameter
+            return sign * self.params.get(f"{letter}{int(self.number())}", math.nan)
         for name, fn in _FUNCTIONS.items():
             if self.s.startswith(name + "[", self.pos):
                 self.pos += len(name)
@@ -157,8 +178,12 @@ class _Cursor:
 def lex_block(raw: str, dialect: Dialect, params: dict[str, float], *, path=None, line=0) -> Block:
     """Words of one program line (1-based ``line``). ``params`` are the parameter values before
     this block (rs274 rule: assignments take effect after the block)."""
-    code, comments = split_comments(raw, path=path, line=line)
+    code, comments = split_comments(
+        raw, path=path, line=line, parens=not dialect.keywords, nested=dialect.nested_comments
+    )
     text = "".join(code.split()).upper()
+    if dialect.block_end and text.endswith(dialect.block_end.strip()):
+        text = text[: -len(dialect.block_end.strip())]
     block = Block(comments=comments)
     if text.startswith("/"):
         block.deleted = True
@@ -178,9 +203,14 @@ def lex_block(raw: str, dialect: Dialect, params: dict[str, float], *, path=None
         elif ch in dialect.block_number_letters and not ch.isalpha():
             cur.pos += 1  # Fanuc ':' alignment sequence number
             block.words.append(("N", cur.number()))
+        elif ch.isalpha() and dialect.keywords and re.match(r"[A-Z_][A-Z_]", text[cur.pos :]):
+            block.keywords.append(_keyword(cur))
         elif ch.isalpha():
             cur.pos += 1
-            if dialect.letter_assignments and re.match(r"[0-9]+=", text[cur.pos :]):
+            if cur.peek() == "=" and dialect.letter_assignments:  # MillPlus B=E254
+                cur.pos += 1
+                block.words.append((ch, cur.real()))
+            elif dialect.letter_assignments and re.match(r"[0-9]+=", text[cur.pos :]):
                 index = cur.number()
                 cur.pos += 1  # '='
                 block.assignments.append((f"{ch}{int(index)}", cur.real()))
@@ -189,3 +219,34 @@ def lex_block(raw: str, dialect: Dialect, params: dict[str, float], *, path=None
         else:
             raise cur.fail("a word (a letter and a value)")
     return block
+
+
+_IDENT = re.compile(r"[A-Z_][A-Z0-9_]*")
+
+
+def _keyword(cur: _Cursor) -> tuple[str, list[float]]:
+    """A Sinumerik identifier (``TRAORI``, ``SUPA``, ``MCALL``), with its arguments when
+    followed by ``( ... )`` (empty arguments are NaN) or its value after ``=`` (``CR=5``)."""
+    name = _IDENT.match(cur.s, cur.pos).group(0)
+    cur.pos += len(name)
+    args: list[float] = []
+    if cur.peek() == "(":
+        end = cur.s.find(")", cur.pos)
+        if end < 0:
+            raise cur.fail(f"')' closing the arguments of {name}")
+        inner = cur.s[cur.pos + 1 : end]
+        for item in inner.split(",") if inner else []:
+            if not item:
+                args.append(math.nan)
+                continue
+            sub = _Cursor(item, cur.params, cur.dialect, cur.path, cur.line)
+            try:
+                value = sub.expression()
+            except PathcheckError:
+                value = math.nan  # text arguments (tool names, messages)
+            args.append(value if sub.pos == len(item) else math.nan)
+        cur.pos = end + 1
+    elif cur.peek() == "=":
+        cur.pos += 1
+        args.append(cur.real())
+    return name, args

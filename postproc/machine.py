@@ -1,16 +1,35 @@
-"""Machine definitions: a horizontal 4-axis machining centre with a B table about machine Y,
-read from TOML (`checker/resources/machines/NAME.toml`) and validated by pydantic.
+"""Machine definitions as kinematic chains, read from TOML (`checker/resources/machines/NAME.toml`)
+and validated by pydantic.
 
-Frames and units: linear values in mm in the program's work frame (G54); B in degrees. Commanding
-``B = w`` turns the part by ``b = b_direction * w`` about +Y through ``table_center`` (DESIGN.md).
+A machine is linear axes X, Y, Z (``[travel]``, the relative translation of the tool against the
+table, ISO 841 signs) plus rotary axes (``[[rotary_axes]]``), each on the table or on the head:
+
+- table axes are listed from the machine bed up to the part (the first carries the others); a
+  positive word turns the part right-handed about ``direction`` through ``point`` (work frame,
+  mm, at every rotary word 0);
+- head axes are listed from the ram down to the spindle (the first carries the others); a
+  positive word turns the tool right-handed about ``direction`` through ``point`` (mm, relative
+  to the spindle gauge point at every rotary word 0: ``[0, 0, pivot_length]`` for a head whose
+  axes cross the spindle line ``pivot_length`` above the gauge point).
+
+The spindle is machine +Z (tip -> spindle). ``[head] tool_length`` is the gauge length used where
+the control does not compensate it (head machines posted without tool-centre-point control).
+``[setup]`` places the part frame (CL coordinates) on the table: work = ``rotation @ part +
+origin``. Forward and inverse kinematics follow from the chain (`postproc.kinematics`), never from
+the machine kind. Linear values mm in the work frame (G54), angles degrees.
+
+The older 4-axis form (``[kinematics] table_center, b_direction`` with one ``[rotary]`` table) is
+read as the B table it describes; ``machine.kinematics`` and ``machine.rotary`` still answer for
+the first table axis (what the 4-axis planner asks).
 """
 
 from __future__ import annotations
 
 import tomllib
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
+import numpy as np
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -28,55 +47,70 @@ MACHINES_DIR = resource("machines")
 DEFAULT_MACHINE = "fanuc-hmc"
 
 WrapMode = Literal["limited", "shortest", "0_360", "-180_180", "signed"]
+Vec3 = tuple[float, float, float]
+DIALECT_NAMES = ("fanuc", "linuxcnc", "siemens", "heidenhain", "haas", "millplus")
 
 
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-class Kinematics(_Model):
-    """Where the B axis is and which way it counts."""
+class RotaryAxis(_Model):
+    """One rotary axis of the chain. ``wrap`` says how words map to positions:
 
-    table_center: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    b_direction: Literal[1, -1] = 1
-
-
-class Rotary(_Model):
-    """The B axis. ``wrap`` says how B words map to table positions:
-
-    - ``limited``: words in ``[b_min, b_max]``, the table moves by the difference of words;
-    - ``0_360`` / ``-180_180``: continuous table, words in that closed range, moved like ``limited``
-      (a cut crossing the range end is retracted, rotated back a full turn and re-entered);
-    - a cut that turns B by more than ``max_turn_in_cut`` degrees is not cut with the table
-      turning: the post retracts, turns the table and re-enters at the end point (a comment says
-      so in the program).
+    - ``limited``: words in ``limits``, the axis moves by the difference of words;
+    - ``0_360`` / ``-180_180``: continuous axis, words in that closed range, moved like
+      ``limited`` (a cut crossing the range end is retracted, turned back a full turn and
+      re-entered);
     - ``shortest``: rollover axis, words in ``[0, 360)``, the control takes the shorter way;
     - ``signed``: rollover axis, ``|word|`` in ``[0, 360)`` is the target, its sign the direction.
-    """
 
-    wrap: WrapMode = "shortest"
-    b_min: float = -360.0
-    b_max: float = 360.0
+    A cut that turns the axis by more than ``max_turn_in_cut`` degrees is made as retract,
+    rotate, re-enter (a comment says so in the program)."""
+
+    name: Literal["A", "B", "C"]
+    on: Literal["table", "head"] = "table"
+    direction: Vec3
+    point: Vec3 = (0.0, 0.0, 0.0)
+    wrap: WrapMode = "limited"
+    limits: tuple[float, float] = (-360.0, 360.0)
     max_feed: PositiveFloat = 3600.0  # deg/min
-    max_turn_in_cut: PositiveFloat = 45.0  # deg: a cut turning more is retract-rotate-re-enter
+    max_turn_in_cut: PositiveFloat = 45.0
 
-    @model_validator(mode="after")
-    def _range(self) -> Rotary:
-        if self.b_max <= self.b_min:
-            raise ValueError(f"b_max ({self.b_max}) must be greater than b_min ({self.b_min})")
-        return self
+    @field_validator("direction")
+    @classmethod
+    def _unit(cls, value: Vec3) -> Vec3:
+        norm = float(np.linalg.norm(value))
+        if not np.isfinite(norm) or norm < 1e-9:
+            raise ValueError("expected a non-zero direction vector [x, y, z]")
+        return tuple(float(v) / norm for v in value)  # type: ignore[return-value]
+
+    @field_validator("limits")
+    @classmethod
+    def _ordered(cls, value: tuple[float, float]) -> tuple[float, float]:
+        if value[1] <= value[0]:
+            raise ValueError(f"max ({value[1]}) must be greater than min ({value[0]})")
+        return value
+
+    @property
+    def b_min(self) -> float:
+        return self.limits[0]
+
+    @property
+    def b_max(self) -> float:
+        return self.limits[1]
 
     def word_range(self) -> tuple[float, float] | None:
-        """Closed range of B words for the modes that move by word difference; None for rollover."""
+        """Closed range of words for the modes that move by word difference; None for rollover."""
         return {
-            "limited": (self.b_min, self.b_max),
+            "limited": self.limits,
             "0_360": (0.0, 360.0),
             "-180_180": (-180.0, 180.0),
         }.get(self.wrap)
 
 
 class Travel(_Model):
-    """Travel limits of X, Y, Z in the work frame, mm (min, max)."""
+    """The linear axes: travel of X, Y, Z in the work frame, mm (min, max)."""
 
     x: tuple[float, float] = (-500.0, 500.0)
     y: tuple[float, float] = (-500.0, 500.0)
@@ -91,11 +125,41 @@ class Travel(_Model):
 
 
 class Feeds(_Model):
-    """Feed limits and the rotary feed mode (G94: F scaled by the dialect's rotary rule so the tip
-    moves at the programmed feed; G93: inverse time, F = 1 / block time in minutes)."""
+    """Feed limits and the feed mode of the posted program (G94: F scaled by the dialect's rule
+    so the tip moves at the programmed feed; G93: inverse time, F = 1 / block time in minutes)."""
 
     max_linear: PositiveFloat = 20000.0  # mm/min
     rotary_mode: Literal["g94", "g93"] = "g94"
+
+
+class Tcp(_Model):
+    """Tool-centre-point control: with ``enabled`` the program carries part-frame (work-frame)
+    tips and the axis angles, and the control does the kinematics (Fanuc G43.4, Siemens TRAORI,
+    Heidenhain M128, LinuxCNC's TCP kinematics); without, the post computes machine X Y Z."""
+
+    enabled: bool = False
+
+
+class Head(_Model):
+    """The spindle: tool gauge length (mm) used where the control does not compensate it."""
+
+    tool_length: float = 0.0
+
+
+class Setup(_Model):
+    """Where the part frame sits on the table: work = ``rotation @ part + origin`` (rotation as
+    three rows, a proper rotation matrix)."""
+
+    rotation: tuple[Vec3, Vec3, Vec3] = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    origin: Vec3 = (0.0, 0.0, 0.0)
+
+    @field_validator("rotation")
+    @classmethod
+    def _proper(cls, value):
+        r = np.asarray(value, dtype=float)
+        if not np.allclose(r @ r.T, np.eye(3), atol=1e-6) or np.linalg.det(r) < 0:
+            raise ValueError("expected a rotation matrix (orthonormal rows, determinant +1)")
+        return value
 
 
 class Format(_Model):
@@ -112,45 +176,173 @@ class Format(_Model):
 
 
 class Program(_Model):
-    """Fixed program text and safe positions. ``tool_change`` lines may use ``{tool}``."""
+    """Fixed program text and safe positions. ``tool_change`` lines may use ``{tool}``; None:
+    the dialect's own lines (`postproc.dialects`)."""
 
-    header: list[str] = ["G17 G40 G49 G80 G90", "G54"]
-    footer: list[str] = ["M05", "M09", "M30"]
-    tool_change: list[str] = ["T{tool} M06"]
+    header: list[str] | None = None
+    footer: list[str] | None = None
+    tool_change: list[str] | None = None
     safe_z: float = 200.0  # mm, work frame: retract plane along the spindle (machine +Z)
     reentry_clearance: PositiveFloat = 2.0  # mm above the re-entry point before feeding in
 
     @field_validator("header", "footer", "tool_change")
     @classmethod
-    def _printable(cls, lines: list[str]) -> list[str]:
-        for text in lines:
+    def _printable(cls, lines: list[str] | None) -> list[str] | None:
+        for text in lines or ():
             if not all(" " <= c <= "~" for c in text):
                 raise ValueError(f"expected printable ASCII G-code, found {text!r}")
         return lines
 
 
+class Kinematics(_Model):
+    """The 4-axis view of a machine (DESIGN.md): a point on the first table axis in the part
+    frame, and +1 / -1 as that axis turns the part about +Y / -Y."""
+
+    table_center: Vec3 = (0.0, 0.0, 0.0)
+    b_direction: Literal[1, -1] = 1
+
+
+def _legacy(data: dict[str, Any]) -> dict[str, Any]:
+    """The older 4-axis form (``[kinematics]`` + one ``[rotary]`` table) as a chain."""
+    kin = data.pop("kinematics", {}) or {}
+    rot = data.pop("rotary", {}) or {}
+    if not isinstance(kin, dict) or not isinstance(rot, dict):
+        raise ValueError("expected [kinematics] and [rotary] tables (or [[rotary_axes]])")
+    unknown = (set(kin) - {"table_center", "b_direction"}) | (
+        set(rot) - {"wrap", "b_min", "b_max", "max_feed", "max_turn_in_cut"}
+    )
+    if unknown:
+        raise ValueError(f"unknown 4-axis field(s) {sorted(unknown)}")
+    direction = kin.get("b_direction", 1)
+    if direction not in (1, -1):
+        raise ValueError(f"kinematics.b_direction must be 1 or -1, found {direction!r}")
+    axis = {
+        "name": "B",
+        "on": "table",
+        "direction": [0.0, float(direction), 0.0],
+        "point": kin.get("table_center", [0.0, 0.0, 0.0]),
+        "wrap": rot.get("wrap", "shortest"),
+        "limits": [rot.get("b_min", -360.0), rot.get("b_max", 360.0)],
+    }
+    for key in ("max_feed", "max_turn_in_cut"):
+        if key in rot:
+            axis[key] = rot[key]
+    data["rotary_axes"] = [axis]
+    return data
+
+
 class Machine(_Model):
-    """A horizontal 4-axis machine: spindle along machine +Z, B table about machine Y."""
+    """A machine: linear axes X Y Z, a chain of rotary axes on the table and the head, its
+    control's dialect and the posting options."""
 
     name: str
     description: str = ""
-    dialect: Literal["fanuc", "linuxcnc"] = "fanuc"
+    dialect: Literal["fanuc", "linuxcnc", "siemens", "heidenhain", "haas", "millplus"] = "fanuc"
     units: Literal["mm", "inch"] = "mm"
-    kinematics: Kinematics = Kinematics()
-    rotary: Rotary = Rotary()
+    rotary_axes: tuple[RotaryAxis, ...] = ()
     travel: Travel = Travel()
     feeds: Feeds = Feeds()
+    tcp: Tcp = Tcp()
+    head: Head = Head()
+    setup: Setup = Setup()
     format: Format = Format()
     program: Program = Program()
 
+    @model_validator(mode="before")
+    @classmethod
+    def _older_form(cls, data: Any) -> Any:
+        if isinstance(data, dict) and ("kinematics" in data or "rotary" in data):
+            if "rotary_axes" in data:
+                raise ValueError("give either [[rotary_axes]] or [kinematics]/[rotary], not both")
+            return _legacy(dict(data))
+        return data
+
     @model_validator(mode="after")
-    def _safe_z(self) -> Machine:
+    def _consistent(self) -> Machine:
         lo, hi = self.travel.z
         if not lo <= self.program.safe_z <= hi:
             raise ValueError(
                 f"program.safe_z ({self.program.safe_z}) outside travel.z {self.travel.z}"
             )
+        names = [a.name for a in self.rotary_axes]
+        if len(set(names)) != len(names):
+            raise ValueError(f"rotary axis names must differ, found {names}")
+        if len(names) > 3:
+            raise ValueError(f"at most 3 rotary axes, found {len(names)}")
+        if self.feeds.rotary_mode == "g93" and self.dialect in ("heidenhain", "millplus"):
+            raise ValueError(f"the {self.dialect} dialect has no inverse-time feed (G93)")
         return self
+
+    # -- views ------------------------------------------------------------------------------
+    @property
+    def kind(self) -> str:
+        """A short name of the chain, e.g. ``table-table A/C``, ``head-table B/C``, ``table B``."""
+        table = [a.name for a in self.rotary_axes if a.on == "table"]
+        head = [a.name for a in self.rotary_axes if a.on == "head"]
+        if not table and not head:
+            return "3-axis"
+        parts = ["head"] * len(head) + ["table"] * len(table)
+        return "-".join(parts) + " " + "/".join(head + table)
+
+    @property
+    def rotary(self) -> RotaryAxis:
+        """The first table axis (else the first axis): what the 4-axis B planner asks."""
+        if not self.rotary_axes:
+            return RotaryAxis(name="B", direction=(0.0, 1.0, 0.0), wrap="limited")
+        tables = [a for a in self.rotary_axes if a.on == "table"]
+        return (tables or list(self.rotary_axes))[0]
+
+    @property
+    def kinematics(self) -> Kinematics:
+        """The first table axis as the DESIGN.md B table: a point on it in the part frame and
+        the sign of its turn about +Y (1 unless it turns the part about -Y)."""
+        axis = self.rotary
+        rot = np.asarray(self.setup.rotation, dtype=float)
+        center = rot.T @ (np.asarray(axis.point) - np.asarray(self.setup.origin))
+        part_dir = rot.T @ np.asarray(axis.direction)
+        sign = -1 if part_dir[1] < 0 else 1
+        return Kinematics(table_center=tuple(float(v) for v in center), b_direction=sign)
+
+    def with_dialect(self, dialect: str) -> Machine:
+        """A copy for another control: the dialect, its program text, and its feed mode where it
+        has no inverse time."""
+        from postproc.dialects import get_dialect
+
+        mode = self.feeds.rotary_mode if get_dialect(dialect).inverse_time else "g94"
+        return self.with_options(
+            dialect=dialect, feeds={"rotary_mode": mode},
+            program={"header": None, "footer": None, "tool_change": None},
+        )
+
+    def with_options(self, **update) -> Machine:
+        """A copy with sections or fields replaced and validated again, e.g.
+        ``with_options(dialect="siemens", tcp={"enabled": True})``; a dict merges into its
+        section, ``rotary_axes`` takes a list of dicts merged into the axes in order."""
+        data = self.model_dump()
+        for key, value in update.items():
+            if key == "rotary_axes" and isinstance(value, list | tuple):
+                data[key] = [
+                    {**old, **(new or {})}
+                    for old, new in zip(data[key], list(value) + [None] * len(data[key]),
+                                        strict=False)
+                ]
+            elif isinstance(value, dict) and isinstance(data.get(key), dict):
+                data[key] = {**data[key], **value}
+            else:
+                data[key] = value
+        try:
+            return Machine.model_validate(data)
+        except ValidationError as err:
+            raise PathcheckError(_validation_message(err), code="machine") from err
+
+
+def _validation_message(err: ValidationError) -> str:
+    first = err.errors()[0]
+    field = ".".join(str(p) for p in first["loc"]) or "(file)"
+    found = first.get("input")
+    shown = "" if isinstance(found, dict) else f", found {found!r}"
+    msg = first["msg"].removeprefix("Value error, ")
+    return f"machine field '{field}': {msg}{shown}"
 
 
 def load_machine_file(path: str | Path) -> Machine:
@@ -171,13 +363,7 @@ def load_machine_file(path: str | Path) -> Machine:
     try:
         return Machine.model_validate(data)
     except ValidationError as err:
-        first = err.errors()[0]
-        field = ".".join(str(p) for p in first["loc"]) or "(file)"
-        found = first.get("input")
-        shown = "" if isinstance(found, dict) else f", found {found!r}"
-        raise PathcheckError(
-            f"machine field '{field}': {first['msg']}{shown}", path=path, code="machine"
-        ) from err
+        raise PathcheckError(_validation_message(err), path=path, code="machine") from err
 
 
 def available_machines() -> list[str]:

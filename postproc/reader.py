@@ -5,7 +5,14 @@ Interpreted: G0-G3 (arcs by I/J/K or R, planes G17-G19), canned cycles G73/G76/G
 as rapid down to R, feed to Z, rapid back to R or the initial level), G20/G21 (converted to mm),
 G90/G91, G93/G94/G95, G28/G30 and G53 (the named linear axes end unknown in the work frame),
 G92 and G10 L20 (set the position), T/M6, S/M3/M4/M5, M7/M8/M9, A/B/C words, full circles by
-I/J/K alone. Other codes of the dialect table are accepted and counted. Unknown positions are NaN.
+I/J/K alone; per dialect (`postproc.dialects`): the units and feed-mode codes (Sinumerik,
+Heidenhain and MillPlus G70/G71), the machine-frame words (G53, SUPA, G74, M91), the words that
+switch tool-centre-point control (G43.4, G234, M428, TRAORI, M128, G141) and their cancels,
+Sinumerik ``MCALL CYCLE81..89(RTP, RFP, SDIS, DP, DPR)`` holes, MillPlus G93/G92 datum shifts, G7
+tilted planes (``A5= B5= C5=``: rotations about X, then Y, then Z; the XYZ that follow are in the
+tilted frame and the tool is along its Z) and G8x definitions called by G79, LinuxCNC M61 Q,
+Heidenhain ``T`` tool calls. Other codes of the dialect table are accepted and counted. Unknown
+positions are NaN.
 """
 
 from __future__ import annotations
@@ -40,7 +47,9 @@ class GcodeMoves:
     ``plane (N,)`` 17/18/19; ``feed (N,)`` F in effect (mm/min for G94, 1/min for G93, mm/rev for
     G95) and ``feed_mode (N,)``; ``tool``, ``spindle`` (signed rpm, 0 stopped), ``coolant`` (0, 7,
     8; -1 unknown) in effect; ``line (N,)`` program line (1-based); ``kind (N,)`` PROGRAMMED,
-    CYCLE, HOME or MACHINE_FRAME."""
+    CYCLE, HOME or MACHINE_FRAME; ``tcp (N,)`` the xyz are work-frame tips (tool-centre-point
+    control or a tilted plane); ``tool_axis (N,3)`` the work-frame tool axis a tilted plane
+    fixes (NaN otherwise)."""
 
     path: str
     dialect: str
@@ -57,6 +66,8 @@ class GcodeMoves:
     coolant: np.ndarray
     line: np.ndarray
     kind: np.ndarray
+    tcp: np.ndarray = None  # type: ignore[assignment]
+    tool_axis: np.ndarray = None  # type: ignore[assignment]
     comments: tuple[tuple[int, str], ...] = ()
     other: dict[str, int] = field(default_factory=dict)
 
@@ -85,7 +96,11 @@ class _State:
     cycle_r: float = math.nan
     cycle_z: float = math.nan
     cycle_initial: float = math.nan
-
+    tcp: bool = False
+    datum: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])  # MillPlus G93/G92
+    tilt: np.ndarray | None = None  # MillPlus G7 frame (3x3), None: untilted
+    mcall: list[float] | None = None  # Sinumerik modal cycle arguments
+    cycle_def: dict[str, float] | None = None  # MillPlus G8x definition
 
 class _Program:
     """Accumulates rows while the state machine walks the blocks."""
@@ -111,6 +126,8 @@ class _Program:
                 "coolant",
                 "line",
                 "kind",
+                "tcp",
+                "tool_axis",
             )
         }
         self.comments: list[tuple[int, str]] = []
@@ -121,10 +138,36 @@ class _Program:
     def error(self, message: str, line: int) -> PathcheckError:
         return PathcheckError(message, path=self.path, line=line, code="gcode")
 
+    def _out(self, pos: list[float]) -> list[float]:
+        """Programmed XYZ (tilted frame, datum shift) -> work frame."""
+        st = self.st
+        xyz = np.asarray(pos[:3], dtype=float)
+        if st.tilt is not None:
+            xyz = st.tilt @ xyz
+        return (xyz + np.asarray(st.datum)).tolist()
+
+    def reframe(self, datum: list[float], tilt: np.ndarray | None) -> None:
+        """Change the datum / tilted plane keeping the tool where it is (in the work frame)."""
+        st = self.st
+        here = np.asarray(self._out(st.pos), dtype=float) - np.asarray(datum)
+        if tilt is not None:
+            here = tilt.T @ here
+        st.datum, st.tilt = list(datum), tilt
+        st.pos[:3] = here.tolist()
+
     def emit(self, pos: list[float], motion: int, line: int, kind: int, center=None) -> None:
         st = self.st
         r = self.rows
-        r["xyz"].append(pos[:3])
+        framed = st.tilt is not None or any(st.datum)
+        if framed:
+            if center is not None and np.isfinite(center).all():
+                c = np.asarray(center, float)
+                center = (st.tilt @ c if st.tilt is not None else c) + np.asarray(st.datum)
+            r["xyz"].append(self._out(pos))
+        else:
+            r["xyz"].append(pos[:3])
+        r["tcp"].append(st.tcp or st.tilt is not None)
+        r["tool_axis"].append(_NO_CENTER if st.tilt is None else st.tilt[:, 2].tolist())
         r["abc"].append(pos[3:])
         r["motion"].append(motion)
         r["center"].append(_NO_CENTER if center is None else center)
@@ -146,6 +189,7 @@ class _Program:
         m_codes: list[int] = []
         words: dict[str, float] = {}
         tools: list[float] = []
+        tokens: set[str] = {name for name, _ in block.keywords}
         for letter, value in block.words:
             if letter not in self.dialect.letters:
                 raise self.error(f"{letter} is not a word of the {self.dialect.name} dialect", line)
@@ -164,8 +208,10 @@ class _Program:
                         line,
                     )
                 g_codes[group] = code
+                tokens.add(f"G{code}")
             elif letter == "M":
                 m_codes.append(int(value))
+                tokens.add(f"M{int(value)}")
             elif letter == "T":
                 tools.append(value)
             elif letter in ("N", "O"):
@@ -178,8 +224,18 @@ class _Program:
                 words[letter] = value
         for name, _ in block.assignments:
             self.other[f"{name.rstrip('0123456789') if name[0].isalpha() else '#'}="] += 1
+        for name, _ in block.keywords:
+            if name not in ("MCALL", "SUPA") and not name.startswith("CYCLE8"):
+                self.other[name] += 1
+        assigned = dict(block.assignments)
         self._modes(g_codes, words, m_codes, tools, line)
-        self._motion(g_codes, words, line)
+        dia = self.dialect
+        if tokens & dia.tcp_on:
+            self.st.tcp = True
+        elif tokens & dia.tcp_off:
+            self.st.tcp = False
+        if not self._frames(g_codes, words, assigned, block.keywords, line):
+            self._motion(g_codes, words, line, machine_frame=bool(tokens & dia.machine_frame))
         for name, value in block.assignments:
             self.params[name] = value
 
@@ -193,11 +249,9 @@ class _Program:
     ) -> None:
         st = self.st
         if "units" in g:
-            st.units = "inch" if g["units"] == "20" else "mm"
-            st.scale = MM_PER_INCH if st.units == "inch" else 1.0
-            self.units_seen = self.units_seen or st.units
+            self.set_units(self.dialect.units_codes[g["units"]])
         if "feed_mode" in g:
-            st.feed_mode = int(g["feed_mode"])
+            st.feed_mode = self.dialect.feed_codes[g["feed_mode"]]
         if "F" in words:
             f = words["F"]
             st.feed = f if st.feed_mode == 93 else f * st.scale
@@ -205,8 +259,12 @@ class _Program:
             st.speed = words["S"]
         if tools:
             st.next_tool = int(tools[0])
+            if self.dialect.tool_call_on_t:
+                st.tool = st.next_tool
         for m in m_codes:
-            if m == 6:
+            if m == 61 and "Q" in words:  # LinuxCNC: set the tool in the spindle
+                st.tool = int(words["Q"])
+            elif m == 6:
                 st.tool = st.next_tool
                 if len(tools) > 1:
                     st.next_tool = int(tools[1])
@@ -214,7 +272,7 @@ class _Program:
                 st.spindle_dir = {3: 1, 4: -1, 5: 0}[m]
             elif m in (7, 8, 9):
                 st.coolant = 0 if m == 9 else m
-            elif m not in (0, 1, 2, 30):
+            elif m not in (0, 1, 2, 30, 61):
                 self.other[f"M{m}"] += 1
         if "plane" in g:
             st.plane = int(g["plane"])
@@ -247,7 +305,82 @@ class _Program:
                 pos[k] = value if st.absolute else pos[k] + value
         return pos, given
 
-    def _motion(self, g: dict[str, str], words: dict[str, float], line: int) -> None:
+    def set_units(self, units: str) -> None:
+        st = self.st
+        st.units = units
+        st.scale = MM_PER_INCH if units == "inch" else 1.0
+        self.units_seen = self.units_seen or units
+
+    def _frames(self, g, words, assigned, keywords, line) -> bool:
+        """Dialect blocks that are not motion: MillPlus datum shifts, tilted planes, cycle
+        definitions and calls; Sinumerik cycles. True when the block is done."""
+        st = self.st
+        if "datum" in g:  # MillPlus G93 absolute / G92 incremental datum shift
+            base = [0.0, 0.0, 0.0] if g["datum"] == "93" else list(st.datum)
+            shift = [base[k] + words.get(a, 0.0) * st.scale for k, a in enumerate("XYZ")]
+            self.reframe(shift, st.tilt)
+            self.other[f"G{g['datum']}"] += 1
+            return True
+        if "tilt" in g:  # MillPlus G7 A5= B5= C5=: the working plane
+            angles = [assigned.get(f"{a}5", 0.0) for a in "ABC"]
+            if not all(math.isfinite(v) for v in angles):
+                raise self.error("G7 plane angles A5= B5= C5= must be known numbers", line)
+            rot = _rot_xyz(*angles)
+            self.reframe(st.datum, None if np.allclose(rot, np.eye(3)) else rot)
+            self.other["G7"] += 1
+            return True
+        if "cycle_def" in g:  # MillPlus G8x: define the cycle G79 calls
+            st.cycle_def = {k: v * (st.scale if k in "YZB" else 1.0) for k, v in words.items()}
+            if "F" in words:
+                st.feed = words["F"] * st.scale
+            self.other[f"G{g['cycle_def']}"] += 1
+            return True
+        if self.dialect.cycle_call and g.get("non_modal") == self.dialect.cycle_call:
+            target, _ = self._target(words)
+            self._millplus_hole(target, line)
+            return True
+        for name, args in keywords:
+            if name == "MCALL":
+                st.mcall = None
+                cycles = [a for n, a in keywords if n.startswith("CYCLE8")]
+                if cycles:
+                    st.mcall = cycles[0]
+                return True
+            if name.startswith("CYCLE8") and name[5:].isdigit():
+                self._siemens_hole(list(st.pos), args, line)
+                return True
+        return False
+
+    def _siemens_hole(self, target: list[float], args: list[float], line: int) -> None:
+        """One Sinumerik drilling cycle at X/Y: rapid to RFP + SDIS, feed to DP (or RFP - DPR),
+        rapid back to RTP."""
+        st = self.st
+        rtp, rfp, sdis, dp, dpr = ([*args, *[math.nan] * 5])[:5]
+        s = st.scale
+        sdis = 0.0 if not math.isfinite(sdis) else sdis
+        depth = dp if math.isfinite(dp) else rfp - dpr
+        hole = list(target)
+        self.emit(hole, 0, line, CYCLE)
+        for z, motion in (((rfp + sdis) * s, 0), (depth * s, 1), (rtp * s, 0)):
+            hole[2] = z
+            self.emit(hole, motion, line, CYCLE)
+
+    def _millplus_hole(self, target: list[float], line: int) -> None:
+        """MillPlus G79 at X Y Z (the surface): rapid to Z + Y (set-up clearance), feed to
+        Z + Z (the depth, negative), rapid to Z + B (retract)."""
+        st = self.st
+        d = st.cycle_def or {}
+        top = target[2]
+        hole = list(target)
+        hole[2] = top + d.get("B", d.get("Y", 0.0))
+        self.emit(hole, 0, line, CYCLE)
+        for z, motion in ((top + d.get("Y", 0.0), 0), (top + d.get("Z", 0.0), 1),
+                          (top + d.get("B", d.get("Y", 0.0)), 0)):
+            hole[2] = z
+            self.emit(hole, motion, line, CYCLE)
+
+    def _motion(self, g: dict[str, str], words: dict[str, float], line: int,
+                machine_frame: bool = False) -> None:
         st = self.st
         non_modal = g.get("non_modal")
         if non_modal == "4":  # dwell: X/P are the time
@@ -269,7 +402,7 @@ class _Program:
                     if a in words:
                         st.pos[k] = target[k]
             return
-        if non_modal in ("28", "30"):
+        if non_modal in self.dialect.home_codes:
             homed = [k for k, a in enumerate("XYZ") if a in words] or [0, 1, 2]  # none: all
             for k in homed:
                 target[k] = math.nan  # at the reference point: unknown in the work frame
@@ -279,6 +412,10 @@ class _Program:
         if st.cycle is not None and (given or defines):
             self._cycle(target, words, line)
             return
+        if st.mcall is not None and given and not machine_frame:
+            self.emit(target, 0, line, PROGRAMMED)
+            self._siemens_hole(target, st.mcall, line)
+            return
         if st.motion in (2, 3) and any(k in words for k in _ARC_OFFSETS):
             given = True  # I/J/K without an end point: a full circle (Fanuc)
         if not given:
@@ -287,7 +424,7 @@ class _Program:
             raise self.error(
                 "axis words without a motion mode: expected G0, G1, G2 or G3 first", line
             )
-        if non_modal == "53":  # machine coordinates: unknown in the work frame
+        if machine_frame:  # machine coordinates: unknown in the work frame
             for k, a in enumerate("XYZ"):
                 if a in words:
                     target[k] = math.nan
@@ -377,6 +514,8 @@ class _Program:
             coolant=arr("coolant", int),
             line=arr("line", int),
             kind=arr("kind", int),
+            tcp=arr("tcp", bool),
+            tool_axis=arr("tool_axis", float, (3,)),
             comments=tuple(self.comments),
             other=dict(self.other),
         )
@@ -398,6 +537,15 @@ def read_gcode_text(
         stripped = raw.strip()
         if not stripped or stripped == "%":
             continue
+        if dia.block_end and "%" in stripped:  # Heidenhain "%NAME G71 *" begin and end
+            units = re.search(r"G7([01])", stripped.upper())
+            if units:
+                prog.set_units("inch" if units.group(1) == "0" else "mm")
+            continue
+        if (dia.program_number_letter and stripped[:1] in "oO"
+                and not re.match(r"[oO]\s*[0-9]", stripped)):
+            prog.other["program name"] += 1  # "O ENTER OP AND LAST 3 DIGITS"
+            continue
         if not dia.program_number_letter and stripped[:1] in "oO":
             raise prog.error(
                 "o-word subroutines and control flow are not supported: expected plain G-code",
@@ -418,3 +566,12 @@ def read_gcode(path: str | Path, dialect: str | Dialect, *, units: str = "mm") -
             f"cannot read G-code: {err.strerror}", path=path, code="gcode"
         ) from err
     return read_gcode_text(text, dialect, path=str(path), units=units)
+
+
+def _rot_xyz(a: float, b: float, c: float) -> np.ndarray:
+    """Rz(c) Ry(b) Rx(a), degrees: rotations about X, then Y, then Z (fixed axes)."""
+    a, b, c = np.radians([a, b, c])
+    rx = np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
+    ry = np.array([[np.cos(b), 0, np.sin(b)], [0, 1, 0], [-np.sin(b), 0, np.cos(b)]])
+    rz = np.array([[np.cos(c), -np.sin(c), 0], [np.sin(c), np.cos(c), 0], [0, 0, 1]])
+    return rz @ ry @ rx

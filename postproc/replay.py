@@ -1,6 +1,8 @@
-"""G-code moves back into the part frame: B words resolved by the machine's wrap mode, arcs cut
-into chords, the machine kinematics inverted, and the tip speed relative to the part recovered
-from F (G94 by the dialect's feed-distance rule, G93 as inverse time, G95 per revolution)."""
+"""G-code moves back into the part frame: rotary words resolved by each axis's wrap mode, arcs cut
+into chords, the machine's forward kinematics (from its chain; work-frame tips where the program
+runs with tool-centre-point control or in a tilted plane), and the tip speed relative to the part
+recovered from F (G94 by the dialect's feed-distance rule, G93 as inverse time, G95 per
+revolution at the spindle speed in force)."""
 
 from __future__ import annotations
 
@@ -12,19 +14,24 @@ import numpy as np
 from checker.errors import PathcheckError
 from checker.toolpath import MotionArrays, Operation, ToolPath
 from postproc.dialects import get_dialect
-from postproc.kinematics import machine_to_part, tip_path_length
+from postproc.kinematics import Chain
 from postproc.machine import Machine
 from postproc.reader import CYCLE, MM_PER_INCH, PROGRAMMED, GcodeMoves
 from postproc.wrap import unroll_rollover
+
+_LETTERS = "ABC"
 
 
 @dataclass(frozen=True)
 class PartMotions:
     """Tool positions in the part frame, one row per block end (arcs: per chord end).
-    ``tip (N,3)`` mm, ``axis (N,3)`` unit (tip -> spindle), ``b_deg (N,)`` part rotation about
-    +Y, ``rapid (N,)``, ``feed (N,)`` tip speed relative to the part mm/min (nan: rapid or
-    unknown), ``line (N,)`` program line, ``tool (N,)``, ``known (N,)`` the position is known in
-    the work frame (not after G28/G53 until the axes are programmed again)."""
+    ``tip (N,3)`` mm, ``axis (N,3)`` unit (tip -> spindle), ``b_deg (N,)`` the part rotation
+    about +Y that gives the axis (DESIGN.md b; meaningful for 4-axis B tables), ``joints (N,k)``
+    the machine's rotary positions (deg, continuous, ``names`` order), ``xyz (N,3)`` program
+    X Y Z (work frame mm), ``tcp (N,)`` those are work-frame tips, ``rapid (N,)``, ``feed (N,)``
+    tip speed relative to the part mm/min (nan: rapid or unknown), ``minutes (N,)`` block time
+    (nan unknown), ``line (N,)`` program line, ``tool (N,)``, ``known (N,)`` the position is
+    known (not after G28/G53 until the axes are programmed again, nor at unknown words)."""
 
     tip: np.ndarray
     axis: np.ndarray
@@ -34,38 +41,63 @@ class PartMotions:
     line: np.ndarray
     tool: np.ndarray
     known: np.ndarray
+    joints: np.ndarray | None = None
+    names: tuple[str, ...] = ()
+    xyz: np.ndarray | None = None
+    tcp: np.ndarray | None = None
+    minutes: np.ndarray | None = None
+    feed_mode: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.line)
 
 
-def table_position(moves: GcodeMoves, machine: Machine) -> np.ndarray:
-    """Continuous table position ``(N,)`` degrees the control reaches for the program's B words
-    (rollover axes unrolled the shorter or the signed way; B never programmed counts as 0)."""
-    words = np.nan_to_num(moves.abc[:, 1], nan=0.0)
-    if machine.rotary.word_range() is None:
-        return unroll_rollover(
-            words, machine.rotary.wrap, start=float(words[0]) if len(words) else 0.0
-        )
-    return words
-
-
-def _check_axes(moves: GcodeMoves, machine: Machine) -> None:
-    for k, name in ((0, "A"), (2, "C")):
+def _rotary_words(moves: GcodeMoves, machine: Machine) -> np.ndarray:
+    """Rotary words ``(N,k)`` in the machine's axis order: NaN before an axis is first
+    programmed counts as 0; NaN after (an unknown value) stays NaN. A word for an axis the
+    machine lacks is an error naming the line."""
+    names = [a.name for a in machine.rotary_axes]
+    for k, name in enumerate(_LETTERS):
+        if name in names:
+            continue
         used = np.flatnonzero(np.nan_to_num(moves.abc[:, k]) != 0.0)
         if used.size:
             raise PathcheckError(
                 f"the program turns {name} ({name}{moves.abc[used[0], k]:g}); machine "
-                f"'{machine.name}' has only a B table: expected {name} unused or 0",
+                f"'{machine.name}' ({machine.kind}) has no {name} axis: expected {name} unused "
+                "or 0",
                 path=moves.path,
                 line=int(moves.line[used[0]]),
                 code="kinematics",
             )
+    out = np.zeros((len(moves), len(names)))
+    for j, name in enumerate(names):
+        col = moves.abc[:, _LETTERS.index(name)]
+        finite = np.isfinite(col)
+        before = np.arange(len(col)) < (np.argmax(finite) if finite.any() else len(col))
+        out[:, j] = np.where(before, 0.0, col)
+    return out
+
+
+def table_position(moves: GcodeMoves, machine: Machine) -> np.ndarray:
+    """Continuous rotary positions ``(N,k)`` degrees the control reaches for the program's words
+    (rollover axes unrolled the shorter or the signed way)."""
+    words = _rotary_words(moves, machine)
+    out = words.copy()
+    for j, axis in enumerate(machine.rotary_axes):
+        if axis.word_range() is None:
+            col = words[:, j]
+            ok = np.isfinite(col)
+            if ok.any():
+                start = float(col[ok][0])
+                out[ok, j] = unroll_rollover(col[ok], axis.wrap, start=start)
+    return out
 
 
 def _chords(moves: GcodeMoves, turn: np.ndarray, tolerance: float):
     """Block ends with arcs split into chords of sagitta <= tolerance (mm): end points ``(M,3)``,
-    table positions ``(M,)``, the row each came from ``(M,)`` and the chord count of that row."""
+    rotary positions ``(M,k)``, the row each came from ``(M,)`` and the chord count of that
+    row."""
     n = len(moves)
     start = np.vstack([moves.xyz[:1], moves.xyz[:-1]]) if n else moves.xyz
     arc = np.isin(moves.motion, (2, 3)) & np.isfinite(moves.center).all(axis=1)
@@ -88,11 +120,11 @@ def _chords(moves: GcodeMoves, turn: np.ndarray, tolerance: float):
     with np.errstate(invalid="ignore", divide="ignore"):
         step = 2 * np.arccos(np.clip(1 - tolerance / radius, -1.0, 1.0))
         count = np.where(arc, np.maximum(1, np.ceil(np.abs(sweep) / np.maximum(step, 1e-6))), 1)
-    count = count.astype(int)
+    count = np.minimum(count, 100000).astype(int)
     src = np.repeat(rows, count)
     j = np.arange(src.size) - np.repeat(np.cumsum(count) - count, count) + 1
     t = j / count[src]
-    prev_turn = np.concatenate([turn[:1], turn[:-1]])
+    prev_turn = np.vstack([turn[:1], turn[:-1]])
     pts = start[src] + t[:, None] * (moves.xyz[src] - start[src])  # lines and the helix axis
     on_arc = arc[src]
     ang = a0[src] + t * sweep[src]
@@ -101,7 +133,7 @@ def _chords(moves: GcodeMoves, turn: np.ndarray, tolerance: float):
     pts[idx, k[idx, 0]] = moves.center[src[idx], k[idx, 0]] + radius[src[idx]] * np.cos(ang[idx])
     pts[idx, k[idx, 1]] = moves.center[src[idx], k[idx, 1]] + radius[src[idx]] * np.sin(ang[idx])
     pts[j == count[src]] = moves.xyz[src[j == count[src]]]
-    turns = prev_turn[src] + t * (turn[src] - prev_turn[src])
+    turns = prev_turn[src] + t[:, None] * (turn[src] - prev_turn[src])
     return pts, turns, src, count
 
 
@@ -109,20 +141,36 @@ def part_motions(
     moves: GcodeMoves, machine: Machine, *, chord_tolerance: float = 0.01
 ) -> PartMotions:
     """The program's tool positions in the part frame for ``machine`` (see PartMotions)."""
-    _check_axes(moves, machine)
+    chain = Chain(machine)
     turn = table_position(moves, machine)
     xyz, turns, src, count = _chords(moves, turn, chord_tolerance)
-    tip, axis = machine_to_part(xyz, turns, machine)
-    b_deg = machine.kinematics.b_direction * turns
-    known = np.isfinite(xyz).all(axis=1) & np.isin(moves.kind[src], (PROGRAMMED, CYCLE))
+    n = len(moves)
+    tcp = moves.tcp if moves.tcp is not None else np.zeros(n, bool)
+    tool_axis = moves.tool_axis if moves.tool_axis is not None else np.full((n, 3), np.nan)
+    tcp_rows = tcp[src]
+    safe_j = np.nan_to_num(turns)
+    tip, axis = chain.forward(np.nan_to_num(xyz), safe_j, tcp_rows)
+    tilted = np.isfinite(tool_axis[src]).all(axis=1)
+    axis[tilted] = tool_axis[src][tilted] @ chain.rot
+    known_axis = np.isfinite(turns).all(axis=1) | tilted
+    tip[~np.isfinite(xyz).all(axis=1)] = np.nan
+    known = (np.isfinite(xyz).all(axis=1) & known_axis
+             & np.isin(moves.kind[src], (PROGRAMMED, CYCLE)))
     prev_known = np.concatenate([[False], known[:-1]])
     xyz0 = np.vstack([xyz[:1], xyz[:-1]])
-    turn0 = np.concatenate([turns[:1], turns[:-1]])
-    length = tip_path_length(np.nan_to_num(xyz0), np.nan_to_num(xyz), turn0, turns, machine)
+    turn0 = np.vstack([turns[:1], turns[:-1]])
+    length = np.linalg.norm(np.nan_to_num(tip) - np.nan_to_num(np.vstack([tip[:1], tip[:-1]])),
+                            axis=1)
+    turning = ~tcp_rows & np.any(turn0 != turns, axis=1) & known & prev_known
+    if turning.any():
+        length[turning] = chain.tip_path_length(xyz0[turning], xyz[turning],
+                                                turn0[turning], turns[turning])
     f = moves.feed[src]
     mode = moves.feed_mode[src]
     scale = MM_PER_INCH if moves.units == "inch" else 1.0
-    dist = get_dialect(moves.dialect).feed_distance((xyz - xyz0) / scale, turns - turn0)
+    rule = get_dialect(moves.dialect).feed_distance
+    dxyz, dturn = (xyz - xyz0) / scale, turns - turn0
+    dist = np.where(tcp_rows, rule(dxyz, dturn, True), rule(dxyz, dturn, False))
     with np.errstate(invalid="ignore", divide="ignore"):
         minutes = np.select(
             [mode == 94, mode == 93],
@@ -131,16 +179,25 @@ def part_motions(
         )
         speed = length / minutes
     rapid = moves.motion[src] == 0
-    feed = np.where(~rapid & known & prev_known & np.isfinite(speed), speed, np.nan)
+    ok = ~rapid & known & prev_known
+    feed = np.where(ok & np.isfinite(speed), speed, np.nan)
+    from checker.four_axis.axes import b_for_axis
+
     return PartMotions(
         tip=tip,
         axis=axis,
-        b_deg=b_deg,
+        b_deg=b_for_axis(axis),
         rapid=rapid,
         feed=feed,
         line=moves.line[src],
         tool=moves.tool[src],
         known=known,
+        joints=turns,
+        names=chain.names,
+        xyz=xyz,
+        tcp=tcp_rows,
+        minutes=np.where(ok, minutes, np.nan),
+        feed_mode=mode,
     )
 
 

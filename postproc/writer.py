@@ -22,8 +22,10 @@ _NO_DOT = re.compile(r"$", re.M)
 
 @dataclass
 class Rows:
-    """Machine rows in program order. ``xyz (M,3)`` work frame mm (nan: not commanded), ``word
-    (M,)`` B words (deg), ``turn (M,)`` continuous table position (deg), ``motion (M,)`` 0 rapid
+    """Program rows in program order. ``xyz (M,3)`` program X Y Z mm (machine coordinates, or
+    work-frame tips with tool-centre-point control; nan: not commanded), ``word (M,k)`` rotary
+    words (deg) in the machine's axis order, ``turn (M,k)`` continuous rotary positions (deg),
+    ``motion (M,)`` 0 rapid
     / 1 feed, ``fword (M,)`` F word in program units (nan: none), ``g43``/``force`` flags,
     ``src (M,)`` source move, ``end (M,)`` row ends its source move. ``line (M,)`` is filled by
     the writer: the program line (1-based) of the row's block, -1 when nothing changed."""
@@ -72,6 +74,10 @@ def comment(text: str) -> str:
     return "(" + clean.replace("(", "[").replace(")", "]") + ")"
 
 
+def _is_comment(text: str) -> bool:
+    return text.startswith("(") or text.startswith(";")
+
+
 def format_program(
     rows: Rows,
     machine: Machine,
@@ -92,12 +98,14 @@ def format_program(
         valid = np.isfinite(vals)
         texts = format_number(np.where(valid, vals, 0.0), fmt.linear_decimals)
         words[letter] = (texts, _changed(texts, valid, force))
-    signed = machine.rotary.wrap == "signed"
-    bvals = rows.word if signed else np.round(rows.word, fmt.rotary_decimals) + 0.0
-    btexts = format_number(bvals, fmt.rotary_decimals)
-    # signed words: the sign is a direction, the position is the magnitude
-    positions = [t.lstrip("-") for t in btexts] if signed else btexts
-    words["B"] = (btexts, _changed(positions, np.isfinite(rows.word), force))
+    for j, axis in enumerate(machine.rotary_axes):
+        signed = axis.wrap == "signed"
+        col = rows.word[:, j]
+        vals = col if signed else np.round(col, fmt.rotary_decimals) + 0.0
+        texts = format_number(np.nan_to_num(vals), fmt.rotary_decimals)
+        # signed words: the sign is a direction, the position is the magnitude
+        positions = [t.lstrip("-") for t in texts] if signed else texts
+        words[axis.name] = (texts, _changed(positions, np.isfinite(col), force))
     inverse = machine.feeds.rotary_mode == "g93"
     feed_ok = np.isfinite(rows.fword)
     if inverse:
@@ -113,24 +121,26 @@ def format_program(
     if not inverse:
         fchanged &= _changed(ftexts, feed_ok & any_axis & (rows.motion == 1), np.zeros(m, bool))
 
-    lines: list[str] = ["%"]
-    if dialect.program_number_letter:
-        lines.append(
-            f"{dialect.program_number_letter}{fmt.program_number:04d} {comment(program_name)}"
-        )
-    else:
-        lines.append(comment(program_name))
-    blocks: list[str] = list(machine.program.header)
-    blocks.append(code("G", 20 if machine.units == "inch" else 21))
-    blocks.append(code("G", 93 if inverse else 94))
+    name = dialect.comment(program_name)[1:].strip(" )")
+    lines: list[str] = list(dialect.program_start(name, machine.units, fmt.program_number))
+    header = machine.program.header
+    blocks: list[str] = list(dialect.header if header is None else header)
+    blocks.append(dialect.units_code(machine.units))
+    blocks.append(dialect.feed_code(93 if inverse else 94))
     number = fmt.block_start
+    end = dialect.block_end
+    tcp = machine.tcp.enabled
+    offset = dialect.tcp_on_block if tcp and "{tool" in dialect.tcp_on_block else (
+        dialect.length_offset)
 
     def emit(text: str) -> None:
         nonlocal number
-        if text.startswith("(") or not fmt.block_numbers:
+        if _is_comment(text):
             lines.append(text)
+        elif not fmt.block_numbers:
+            lines.append(text + end)
         else:
-            lines.append(f"N{number} {text}")
+            lines.append(f"N{number} {text}{end}")
             number += fmt.block_increment
 
     for text in blocks:
@@ -142,18 +152,20 @@ def format_program(
         if not any_axis[i]:
             continue
         parts = [motion_texts[i]] if gmotion[i] else []
-        if rows.g43[i]:
-            parts.append(code("G", 43))
+        g43 = offset.format(tool=int(rows.tool[i])).split() if rows.g43[i] and offset else []
+        parts += [w for w in g43 if not w.startswith("H")]
         parts += [f"{letter}{texts[i]}" for letter, (texts, changed) in words.items() if changed[i]]
-        if rows.g43[i]:
-            parts.append(f"H{int(rows.tool[i]):02d}")
+        parts += [w for w in g43 if w.startswith("H")]
         if fchanged[i]:
             parts.append(f"F{ftexts[i]}")
         emit(" ".join(parts))
         row_line[i] = len(lines)
-    for text in machine.program.footer:
+    footer = machine.program.footer
+    if tcp:
+        emit(dialect.tcp_off_block)
+    for text in dialect.footer if footer is None else footer:
         emit(text)
-    lines.append("%")
+    lines += dialect.program_end(name, machine.units, fmt.program_number)
     rows.line = row_line
     return "\n".join(lines) + "\n"
 

@@ -63,8 +63,8 @@ def test_check_gcode_reports_moves(program, tmp_path, capsys):
     [
         (["--machine", "no-such-machine"], "unknown machine 'no-such-machine'"),
         (
-            ["--machine", "fanuc-hmc", "--dialect", "heidenhain"],
-            "unknown G-code dialect 'heidenhain'",
+            ["--machine", "fanuc-hmc", "--dialect", "okuma"],
+            "unknown G-code dialect 'okuma'",
         ),
         (["--machine", "fanuc-hmc", "--cutter", "CUTTER/-3"], "CUTTER"),
     ],

@@ -7,13 +7,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from checker.errors import PathcheckError
-from postproc.kinematics import (
-    axis_from_rotation,
-    machine_to_part,
-    part_to_machine,
-    rotation_from_axis,
-    tip_path_length,
-)
+from postproc.kinematics import Chain, axis_from_rotation, rotation_from_axis
 from postproc.machine import available_machines, load_machine
 
 
@@ -29,10 +23,15 @@ def test_shipped_machines_load():
 @pytest.mark.parametrize(
     ("body", "field"),
     [
-        ('[rotary]\nwrap = "spiral"\n', "rotary.wrap"),
-        ("[rotary]\nb_min = 10.0\nb_max = -10.0\n", "rotary"),
+        ('[rotary]\nwrap = "spiral"\n', "rotary_axes.0.wrap"),
+        ("[rotary]\nb_min = 10.0\nb_max = -10.0\n", "rotary_axes.0.limits"),
         ("[travel]\nx = [5.0, -5.0]\n", "travel.x"),
-        ("[kinematics]\nb_direction = 2\n", "kinematics.b_direction"),
+        ("[kinematics]\nb_direction = 2\n", "(file)': kinematics.b_direction must be 1 or -1"),
+        ('[[rotary_axes]]\nname = "D"\ndirection = [0, 1, 0]\n', "rotary_axes.0.name"),
+        ('[[rotary_axes]]\nname = "A"\ndirection = [0, 0, 0]\n', "rotary_axes.0.direction"),
+        ('[[rotary_axes]]\nname = "A"\non = "spindle"\ndirection = [1, 0, 0]\n',
+         "rotary_axes.0.on"),
+        ("[setup]\nrotation = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]\n", "setup.rotation"),
         ("[format]\nlinear_decimals = 12\n", "format.linear_decimals"),
         ("[feeds]\nmax_linear = -1\n", "feeds.max_linear"),
         ("colour = 'red'\n", "colour"),
@@ -62,9 +61,9 @@ def test_machine_file_errors(tmp_path):
 
 
 def _machine(center=(0.0, 0.0, 0.0), direction=1):
-    m = load_machine()
-    kin = m.kinematics.model_copy(update={"table_center": center, "b_direction": direction})
-    return m.model_copy(update={"kinematics": kin})
+    return load_machine().with_options(
+        rotary_axes=[{"point": center, "direction": (0.0, float(direction), 0.0)}]
+    )
 
 
 @pytest.mark.parametrize("direction", [1, -1])
@@ -79,9 +78,12 @@ def test_part_to_machine_matches_rotation_about_y(direction):
         Rotation.from_euler("y", direction * words[:, None], degrees=True).apply(p - center)
         + center
     )
-    m = part_to_machine(p, words, machine)
+    chain = Chain(machine)
+    m = chain.inverse_position(p, words[:, None])
     assert np.allclose(m, expected, atol=1e-12)
-    tip, axis = machine_to_part(m, words, machine)
+    assert machine.kinematics.b_direction == direction
+    assert np.allclose(machine.kinematics.table_center, center)
+    tip, axis = chain.forward(m, words[:, None])
     assert np.allclose(tip, p, atol=1e-12)
     # the spindle (machine +Z) seen in the part frame
     spindle = (
@@ -103,9 +105,10 @@ def test_tip_path_length_pure_rotation_is_an_arc():
     machine = _machine()
     xyz = np.array([[50.0, 0.0, 0.0]])
     # the table turns 90 deg with the tool fixed at radius 50: the tip sweeps a quarter circle
-    length = tip_path_length(xyz, xyz, np.array([0.0]), np.array([90.0]), machine)
+    chain = Chain(machine)
+    length = chain.tip_path_length(xyz, xyz, np.array([[0.0]]), np.array([[90.0]]))
     assert length[0] == pytest.approx(50 * np.pi / 2, rel=2e-3)
-    straight = tip_path_length(
-        xyz, xyz + [3.0, 4.0, 0.0], np.array([10.0]), np.array([10.0]), machine
+    straight = chain.tip_path_length(
+        xyz, xyz + [3.0, 4.0, 0.0], np.array([[10.0]]), np.array([[10.0]])
     )
     assert straight[0] == pytest.approx(5.0, abs=1e-12)

@@ -60,12 +60,21 @@ def blade_path(n: int = 240) -> PostMoves:
 
 
 def variant(name: str, **update) -> Machine:
+    """A shipped B-table machine with sections changed; ``kinematics`` (table_center,
+    b_direction) and ``rotary`` (wrap, b_min, b_max, max_feed) change its B axis."""
     machine = load_machine(name)
-    for section, values in update.items():
-        machine = machine.model_copy(
-            update={section: getattr(machine, section).model_copy(update=values)}
-        )
-    return machine
+    axis: dict = {}
+    kin = update.pop("kinematics", {})
+    if "table_center" in kin:
+        axis["point"] = tuple(kin["table_center"])
+    if "b_direction" in kin:
+        axis["direction"] = (0.0, float(kin["b_direction"]), 0.0)
+    rot = dict(update.pop("rotary", {}))
+    if "b_min" in rot or "b_max" in rot:
+        lo, hi = machine.rotary.limits
+        axis["limits"] = (rot.pop("b_min", lo), rot.pop("b_max", hi))
+    axis.update(rot)
+    return machine.with_options(rotary_axes=[axis], **update)
 
 
 def round_trip(moves: PostMoves, machine: Machine):
@@ -397,7 +406,8 @@ def test_program_structure_tool_changes_flags():
 
 def test_travel_limit_names_the_block():
     moves = _uniform_path()
-    machine = variant("fanuc-hmc", travel={"z": (-300.0, 60.0)})  # the path runs at Z 70
+    # the path runs at Z 70
+    machine = variant("fanuc-hmc", travel={"z": (-300.0, 60.0)}, program={"safe_z": 50.0})
     with pytest.raises(PathcheckError) as err:
         post_program(moves, machine)
     msg = str(err.value)

@@ -18,7 +18,9 @@ from postproc.wrap import pieces_per_move, range_branches, rollover_words, unrol
 
 def machine(wrap: str, **rotary):
     m = load_machine("linuxcnc-hmc")  # no block numbers: blocks are easy to compare
-    return m.model_copy(update={"rotary": m.rotary.model_copy(update={"wrap": wrap, **rotary})})
+    if "b_min" in rotary or "b_max" in rotary:
+        rotary["limits"] = (rotary.pop("b_min", -360.0), rotary.pop("b_max", 360.0))
+    return m.with_options(rotary_axes=[{"wrap": wrap, **rotary}])
 
 
 def ring(b_deg: list[float]) -> PostMoves:
@@ -115,7 +117,7 @@ def test_a_cut_turning_too_far_is_retract_rotate_reenter():
     m = machine("shortest", max_turn_in_cut=45.0)
     text = post_program(ring([0, 10, 100, 110]), m)
     blocks = [ln for ln in text.splitlines() if not ln.startswith(("%", "(P"))]
-    i = blocks.index("(B turns +90.000 deg in one cut [line 3]: retract, rotate, re-enter)")
+    i = blocks.index("(B +90.000 deg in one cut [line 3]: retract, rotate, re-enter)")
     # from the point at B10: up to the safe plane, turn to B100, down over the end point, feed in
     assert blocks[i + 1 : i + 5] == ["G0 Z250.0", "B100.0", "Z52.0", "G1 Z50.0 F250.0"]
     assert b_words(text) == ["0.0", "10.0", "100.0", "110.0"]
