@@ -360,7 +360,7 @@ HEIDENHAIN = Dialect(
 
 MILLPLUS = Dialect(
     name="millplus",
-    letters=frozenset("ABCDEFGHIJKLMNPQRSTUVWXYZ"),
+    letters=frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZ"),
     g_groups=_groups(
         motion=_MOTION,
         cycle_def=("81", "82", "83", "84", "85", "86", "87", "88", "89"),

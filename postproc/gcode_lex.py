@@ -181,10 +181,14 @@ def lex_block(raw: str, dialect: Dialect, params: dict[str, float], *, path=None
     code, comments = split_comments(
         raw, path=path, line=line, parens=not dialect.keywords, nested=dialect.nested_comments
     )
+    keywords: list[tuple[str, list[float]]] = []
+    if dialect.keywords:
+        code = _KEYWORD.sub(lambda m: _keyword(m, keywords, params, dialect, path, line),
+                            code.upper())
     text = "".join(code.split()).upper()
     if dialect.block_end and text.endswith(dialect.block_end.strip()):
         text = text[: -len(dialect.block_end.strip())]
-    block = Block(comments=comments)
+    block = Block(comments=comments, keywords=keywords)
     if text.startswith("/"):
         block.deleted = True
         text = text[1:]
@@ -203,8 +207,6 @@ def lex_block(raw: str, dialect: Dialect, params: dict[str, float], *, path=None
         elif ch in dialect.block_number_letters and not ch.isalpha():
             cur.pos += 1  # Fanuc ':' alignment sequence number
             block.words.append(("N", cur.number()))
-        elif ch.isalpha() and dialect.keywords and re.match(r"[A-Z_][A-Z_]", text[cur.pos :]):
-            block.keywords.append(_keyword(cur))
         elif ch.isalpha():
             cur.pos += 1
             if cur.peek() == "=" and dialect.letter_assignments:  # MillPlus B=E254
@@ -221,32 +223,30 @@ def lex_block(raw: str, dialect: Dialect, params: dict[str, float], *, path=None
     return block
 
 
-_IDENT = re.compile(r"[A-Z_][A-Z0-9_]*")
+#: a Sinumerik identifier (two letters or more) with its ( ... ) arguments or its = value
+_KEYWORD = re.compile(
+    r"(?<![A-Z0-9_.])([A-Z_][A-Z_][A-Z0-9_]*)(\s*\([^)]*\)|\s*=\s*[-+]?(?:[0-9]*\.?[0-9]+|[0-9]+\.))?"
+)
 
 
-def _keyword(cur: _Cursor) -> tuple[str, list[float]]:
-    """A Sinumerik identifier (``TRAORI``, ``SUPA``, ``MCALL``), with its arguments when
-    followed by ``( ... )`` (empty arguments are NaN) or its value after ``=`` (``CR=5``)."""
-    name = _IDENT.match(cur.s, cur.pos).group(0)
-    cur.pos += len(name)
+def _keyword(match, out: list, params, dialect: Dialect, path, line) -> str:
+    """Record a Sinumerik identifier (``TRAORI``, ``SUPA``, ``MCALL``, ``CYCLE81(...)``,
+    ``CR=5``) with its arguments (empty ones NaN, text ones NaN) and cut it from the block."""
+    name, tail = match.group(1), (match.group(2) or "").strip()
     args: list[float] = []
-    if cur.peek() == "(":
-        end = cur.s.find(")", cur.pos)
-        if end < 0:
-            raise cur.fail(f"')' closing the arguments of {name}")
-        inner = cur.s[cur.pos + 1 : end]
+    if tail.startswith("("):
+        inner = "".join(tail[1:-1].split())
         for item in inner.split(",") if inner else []:
             if not item:
                 args.append(math.nan)
                 continue
-            sub = _Cursor(item, cur.params, cur.dialect, cur.path, cur.line)
+            sub = _Cursor(item, params, dialect, path, line)
             try:
                 value = sub.expression()
             except PathcheckError:
                 value = math.nan  # text arguments (tool names, messages)
             args.append(value if sub.pos == len(item) else math.nan)
-        cur.pos = end + 1
-    elif cur.peek() == "=":
-        cur.pos += 1
-        args.append(cur.real())
-    return name, args
+    elif tail.startswith("="):
+        args.append(float(tail[1:]))
+    out.append((name, args))
+    return " "

@@ -232,10 +232,17 @@ class Chain:
         switches: list[int] = []
         notes: list[tuple[int, str]] = []
         if two and n:
-            d = np.abs(wrapped(j[1:, :, None, :] - j[:-1, None, :, :])).sum(-1)  # (n-1, to, from)
+            # compare each row with the previous row off the pole (at the pole both solutions
+            # meet, so crossing it is where the other solution continues the path)
+            at_pole = sol.pole < 1e-6
+            idx = np.where(at_pole, -1, np.arange(n))
+            prev = np.concatenate([[-1], np.maximum.accumulate(idx)[:-1]])
+            has = (prev >= 0) & ~at_pole
+            pj = j[np.maximum(prev, 0)]
+            d = np.abs(wrapped(j[:, :, None, :] - pj[:, None, :, :])).sum(-1)  # (n, to, from)
             stay = 0.5 * (d[:, 0, 0] + d[:, 1, 1])
             swap = 0.5 * (d[:, 1, 0] + d[:, 0, 1])
-            flip = np.concatenate([[False], swap < stay - 1e-9])
+            flip = has & (swap < stay - 1e-9)
             ok = np.stack([inside(j[:, 0]), inside(j[:, 1])], axis=1)
             parity = np.cumsum(flip) % 2
             first = [s for s in (0, 1) if ok[0, s]] or [0]

@@ -456,10 +456,16 @@ def _feed_words(rows: dict[str, np.ndarray], moves: PostMoves, machine: Machine)
     dturn = turn1 - turn0
     scale = 1.0 / MM_PER_INCH if machine.units == "inch" else 1.0
     max_rot = np.array([a.max_feed for a in machine.rotary_axes]).reshape(1, -1)
+    if tcp:  # the linear axes' own motion (the program carries tips)
+        xm0 = chain.inverse_position(chain.to_part(xyz0), turn0, tcp=False)
+        xm1 = chain.inverse_position(chain.to_part(xyz1), turn1, tcp=False)
+        dmachine = xm1 - xm0
+    else:
+        dmachine = dxyz
     limits = [
         length / moves.feed[rows["src"][i]],
         (np.abs(dturn) / max_rot).max(axis=1, initial=0.0),
-        np.linalg.norm(dxyz, axis=1) / machine.feeds.max_linear,
+        np.linalg.norm(dmachine, axis=1) / machine.feeds.max_linear,
     ]
     g93 = machine.feeds.rotary_mode == "g93"
     distance = get_dialect(machine.dialect).feed_distance(dxyz * scale, dturn, tcp)

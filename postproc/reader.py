@@ -37,6 +37,8 @@ PROGRAMMED, CYCLE, HOME, MACHINE_FRAME = 0, 1, 2, 3
 _AXES = "XYZABC"
 _PLANES = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}  # (u, v, normal) axis indices
 _ARC_OFFSETS = "IJK"
+#: Sinumerik drilling and boring cycles read as holes
+_SIEMENS_CYCLE = re.compile(r"CYCLE(7[67]|8[1-9])")
 
 
 @dataclass(frozen=True)
@@ -70,6 +72,7 @@ class GcodeMoves:
     tool_axis: np.ndarray = None  # type: ignore[assignment]
     comments: tuple[tuple[int, str], ...] = ()
     other: dict[str, int] = field(default_factory=dict)
+    blocks: int = 0  # blocks read (program lines with code or a comment)
 
     def __len__(self) -> int:
         return len(self.line)
@@ -134,6 +137,7 @@ class _Program:
         self.other: Counter[str] = Counter()
         self.params: dict[str, float] = {}
         self.units_seen: str | None = None
+        self.blocks = 0
 
     def error(self, message: str, line: int) -> PathcheckError:
         return PathcheckError(message, path=self.path, line=line, code="gcode")
@@ -224,8 +228,10 @@ class _Program:
                 words[letter] = value
         for name, _ in block.assignments:
             self.other[f"{name.rstrip('0123456789') if name[0].isalpha() else '#'}="] += 1
-        for name, _ in block.keywords:
-            if name not in ("MCALL", "SUPA") and not name.startswith("CYCLE8"):
+        for name, args in block.keywords:
+            if name == "CR" and args:  # Sinumerik arc radius
+                words["R"] = args[0]
+            elif name not in ("MCALL", "SUPA") and not _SIEMENS_CYCLE.fullmatch(name):
                 self.other[name] += 1
         assigned = dict(block.assignments)
         self._modes(g_codes, words, m_codes, tools, line)
@@ -342,11 +348,11 @@ class _Program:
         for name, args in keywords:
             if name == "MCALL":
                 st.mcall = None
-                cycles = [a for n, a in keywords if n.startswith("CYCLE8")]
+                cycles = [a for n, a in keywords if _SIEMENS_CYCLE.fullmatch(n)]
                 if cycles:
                     st.mcall = cycles[0]
                 return True
-            if name.startswith("CYCLE8") and name[5:].isdigit():
+            if _SIEMENS_CYCLE.fullmatch(name):
                 self._siemens_hole(list(st.pos), args, line)
                 return True
         return False
@@ -518,6 +524,7 @@ class _Program:
             tool_axis=arr("tool_axis", float, (3,)),
             comments=tuple(self.comments),
             other=dict(self.other),
+            blocks=self.blocks,
         )
 
 
@@ -552,6 +559,7 @@ def read_gcode_text(
                 number,
             )
         block = lex_block(stripped, dia, prog.params, path=path, line=number)
+        prog.blocks += 1
         prog.block(block, number)
     return prog.result()
 

@@ -98,7 +98,7 @@ def format_program(
         valid = np.isfinite(vals)
         texts = format_number(np.where(valid, vals, 0.0), fmt.linear_decimals)
         words[letter] = (texts, _changed(texts, valid, force))
-    for j, axis in enumerate(machine.rotary_axes):
+    for j, axis in sorted(enumerate(machine.rotary_axes), key=lambda t: t[1].name):
         signed = axis.wrap == "signed"
         col = rows.word[:, j]
         vals = col if signed else np.round(col, fmt.rotary_decimals) + 0.0

@@ -1,10 +1,12 @@
 """`pathcheck check-gcode PROG.nc --machine NAME [--part PART] [--cutter "CUTTER/..."]`: read an
-existing program in the machine's dialect, apply the machine kinematics back into the part frame
-and report its moves."""
+existing program in the machine's dialect, apply the machine kinematics back into the part frame,
+report its moves and the machine checks (travel, rotary limits and wraps, singular passages, axis
+feeds), and with --part and --cutter check it like a CL job. Exit 1 on findings of either."""
 
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import click
@@ -15,7 +17,10 @@ import click
 @click.option(
     "--machine", "machine_name", default=None, help="machine name or .toml (default fanuc-hmc)"
 )
-@click.option("--dialect", default=None, help="override the machine's dialect (fanuc, linuxcnc)")
+@click.option(
+    "--dialect", default=None,
+    help="override the machine's dialect (fanuc, haas, linuxcnc, siemens, heidenhain, millplus)",
+)
 @click.option(
     "--units", type=click.Choice(["mm", "inch"]), default=None, help="units before G20/G21"
 )
@@ -40,6 +45,7 @@ def check_gcode(
     \b
     pathcheck check-gcode prog.nc --machine fanuc-hmc
     pathcheck check-gcode prog.ngc --machine linuxcnc-hmc --json out.json
+    pathcheck check-gcode boat.ngc --machine linuxcnc-xyzac-trt --part boat.stl --cutter CUTTER/10
     """
     from checker.errors import PathcheckError
     from postproc.describe import describe_program, format_program_summary
@@ -59,14 +65,16 @@ def check_gcode(
         )
     moves = read_gcode(program, dialect or machine.dialect, units=units or machine.units)
     motions = part_motions(moves, machine)
+    doc = describe_program(moves, motions, machine)
+    click.echo(format_program_summary(doc))
     if part is None or cutter is None:
-        doc = describe_program(moves, motions, machine)
-        click.echo(format_program_summary(doc))
         click.echo("give --part and --cutter to check the program for gouges and interference")
         if json_out is not None:
             from checker.atomic import write_file
 
             write_file(json_out, json.dumps(doc, indent=2) + "\n", what="program JSON")
+        if doc["machine_checks"]:
+            sys.exit(1)
         return
     from checker.commands.check import finish
     from checker.job import check_toolpath
@@ -75,3 +83,5 @@ def check_gcode(
     toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)
     result = check_toolpath(toolpath, part_path=part, cutter=cutter, machine=machine_name)
     finish(result, json_out, store=not no_store)
+    if doc["machine_checks"]:
+        sys.exit(1)
