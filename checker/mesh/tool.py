@@ -1,0 +1,146 @@
+"""The real tool as a union of convex solids of revolution ("pieces") for the exact mesh depth.
+
+Tool frame: tip at the origin, axis +z; a point's radial distance from the axis is r and its
+height above the tip is h (mm). Each piece is `core (+) ball(rho)`: the core K is the solid of
+revolution of a convex polygon in the (r >= 0, h) half-plane that has an edge (or a vertex) on
+the axis, so the solid is convex; the polygon may be degenerate (a segment on the axis: a ball
+end-mill's core). Vertices are stored counter-clockwise in (r, h) (r to the right, h up).
+
+Pieces of a `Cutter` (`tool_pieces`):
+- kind 0, the body: exactly `Core.of(cutter)` (checker/geometry/contact.py) grown by the corner
+  radius r. The core's profile is the wedge with its corner at C = (R, h_o), h_o = R tan(psi) +
+  r sec(psi): its lower side goes from C to the axis at (0, r sec(psi)) (the bottom offset by r),
+  its outer side leaves C upwards with taper theta (the side offset by r), its top is at `top`.
+  flat: the rectangle [0, R] x [0, top], rho = 0; ball: the axis segment from h = r to top,
+  rho = r; bull-nose: [0, R] x [r, top], rho = r; APT: the wedge; tapered ball: the cone from
+  (0, r). `top` is the flute length when known, else `H` when > 0, else unbounded (`UNBOUNDED`
+  mm; the depth kernel clips it per pose just above the mesh, which changes no answer). With
+  rho > 0 the body's top is the core's top grown by rho: a rounded cap reaching rho above `top`
+  (into the shank's span: conservative). With psi > 0 and r > 0 the grown core is rounded where
+  the real tip is sharp, short of it by r (sec(psi) - 1) along the axis (as in contact.py).
+- kind 1, the shank: the cylinder of radius shank_diameter / 2 from the flute length to the
+  stickout, rho = 0; present when `flute_length`, `shank_diameter` and `stickout` are known.
+- kind 2, the holder: the cylinder of radius holder_diameter / 2 from the stickout to
+  stickout + holder_length, rho = 0; present when `with_holder` and `stickout`,
+  `holder_diameter` and `holder_length` are known.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba as nb
+import numpy as np
+
+from checker.cutter import BALL_FAMILY
+
+MAXV = 8           # profile vertices per piece at most (the pieces here need 4)
+UNBOUNDED = 1e6    # mm: the top of a body whose length is not known
+BODY, SHANK, HOLDER = 0, 1, 2
+
+
+@dataclass(frozen=True)
+class ToolPieces:
+    """The pieces of one tool, tool frame, mm. `prof (P, MAXV, 2)` half-profile vertices (r, h)
+    counter-clockwise (rows past `nprof[p]` unused), `nprof (P,)` vertex counts, `rho (P,)` the
+    ball radius each core is grown by, `kind (P,)` 0 body, 1 shank, 2 holder."""
+
+    prof: np.ndarray
+    nprof: np.ndarray
+    rho: np.ndarray
+    kind: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.kind)
+
+    @property
+    def reach_up(self) -> float:
+        """Height (mm) above the tip of the highest point of the tool (UNBOUNDED and more when
+        the body is unbounded)."""
+        return float(max(self.prof[p, : self.nprof[p], 1].max() + self.rho[p]
+                         for p in range(len(self))))
+
+
+@nb.njit(cache=True)
+def body_profile(r: float, R: float, psi: float, theta: float, top: float,
+                 out: np.ndarray) -> int:
+    """Write the body core's half-profile (counter-clockwise (r, h) vertices) into `out (>= 4,
+    2)` for corner radius r, corner-centre radius R, bottom angle psi, taper theta (rad) and
+    core top `top` (mm); return the vertex count (2 for a ball: a segment on the axis)."""
+    h0 = r / math.cos(psi)                      # the lower side meets the axis
+    ho = R * math.tan(psi) + h0                 # corner centre height
+    top = max(top, ho)
+    cand = np.empty((4, 2))
+    cand[0, 0], cand[0, 1] = 0.0, h0
+    cand[1, 0], cand[1, 1] = R, ho
+    cand[2, 0], cand[2, 1] = R + (top - ho) * math.tan(theta), top
+    cand[3, 0], cand[3, 1] = 0.0, top
+    m = 0
+    for k in range(4):
+        if m > 0 and abs(cand[k, 0] - out[m - 1, 0]) <= 1e-12 and \
+                abs(cand[k, 1] - out[m - 1, 1]) <= 1e-12:
+            continue
+        out[m, 0], out[m, 1] = cand[k, 0], cand[k, 1]
+        m += 1
+    while m > 1 and abs(out[m - 1, 0] - out[0, 0]) <= 1e-12 and \
+            abs(out[m - 1, 1] - out[0, 1]) <= 1e-12:
+        m -= 1
+    return m
+
+
+@nb.njit(cache=True)
+def body_profiles(r: np.ndarray, R: np.ndarray, psi: float, theta: float, top: float):
+    """Body cores of N cutters of one family differing in r and R (N,): (prof (N, MAXV, 2),
+    nprof (N,))."""
+    n = r.shape[0]
+    prof = np.zeros((n, MAXV, 2))
+    nprof = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        nprof[i] = body_profile(r[i], R[i], psi, theta, top, prof[i])
+    return prof, nprof
+
+
+def _cylinder(radius: float, h0: float, h1: float) -> np.ndarray:
+    return np.array([[0.0, h0], [radius, h0], [radius, h1], [0.0, h1]])
+
+
+def body_top(cutter) -> float:
+    """Top of the body's core (mm above the tip): the flute length, else H > 0, else
+    UNBOUNDED."""
+    if cutter.flute_length is not None and cutter.flute_length > 0.0:
+        return float(cutter.flute_length)
+    if cutter.H > 0.0:
+        return float(cutter.H)
+    return UNBOUNDED
+
+
+def tool_pieces(cutter, *, with_holder: bool) -> ToolPieces:
+    """The pieces of `cutter` (a `checker.cutter.Cutter`): its body, its shank when known and,
+    with `with_holder`, its holder when known (module docstring)."""
+    R = 0.0 if cutter.kind in BALL_FAMILY else float(cutter.R)
+    r, psi, theta = float(cutter.r), float(cutter.psi), float(cutter.theta)
+    profs, rhos, kinds = [], [], []
+    buf = np.zeros((MAXV, 2))
+    m = body_profile(r, R, psi, theta, body_top(cutter), buf)
+    profs.append(buf[:m].copy())
+    rhos.append(r)
+    kinds.append(BODY)
+    L, S = cutter.flute_length, cutter.stickout
+    if L is not None and S is not None and cutter.shank_diameter and S > L:
+        profs.append(_cylinder(0.5 * float(cutter.shank_diameter), float(L), float(S)))
+        rhos.append(0.0)
+        kinds.append(SHANK)
+    if (with_holder and S is not None and cutter.holder_diameter and cutter.holder_length
+            and cutter.holder_length > 0.0):
+        profs.append(_cylinder(0.5 * float(cutter.holder_diameter), float(S),
+                               float(S) + float(cutter.holder_length)))
+        rhos.append(0.0)
+        kinds.append(HOLDER)
+    prof = np.zeros((len(profs), MAXV, 2))
+    nprof = np.zeros(len(profs), dtype=np.int64)
+    for p, pr in enumerate(profs):
+        prof[p, : len(pr)] = pr
+        nprof[p] = len(pr)
+    return ToolPieces(prof, nprof, np.array(rhos, dtype=np.float64),
+                      np.array(kinds, dtype=np.int64))
