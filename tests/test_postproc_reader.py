@@ -242,13 +242,16 @@ def test_programs_accepted_by_gcodeparser(name):
     assert sum(p.command == ("T", 2) or p.command == ("T", 5) for p in parsed) == 2
 
 
-_ALPHABET = "GMXYZABCIJKRFSTNOPQHLD0123456789.-+ #<>[]=*/();%:\n_abcxyz\t\x00\xe9"
+_ALPHABET = "GMXYZABCIJKRFSTNOPQHLDE0123456789.-+ #<>[]=*/();%:,\n_abcxyz\t\x00\xe9"
+_WORDS = ["TRAORI", "SUPA", "MCALL CYCLE81(1,0,1,-5,)", "CR=", "G7 A5=", "B5=", "G93 X", "G79",
+          "G81 Y", "E254", "=E", "M428", "G43.4", "G141", "G40", "G74 Z", "%P G71 *", "*", "M61 Q"]
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=300, deadline=None)
 @given(
-    st.text(alphabet=_ALPHABET, max_size=200),
-    st.sampled_from(["fanuc", "linuxcnc"]),
+    st.lists(st.one_of(st.text(alphabet=_ALPHABET, max_size=12), st.sampled_from(_WORDS)),
+             max_size=25).map("".join),
+    st.sampled_from(["fanuc", "linuxcnc", "siemens", "heidenhain", "haas", "millplus"]),
 )
 def test_random_text_raises_only_our_error(text, dialect):
     try:
@@ -277,5 +280,6 @@ def test_mutated_programs_raise_only_our_error(data):
 
 def part_motions_or_error(moves) -> None:
     """Reading back into the part frame either works or is our error, never a crash."""
-    with contextlib.suppress(PathcheckError):
-        part_motions(moves, load_machine())
+    for name in ("fanuc-hmc", "fanuc-trunnion-ac", "heidenhain-head-table-bc"):
+        with contextlib.suppress(PathcheckError):
+            part_motions(moves, load_machine(name))
