@@ -22,12 +22,14 @@ STACK = 128  # traversal stack: enough for a balanced tree of 2^60 triangles
 class MeshIndex:
     """The AABB tree of a triangle mesh (mm, part frame). `node_lo/node_hi (M, 3)` boxes,
     `node_left/node_right (M,)` children (-1 at a leaf), `node_start/node_count (M,)` a leaf's
-    triangles in tree order, `tri_verts (T, 3, 3)` the triangles in tree order, `tri_id (T,)`
-    their indices in `triangles`, `lo/hi (3,)` the mesh's box."""
+    triangles in tree order, `tri_verts (T, 3, 3)` the triangles in tree order, `tri_normal
+    (T, 3)` their unit normals (right-hand rule; 0 for a degenerate one), `tri_id (T,)` their
+    indices in `triangles`, `lo/hi (3,)` the mesh's box."""
 
     vertices: np.ndarray
     triangles: np.ndarray
     tri_verts: np.ndarray
+    tri_normal: np.ndarray
     tri_id: np.ndarray
     node_lo: np.ndarray
     node_hi: np.ndarray
@@ -51,20 +53,25 @@ class MeshIndex:
         if not np.isfinite(tv).all():
             raise ValueError("non-finite vertex coordinates")
         lo, hi, left, right, start, count, order = _build(tv)
-        return cls(vertices, triangles, np.ascontiguousarray(tv[order]), order, lo, hi, left,
+        tv = np.ascontiguousarray(tv[order])
+        nrm = np.cross(tv[:, 1] - tv[:, 0], tv[:, 2] - tv[:, 0])
+        ln = np.linalg.norm(nrm, axis=1)
+        nrm = np.where(ln[:, None] > 0.0, nrm / np.where(ln > 0.0, ln, 1.0)[:, None], 0.0)
+        return cls(vertices, triangles, tv, np.ascontiguousarray(nrm), order, lo, hi, left,
                    right, start, count, tv.reshape(-1, 3).min(0), tv.reshape(-1, 3).max(0))
 
     @property
     def nbytes(self) -> int:
         """Memory held by the tree (the copies of the mesh included)."""
-        return sum(a.nbytes for a in (self.tri_verts, self.tri_id, self.node_lo, self.node_hi,
+        return sum(a.nbytes for a in (self.tri_verts, self.tri_normal, self.tri_id, self.node_lo,
+                                      self.node_hi,
                                       self.node_left, self.node_right, self.node_start,
                                       self.node_count))
 
     def arrays(self) -> tuple:
         """The arrays the kernels take, in their order."""
         return (self.node_lo, self.node_hi, self.node_left, self.node_right, self.node_start,
-                self.node_count, self.tri_verts, self.tri_id, self.lo, self.hi)
+                self.node_count, self.tri_verts, self.tri_normal, self.tri_id, self.lo, self.hi)
 
 
 @nb.njit(cache=True)

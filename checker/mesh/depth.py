@@ -52,7 +52,7 @@ GJK_EPS = 1e-11     # mm: GJK stops when its upper and lower distance bounds are
 GJK_TOUCH = 1e-10   # mm: a distance below this counts as touching (t* then has this error)
 GJK_ITER = 100
 EPS_T = 1e-10       # mm: width of the final bracket on the erosion depth t*
-NBOUND = 6          # per candidate: upper bound, lower bound, inside upper bound, witness xyz
+NBOUND = 16         # per candidate: upper, lower bound, t* bound, point xyz, triangle (9)
 _PV = 24            # profile vertices after clipping, at most (MAXV + clips)
 EPS_H = 1e-9        # as checker.kernels.EPS_H: a normal this close to the axis is vertical
 
@@ -448,13 +448,53 @@ def _gjk(T, P, m, thresh, x0x, x0y, x0z, y0x, y0y, y0z, W, A, lam, res):
 
 
 @nb.njit(cache=True)
-def _bounds(T, P, m, cn, cc, nc, solid, rho, rmax, hlo, hhi, out):
-    """Upper bound (out[0]), lower bound with its point (out[1], out[3:6]) of the signed value
-    of triangle T (tool frame) against the piece, and the upper bound of t* (out[2])."""
+def _plane_upper(T, nx, ny, nz, P, m, rho):
+    """Upper bound of the signed value of triangle T (unit normal n, tool frame) from its plane:
+    rho - max(d+, d-), d+- the distances by which the core K lies beyond the plane on either
+    side (support function h_K): dist(T, K) >= d+- when positive, and where the plane cuts K,
+    K (-) tB meets it only while t <= -d+ and t <= -d- (h_(K (-) tB) <= h_K - t)."""
+    s = math.sqrt(nx * nx + ny * ny)
+    hp = -np.inf
+    hm = -np.inf
+    for k in range(m):
+        hp = max(hp, s * P[k, 0] + nz * P[k, 1])
+        hm = max(hm, s * P[k, 0] - nz * P[k, 1])
+    c = nx * T[0, 0] + ny * T[0, 1] + nz * T[0, 2]
+    return rho - max(-hm - c, c - hp)
+
+
+@nb.njit(cache=True)
+def _quick_upper(T, cn, cc, nc, solid, rho, rmax, hlo, hhi):
+    """A cheaper, looser `_upper`: min r over T bounded below by the distance from the axis to
+    the box of T's shadow."""
+    x0 = min(T[0, 0], min(T[1, 0], T[2, 0]))
+    x1 = max(T[0, 0], max(T[1, 0], T[2, 0]))
+    y0 = min(T[0, 1], min(T[1, 1], T[2, 1]))
+    y1 = max(T[0, 1], max(T[1, 1], T[2, 1]))
+    dx = max(x0, max(-x1, 0.0))
+    dy = max(y0, max(-y1, 0.0))
+    rmin = math.sqrt(dx * dx + dy * dy)
+    hmin = min(T[0, 2], min(T[1, 2], T[2, 2]))
+    hmax = max(T[0, 2], max(T[1, 2], T[2, 2]))
+    if solid:
+        ub = np.inf
+        for i in range(nc):
+            a, b = cn[i, 0], cn[i, 1]
+            fmin = a * rmin + (b * hmin if b >= 0.0 else b * hmax)
+            ub = min(ub, cc[i] - fmin)
+        return rho + ub
+    return rho + min(0.0, min(rmax - rmin, min(hmax - hlo, hhi - hmin)))
+
+
+@nb.njit(cache=True)
+def _upper(T, cn, cc, nc, solid, rho, rmax, hlo, hhi, out):
+    """Upper bound (out[0]) of the signed value of triangle T (tool frame) against the piece,
+    the upper bound of t* (out[2]) and T's point nearest the axis (out[3:6]):
+    rho + min_i (c_i - min over T of (a_i r + b_i h)), with min r = the distance from the axis
+    to T's shadow along it (a degenerate core: the bounding cylinder's sides, at most 0)."""
     u, v, w = _tri_w(T[0, 0], T[0, 1], 0.0, T[1, 0], T[1, 1], 0.0, T[2, 0], T[2, 1], 0.0)
     xx = u * T[0, 0] + v * T[1, 0] + w * T[2, 0]
     xy = u * T[0, 1] + v * T[1, 1] + w * T[2, 1]
-    xz = u * T[0, 2] + v * T[1, 2] + w * T[2, 2]
     rmin = math.sqrt(xx * xx + xy * xy)
     hmin = min(T[0, 2], min(T[1, 2], T[2, 2]))
     hmax = max(T[0, 2], max(T[1, 2], T[2, 2]))
@@ -468,12 +508,21 @@ def _bounds(T, P, m, cn, cc, nc, solid, rho, rmax, hlo, hhi, out):
         ub = min(0.0, min(rmax - rmin, min(hmax - hlo, hhi - hmin)))
     out[0] = rho + ub
     out[2] = ub
+    out[3], out[4] = xx, xy
+    out[5] = u * T[0, 2] + v * T[1, 2] + w * T[2, 2]
+
+
+@nb.njit(cache=True)
+def _lower(T, P, m, cn, cc, nc, solid, rho, out):
+    """Lower bound (out[1]) of the signed value of triangle T: the exact value at its vertices and
+    at its point nearest the axis (out[3:6] on entry), that point (out[3:6])."""
     best = -np.inf
+    x0, y0, z0 = out[3], out[4], out[5]
     for k in range(4):
         if k < 3:
             px, py, pz = T[k, 0], T[k, 1], T[k, 2]
         else:
-            px, py, pz = xx, xy, xz
+            px, py, pz = x0, y0, z0
         sd, _, _ = _sd(P, m, cn, cc, nc, solid, 0.0, math.sqrt(px * px + py * py), pz)
         if rho - sd > best:
             best = rho - sd
@@ -484,7 +533,7 @@ def _bounds(T, P, m, cn, cc, nc, solid, rho, rmax, hlo, hhi, out):
 @nb.njit(cache=True)
 def _exact(T, P, m, cn, cc, nc, solid, rho, best, bnd, W, A, lam, res, buf_a, buf_b, wit):
     """Signed value of triangle T against the piece if it beats `best` by more than EPS_T
-    (returned, its point in wit[0:3]), else -inf. bnd: the triangle's `_bounds`."""
+    (returned, its point in wit[0:3]), else -inf. bnd: the triangle's `_upper` and `_lower`."""
     lval = bnd[1]
     wx, wy, wz = bnd[3], bnd[4], bnd[5]
     ub_in = bnd[2]
@@ -687,7 +736,7 @@ SLICE_EPS = 1e-10   # mm: the slice minimisation stops when its bounds are this 
 def _exact_slice(T, P, m, cn, cc, nc, solid, rho, best, ev, br, wit):
     """Signed value of triangle T against the piece, rho - min over T of the signed distance to
     K, if it beats `best` (returned, its point in wit[0:3]), else -inf. `ev (6,)`, `br (NSTACK,
-    7)` scratch.
+    8)` scratch.
 
     The signed distance to the convex solid of revolution K is sd2(r, h), the signed distance in
     the profile plane to the (mirrored, convex) profile: convex and even in r, so nondecreasing
@@ -696,9 +745,11 @@ def _exact_slice(T, P, m, cn, cc, nc, solid, rho, best, ev, br, wit):
     over a convex set): phi(h) = sd2(m(h), h) is convex (sd2 convex, nondecreasing in r). Its
     minimum over the triangle's heights (a level s in [0, 1] affine in the height) is bracketed
     by tangent lines (each evaluation gives an interval holding phi's subgradients; a bracket
-    whose probe's interval holds 0 is split in two), probing where the end tangents meet (exact
-    at a kink between two straight pieces) or halving, until the best value found is within
-    SLICE_EPS of the lowest bracket bound, or that bound shows T cannot beat `best`."""
+    whose probe's interval holds 0 is split in two), probing in turn where the end tangents
+    meet (exact at a kink between two straight pieces) and where the secant of phi' vanishes
+    (exact for a parabola), or halving when a bracket does not shrink by half, until the best
+    value found is within SLICE_EPS of the lowest bracket bound, or that bound shows T cannot
+    beat `best`."""
     i0, i1, i2 = 0, 1, 2
     if T[i1, 2] < T[i0, 2]:
         i0, i1 = i1, i0
@@ -719,6 +770,7 @@ def _exact_slice(T, P, m, cn, cc, nc, solid, rho, best, ev, br, wit):
         wit[0], wit[1], wit[2] = ev[3], ev[4], ev[5]
     br[0, 3], br[0, 4], br[0, 5] = 1.0, ev[0], ev[2]
     br[0, 6] = 0.0
+    br[0, 7] = 0.0
     nbr = 1
     conservative = False
     for _ in range(400):
@@ -739,11 +791,14 @@ def _exact_slice(T, P, m, cn, cc, nc, solid, rho, best, ev, br, wit):
         b, fb, gb = br[kmin, 3], br[kmin, 4], br[kmin, 5]
         if b - a <= 4e-16 or ga >= 0.0 or gb <= 0.0:
             # exhausted (its ends are evaluated): drop it
-            for c in range(7):
+            for c in range(8):
                 br[kmin, c] = br[nbr - 1, c]
             nbr -= 1
             continue
-        hc = hmin
+        # in turn: the secant on phi' (exact for a parabola), the tangents' meeting (exact at a
+        # kink)
+        hc = a - ga * (b - a) / (gb - ga) if br[kmin, 7] > 0.0 else hmin
+        br[kmin, 7] = 1.0 - br[kmin, 7]
         if br[kmin, 6] > 0.0 or not (hc > a and hc < b):
             hc = 0.5 * (a + b)
         _slice_eval(T, i0, i1, i2, s1, hc, P, m, cn, cc, nc, solid, ev)
@@ -763,6 +818,7 @@ def _exact_slice(T, P, m, cn, cc, nc, solid, rho, best, ev, br, wit):
             br[nbr, 0], br[nbr, 1], br[nbr, 2] = hc, ev[0], ev[1]
             br[nbr, 3], br[nbr, 4], br[nbr, 5] = b, fb, gb
             br[nbr, 6] = 0.0
+            br[nbr, 7] = 0.0
             nbr += 1
         else:
             conservative = True
@@ -798,10 +854,10 @@ def _frame(ax, ay, az):
 
 
 @nb.njit(cache=True)
-def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tid, mlo, mhi,
-          prof, nprof, rho, kind, tool_ptr, pose_tool, tips, axes, floor, reach, method, out_d,
-          out_piece, out_tri, out_pt, cand, bnd, order, stack, P, Pc, cn, cc, T, W, A, lam, res,
-          buf_a, buf_b, wit, ev, br):
+def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tn, tid, mlo,
+          mhi, prof, nprof, rho, kind, tool_ptr, pose_tool, tips, axes, floor, reach, method,
+          out_d, out_piece, out_tri, out_pt, stats, cand, bnd, order, stack, P, Pc, cn, cc, T, W,
+          A, lam, res, buf_a, buf_b, wit, ev, br, bq):
     """One pose: the branch and bound over the pieces and the BVH's candidates. Returns the
     candidate buffers (grown when needed)."""
     px, py, pz = tips[i, 0], tips[i, 1], tips[i, 2]
@@ -847,6 +903,7 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
         cand, k_c = query_capsule(node_lo, node_hi, node_left, node_right, node_start,
                                   node_count, s0x, s0y, s0z, L * ex, L * ey, L * ez, pad, cand,
                                   stack)
+        stats[i, 0] += k_c
         if k_c == 0:
             continue
         if bnd.shape[0] < k_c:
@@ -860,42 +917,59 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
                 T[v, 0] = dx * e1x + dy * e1y + dz * e1z
                 T[v, 1] = dx * e2x + dy * e2y + dz * e2z
                 T[v, 2] = dx * ex + dy * ey + dz * ez
-            _bounds(T, Pc, mc, cn, cc, nc, solid, rp, rmax, hlo, hhi, bnd[q])
-            if bnd[q, 0] <= best:
+            nx = tn[t, 0] * e1x + tn[t, 1] * e1y + tn[t, 2] * e1z
+            ny = tn[t, 0] * e2x + tn[t, 1] * e2y + tn[t, 2] * e2z
+            nz = tn[t, 0] * ex + tn[t, 1] * ey + tn[t, 2] * ez
+            up = min(_quick_upper(T, cn, cc, nc, solid, rp, rmax, hlo, hhi),
+                     _plane_upper(T, nx, ny, nz, Pc, mc, rp))
+            if up <= best:
                 continue
-            if bnd[q, 1] > best:
-                best = bnd[q, 1]
+            _upper(T, cn, cc, nc, solid, rp, rmax, hlo, hhi, bnd[nkeep])
+            bnd[nkeep, 0] = min(bnd[nkeep, 0], up)
+            if bnd[nkeep, 0] <= best:
+                continue
+            for v in range(3):
+                bnd[nkeep, 6 + 3 * v] = T[v, 0]
+                bnd[nkeep, 7 + 3 * v] = T[v, 1]
+                bnd[nkeep, 8 + 3 * v] = T[v, 2]
+            order[nkeep] = t
+            nkeep += 1
+        stats[i, 1] += nkeep
+        # best first by upper bound: select the largest left (few are examined)
+        nleft = nkeep
+        while nleft > 0:
+            jb = 0
+            ub = bnd[0, 0]
+            for j in range(1, nleft):
+                if bnd[j, 0] > ub:
+                    ub, jb = bnd[j, 0], j
+            if ub <= best + EPS_T:
+                break
+            t = order[jb]
+            for c in range(NBOUND):
+                bq[c] = bnd[jb, c]
+            nleft -= 1
+            if jb != nleft:
+                order[jb] = order[nleft]
+                for c in range(NBOUND):
+                    bnd[jb, c] = bnd[nleft, c]
+            for v in range(3):
+                T[v, 0], T[v, 1], T[v, 2] = bq[6 + 3 * v], bq[7 + 3 * v], bq[8 + 3 * v]
+            _lower(T, Pc, mc, cn, cc, nc, solid, rp, bq)
+            if bq[1] > best:
+                best = bq[1]
                 best_tri = tid[t]
                 best_piece = kind[p]
-                bx, by, bz = bnd[q, 3], bnd[q, 4], bnd[q, 5]
-                bx, by, bz = (px + bx * e1x + by * e2x + bz * ex,
-                              py + bx * e1y + by * e2y + bz * ey,
-                              pz + bx * e1z + by * e2z + bz * ez)
-            order[nkeep] = q
-            nkeep += 1
-        # best first by upper bound (insertion sort: the lists are short)
-        for a in range(1, nkeep):
-            key = order[a]
-            kv = bnd[key, 0]
-            b = a - 1
-            while b >= 0 and bnd[order[b], 0] < kv:
-                order[b + 1] = order[b]
-                b -= 1
-            order[b + 1] = key
-        for a in range(nkeep):
-            q = order[a]
-            if bnd[q, 0] <= best + EPS_T:
-                break
-            t = cand[q]
-            for v in range(3):
-                dx, dy, dz = tv[t, v, 0] - px, tv[t, v, 1] - py, tv[t, v, 2] - pz
-                T[v, 0] = dx * e1x + dy * e1y + dz * e1z
-                T[v, 1] = dx * e2x + dy * e2y + dz * e2z
-                T[v, 2] = dx * ex + dy * ey + dz * ez
+                bx, by, bz = (px + bq[3] * e1x + bq[4] * e2x + bq[5] * ex,
+                              py + bq[3] * e1y + bq[4] * e2y + bq[5] * ey,
+                              pz + bq[3] * e1z + bq[4] * e2z + bq[5] * ez)
+            if ub <= best + SLICE_EPS:
+                continue
+            stats[i, 2] += 1
             if method == 0:
                 val = _exact_slice(T, Pc, mc, cn, cc, nc, solid, rp, best, ev, br, wit)
             else:
-                val = _exact(T, Pc, mc, cn, cc, nc, solid, rp, best, bnd[q], W, A, lam, res,
+                val = _exact(T, Pc, mc, cn, cc, nc, solid, rp, best, bq, W, A, lam, res,
                              buf_a, buf_b, wit)
             if val > best:
                 best = val
@@ -912,14 +986,15 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
 
 
 @nb.njit(cache=True, parallel=True)
-def _poses(node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tid, mlo, mhi,
-           prof, nprof, rho, kind, tool_ptr, pose_tool, tips, axes, floor, reach, method,
+def _poses(node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tn, tid, mlo,
+           mhi, prof, nprof, rho, kind, tool_ptr, pose_tool, tips, axes, floor, reach, method,
            nchunks):
     n = tips.shape[0]
     out_d = np.empty(n)
     out_piece = np.empty(n, dtype=np.int64)
     out_tri = np.empty(n, dtype=np.int64)
     out_pt = np.empty((n, 3))
+    stats = np.zeros((n, 3), dtype=np.int64)
     for c in nb.prange(nchunks):
         i0 = c * n // nchunks
         i1 = (c + 1) * n // nchunks
@@ -939,15 +1014,16 @@ def _poses(node_lo, node_hi, node_left, node_right, node_start, node_count, tv, 
         buf_a = np.empty((_PV, 2))
         buf_b = np.empty((_PV, 2))
         wit = np.empty(3)
+        bq = np.empty(NBOUND)
         ev = np.empty(6)
-        br = np.empty((NSTACK, 7))
+        br = np.empty((NSTACK, 8))
         for i in range(i0, i1):
-            cand, bnd, order = _pose(i, node_lo, node_hi, node_left, node_right, node_start,
-                                     node_count, tv, tid, mlo, mhi, prof, nprof, rho, kind,
-                                     tool_ptr, pose_tool, tips, axes, floor, reach, method, out_d,
-                                     out_piece, out_tri, out_pt, cand, bnd, order, stack, P, Pc,
-                                     cn, cc, T, W, A, lam, res, buf_a, buf_b, wit, ev, br)
-    return out_d, out_piece, out_tri, out_pt
+            cand, bnd, order = _pose(
+                i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tn, tid,
+                mlo, mhi, prof, nprof, rho, kind, tool_ptr, pose_tool, tips, axes, floor, reach,
+                method, out_d, out_piece, out_tri, out_pt, stats, cand, bnd, order, stack, P, Pc,
+                cn, cc, T, W, A, lam, res, buf_a, buf_b, wit, ev, br, bq)
+    return out_d, out_piece, out_tri, out_pt, stats
 
 
 def _as_n3(a, name: str, n: int | None = None) -> np.ndarray:
@@ -1004,7 +1080,7 @@ def pose_depths(mesh_index: MeshIndex, pieces: ToolPieces, tips: np.ndarray, axe
                           np.zeros((0, 3)))
     tool_ptr = np.array([0, len(pieces)], dtype=np.int64)
     pose_tool = np.zeros(n, dtype=np.int64)
-    d, pc, tr, pt = _run(mesh_index, np.ascontiguousarray(pieces.prof, dtype=np.float64),
+    d, pc, tr, pt, _ = _run(mesh_index, np.ascontiguousarray(pieces.prof, dtype=np.float64),
                          np.ascontiguousarray(pieces.nprof, dtype=np.int64),
                          np.ascontiguousarray(pieces.rho, dtype=np.float64),
                          np.ascontiguousarray(pieces.kind, dtype=np.int64), tool_ptr, pose_tool,
@@ -1050,7 +1126,7 @@ def body_depths(mesh_index: MeshIndex, cutter, sizes: np.ndarray, tips: np.ndarr
     r, R = _family_radii(cutter, sizes)
     prof, nprof = body_profiles(r, R, float(cutter.psi), float(cutter.theta), body_top(cutter))
     n = len(sizes)
-    d, _, _, _ = _run(mesh_index, prof, nprof, np.ascontiguousarray(r),
+    d, _, _, _, _ = _run(mesh_index, prof, nprof, np.ascontiguousarray(r),
                       np.zeros(n, dtype=np.int64), np.arange(n + 1, dtype=np.int64),
                       np.arange(n, dtype=np.int64), tips, axes, float(floor),
                       max(0.0, -float(floor)))
