@@ -185,8 +185,7 @@ class Chain:
         g2 = (1.0 - alpha**2 - beta**2 - 2 * alpha * beta * w12) / float(cross @ cross)
         gamma = np.sqrt(np.maximum(g2, 0.0))
         base = np.outer(alpha, w1) + np.outer(beta, w2)
-        # unreachable axes: the nearest reachable one (gamma = 0), reach = angle between them
-        near = base / np.maximum(np.linalg.norm(base, axis=1, keepdims=True), 1e-12)
+        # an unreachable axis (gamma^2 < 0) gets the words of the nearest one (gamma = 0)
         for s, sheet in ((1.0, 0), (-1.0, 1)):
             c = base + s * np.outer(gamma, cross)
             c = c / np.maximum(np.linalg.norm(c, axis=1, keepdims=True), 1e-12)
@@ -197,7 +196,6 @@ class Chain:
         # how far a is from the set it must lie on: compare a with the axis that the words give
         back = rotate(rotate(a, w2, joints[:, 0, i2] * s2), w1, joints[:, 0, i1] * s1)
         reach = np.where(g2 < 0, np.degrees(np.arccos(np.clip((back * z).sum(1), -1, 1))), 0.0)
-        del near
         pole = np.degrees(np.arccos(np.clip(np.abs(a @ w2), 0.0, 1.0)))
         return Solutions(joints, reach, pole)
 
@@ -341,11 +339,6 @@ class Chain:
                 prev = tip
             length[turning] = total
         return length
-
-
-def chain_of(machine: Machine) -> Chain:
-    """The machine's chain (cached on nothing: cheap to build)."""
-    return Chain(machine)
 
 
 # -- the 4-axis B-table helpers (DESIGN.md), kept for callers of the older API -------------

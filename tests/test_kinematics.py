@@ -179,3 +179,14 @@ def test_unreachable_axis_names_the_line():
     with pytest.raises(PathcheckError, match=r"job.apt:12: tool axis .* cannot be made by "
                                              r"machine 'fanuc-hmc' \(table B\)"):
         chain.words_for_axes(axis, lines=np.array([11, 12]), path="job.apt")
+
+
+def test_unreachable_five_axis_axis_is_reported():
+    """The DMU's 45-degree swivel table tilts the part at most 90 deg: an axis pointing down
+    cannot be made; the nearest axis it can make is 90 deg away."""
+    chain = Chain(load_machine("dmu70evo-840d"))
+    sol = chain.solve(np.array([[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]]))
+    assert sol.reach[0] == pytest.approx(90.0, abs=1e-6) and sol.reach[1] == 0.0
+    with pytest.raises(PathcheckError, match=r"p.apt:3: tool axis \[0.0, 0.0, -1.0\] cannot"):
+        chain.words_for_axes(np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]),
+                             lines=np.array([2, 3]), path="p.apt")
