@@ -729,14 +729,41 @@ def _bracket_low(a, fa, ga, b, fb, gb):
 
 
 NSTACK = 64
+NBR = 11            # per bracket: a, f(a), slope, b, f(b), slope, probes without halving,
+#                     next step (0 tangents, 1 secant), end replaced last, Illinois scales
+
+
+@nb.njit(cache=True)
+def _fresh(br, k):
+    br[k, 6] = 0.0
+    br[k, 7] = 0.0
+    br[k, 8] = 0.0
+    br[k, 9] = 1.0
+    br[k, 10] = 1.0
+
+
+@nb.njit(cache=True)
+def _illinois(br, k, side, poor):
+    """Bookkeeping after end `side` (-1 a, +1 b) of bracket k was replaced; `poor`: the bracket
+    did not halve."""
+    br[k, 6] = br[k, 6] + 1.0 if poor else 0.0
+    if side > 0.0:
+        br[k, 10] = 1.0
+        if br[k, 8] > 0.0:
+            br[k, 9] *= 0.5
+    else:
+        br[k, 9] = 1.0
+        if br[k, 8] < 0.0:
+            br[k, 10] *= 0.5
+    br[k, 8] = side
 SLICE_EPS = 1e-10   # mm: the slice minimisation stops when its bounds are this close
 
 
 @nb.njit(cache=True)
 def _exact_slice(T, P, m, cn, cc, nc, solid, rho, best, ev, br, wit):
     """Signed value of triangle T against the piece, rho - min over T of the signed distance to
-    K, if it beats `best` (returned, its point in wit[0:3]), else -inf. `ev (6,)`, `br (NSTACK,
-    8)` scratch.
+    K, if it beats `best` (returned, its point in wit[0:3]), else -inf. `ev (7,)`, `br (NSTACK,
+    NBR)` scratch.
 
     The signed distance to the convex solid of revolution K is sd2(r, h), the signed distance in
     the profile plane to the (mirrored, convex) profile: convex and even in r, so nondecreasing
@@ -747,9 +774,9 @@ def _exact_slice(T, P, m, cn, cc, nc, solid, rho, best, ev, br, wit):
     by tangent lines (each evaluation gives an interval holding phi's subgradients; a bracket
     whose probe's interval holds 0 is split in two), probing in turn where the end tangents
     meet (exact at a kink between two straight pieces) and where the secant of phi' vanishes
-    (exact for a parabola), or halving when a bracket does not shrink by half, until the best
-    value found is within SLICE_EPS of the lowest bracket bound, or that bound shows T cannot
-    beat `best`."""
+    (exact for a parabola; the Illinois rule keeps it from converging from one side only), or
+    halving after four probes that did not halve a bracket, until the best value found is within
+    SLICE_EPS of the lowest bracket bound, or that bound shows T cannot beat `best`."""
     i0, i1, i2 = 0, 1, 2
     if T[i1, 2] < T[i0, 2]:
         i0, i1 = i1, i0
@@ -769,8 +796,7 @@ def _exact_slice(T, P, m, cn, cc, nc, solid, rho, best, ev, br, wit):
         fbest = ev[0]
         wit[0], wit[1], wit[2] = ev[3], ev[4], ev[5]
     br[0, 3], br[0, 4], br[0, 5] = 1.0, ev[0], ev[2]
-    br[0, 6] = 0.0
-    br[0, 7] = 0.0
+    _fresh(br, 0)
     nbr = 1
     conservative = False
     for _ in range(400):
@@ -791,34 +817,40 @@ def _exact_slice(T, P, m, cn, cc, nc, solid, rho, best, ev, br, wit):
         b, fb, gb = br[kmin, 3], br[kmin, 4], br[kmin, 5]
         if b - a <= 4e-16 or ga >= 0.0 or gb <= 0.0:
             # exhausted (its ends are evaluated): drop it
-            for c in range(8):
+            for c in range(NBR):
                 br[kmin, c] = br[nbr - 1, c]
             nbr -= 1
             continue
-        # in turn: the secant on phi' (exact for a parabola), the tangents' meeting (exact at a
-        # kink)
-        hc = a - ga * (b - a) / (gb - ga) if br[kmin, 7] > 0.0 else hmin
+        # in turn: the tangents' meeting (exact at a kink) and the secant on phi' (exact for a
+        # parabola; Illinois: the slope of an end kept twice is halved); halving after four
+        # probes that did not halve the bracket
+        if br[kmin, 7] > 0.0:
+            sa, sb = ga * br[kmin, 9], gb * br[kmin, 10]
+            hc = a - sa * (b - a) / (sb - sa)
+        else:
+            hc = hmin
         br[kmin, 7] = 1.0 - br[kmin, 7]
-        if br[kmin, 6] > 0.0 or not (hc > a and hc < b):
+        if br[kmin, 6] >= 4.0 or not (hc > a and hc < b):
             hc = 0.5 * (a + b)
+            br[kmin, 6] = 0.0
         _slice_eval(T, i0, i1, i2, s1, hc, P, m, cn, cc, nc, solid, ev)
+        ev[6] += 1.0                             # evaluations, for statistics
         if ev[0] < fbest:
             fbest = ev[0]
             wit[0], wit[1], wit[2] = ev[3], ev[4], ev[5]
         width = b - a
         if ev[1] > 0.0:                          # the minimum is left of hc
             br[kmin, 3], br[kmin, 4], br[kmin, 5] = hc, ev[0], ev[2]
-            br[kmin, 6] = 1.0 if hc - a > 0.5 * width else 0.0
+            _illinois(br, kmin, 1.0, hc - a > 0.5 * width)
         elif ev[2] < 0.0:                        # right of hc
             br[kmin, 0], br[kmin, 1], br[kmin, 2] = hc, ev[0], ev[1]
-            br[kmin, 6] = 1.0 if b - hc > 0.5 * width else 0.0
+            _illinois(br, kmin, -1.0, b - hc > 0.5 * width)
         elif nbr < NSTACK:                       # either side: split
             br[kmin, 3], br[kmin, 4], br[kmin, 5] = hc, ev[0], ev[2]
-            br[kmin, 6] = 0.0
             br[nbr, 0], br[nbr, 1], br[nbr, 2] = hc, ev[0], ev[1]
             br[nbr, 3], br[nbr, 4], br[nbr, 5] = b, fb, gb
-            br[nbr, 6] = 0.0
-            br[nbr, 7] = 0.0
+            _fresh(br, kmin)
+            _fresh(br, nbr)
             nbr += 1
         else:
             conservative = True
@@ -1015,8 +1047,8 @@ def _poses(node_lo, node_hi, node_left, node_right, node_start, node_count, tv, 
         buf_b = np.empty((_PV, 2))
         wit = np.empty(3)
         bq = np.empty(NBOUND)
-        ev = np.empty(6)
-        br = np.empty((NSTACK, 8))
+        ev = np.zeros(7)
+        br = np.empty((NSTACK, NBR))
         for i in range(i0, i1):
             cand, bnd, order = _pose(
                 i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tn, tid,
