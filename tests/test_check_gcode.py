@@ -37,3 +37,32 @@ def test_posted_program_checks_like_its_cl_job(repo, tmp_path, machine):
     big = args.copy()
     big[big.index("CUTTER/10,5")] = "CUTTER/40,20"
     assert _exit_code(big) == 1
+
+
+@pytest.mark.parametrize("machine", ["siemens-trunnion-bc", "linuxcnc-head-head-ac",
+                                     "heidenhain-head-table-bc", "fanuc-vmc-a"])
+def test_five_axis_machine_program_reads_back_to_the_cl_motion(repo, tmp_path, machine):
+    """The mould job posted for a 5-axis (or vertical A) machine, with or without TCP: the tool
+    path check-gcode hands to the checker is the CL file's, point for point."""
+    import numpy as np
+
+    from checker.apt import read_cl
+    from postproc.machine import load_machine
+    from postproc.post import post_toolpath
+    from postproc.reader import read_gcode
+    from postproc.replay import part_motions, toolpath_of
+
+    job = read_cl(repo / "samples/mould/mould.apt")
+    cl = job.motion_arrays(arc_chord_tol=0.01)
+    program = post_toolpath(job, tmp_path / "mould.nc", machine=machine,
+                            b_deg=np.zeros(len(cl.tip)), arc_chord_tol=0.01)
+    m = load_machine(machine)
+    motions = part_motions(read_gcode(program, m.dialect, units=m.units), m)
+    back = toolpath_of(motions, path=program, units="mm", cutter=None).motion_arrays()
+    from scipy.spatial import cKDTree
+
+    cut = ~np.asarray(cl.rapid)
+    # each CL cutting point is a program point (the program adds approach and retract points)
+    dist, _ = cKDTree(back.tip).query(cl.tip[cut])
+    assert dist.max() < 1e-4
+    assert np.abs(back.axis - [0.0, 0.0, 1.0]).max() < 1e-9
