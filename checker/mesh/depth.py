@@ -308,7 +308,9 @@ def _tet_w(W, lam):
         sd = nx * (W[o, 0] - W[i, 0]) + ny * (W[o, 1] - W[i, 1]) + nz * (W[o, 2] - W[i, 2])
         scale = math.sqrt((nx * nx + ny * ny + nz * nz) * (
             (W[o, 0] - W[i, 0]) ** 2 + (W[o, 1] - W[i, 1]) ** 2 + (W[o, 2] - W[i, 2]) ** 2))
-        degenerate = abs(sd) <= 1e-12 * scale or sd == 0.0
+        # a thin tetrahedron (support points bunch up on a curved rim) cannot decide inside:
+        # its faces decide the nearest point instead (touching is then a tiny distance)
+        degenerate = abs(sd) <= 1e-9 * scale or sd == 0.0
         if not degenerate:
             bary[o] = so / sd
         if degenerate or so * sd < 0.0:
@@ -424,6 +426,8 @@ def _gjk(T, P, m, thresh, x0x, x0y, x0z, y0x, y0y, y0z, W, A, lam, res):
         n += 1
         n, nx_, ny_, nz_, inside = _reduce(W, A, lam, n)
         if inside:
+            if lb > GJK_TOUCH:
+                break       # contradicts the certified lower bound: rounding; keep v
             status = 1
             break
         if nx_ * nx_ + ny_ * ny_ + nz_ * nz_ >= vv:
