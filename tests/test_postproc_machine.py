@@ -112,3 +112,31 @@ def test_tip_path_length_pure_rotation_is_an_arc():
         xyz, xyz + [3.0, 4.0, 0.0], np.array([[10.0]]), np.array([[10.0]])
     )
     assert straight[0] == pytest.approx(5.0, abs=1e-12)
+
+
+def test_older_four_axis_form_reads_as_the_same_b_table(tmp_path):
+    """A machine file in the older form ([kinematics] + one [rotary]) is the B table it
+    describes: same chain, same program as the shipped file in the chain form."""
+    from postproc.post import PostMoves, post_program
+
+    old = tmp_path / "old-hmc.toml"
+    old.write_text(
+        'name = "fanuc-hmc"\ndialect = "fanuc"\n'
+        "[kinematics]\ntable_center = [10.0, 0.0, -5.0]\nb_direction = -1\n"
+        '[rotary]\nwrap = "limited"\nb_min = -200.0\nb_max = 200.0\nmax_feed = 5400.0\n'
+        "[travel]\nx = [-400.0, 400.0]\ny = [-350.0, 350.0]\nz = [-300.0, 450.0]\n"
+        '[program]\nsafe_z = 250.0\nheader = ["G17 G40 G49 G80 G90", "G54"]\n'
+        'footer = ["M05", "M09", "G91 G28 Z0.0", "G90", "M30"]\n'
+        'tool_change = ["G91 G28 Z0.0", "G90", "T{tool:02d} M06"]\n'
+    )
+    legacy = load_machine(old)
+    assert legacy.kind == "table B" and legacy.rotary.wrap == "limited"
+    assert legacy.rotary.b_min == -200.0 and legacy.kinematics.b_direction == -1
+    assert legacy.kinematics.table_center == (10.0, 0.0, -5.0)
+    chain_form = load_machine("fanuc-hmc").with_options(rotary_axes=[{
+        "direction": (0.0, -1.0, 0.0), "point": (10.0, 0.0, -5.0), "wrap": "limited",
+        "limits": (-200.0, 200.0)}])
+    b = np.linspace(-30, 150, 40)
+    tip = np.c_[50 * np.sin(np.radians(b)), np.zeros(40), 50 * np.cos(np.radians(b))]
+    moves = PostMoves.build(tip, b, feed=500.0, tool=1)
+    assert post_program(moves, legacy) == post_program(moves, chain_form)
