@@ -19,7 +19,13 @@ import numpy as np
 from checker.config import default_config
 from checker.errors import PathcheckError
 from postproc.dialects import get_dialect
-from postproc.kinematics import Chain, Choice, axis_from_rotation, rotation_from_axis
+from postproc.kinematics import (
+    PATH_SUBSTEPS,
+    Chain,
+    Choice,
+    axis_from_rotation,
+    rotation_from_axis,
+)
 from postproc.machine import Machine, load_machine
 from postproc.wrap import MAX_STEP, range_branches, rollover_words
 from postproc.writer import MM_PER_INCH, Rows, format_program, write_program
@@ -456,16 +462,10 @@ def _feed_words(rows: dict[str, np.ndarray], moves: PostMoves, machine: Machine)
     dturn = turn1 - turn0
     scale = 1.0 / MM_PER_INCH if machine.units == "inch" else 1.0
     max_rot = np.array([a.max_feed for a in machine.rotary_axes]).reshape(1, -1)
-    if tcp:  # the linear axes' own motion (the program carries tips)
-        xm0 = chain.inverse_position(chain.to_part(xyz0), turn0, tcp=False)
-        xm1 = chain.inverse_position(chain.to_part(xyz1), turn1, tcp=False)
-        dmachine = xm1 - xm0
-    else:
-        dmachine = dxyz
     limits = [
         length / moves.feed[rows["src"][i]],
         (np.abs(dturn) / max_rot).max(axis=1, initial=0.0),
-        np.linalg.norm(dmachine, axis=1) / machine.feeds.max_linear,
+        _linear_reach(chain, xyz0, xyz1, turn0, turn1, tcp) / machine.feeds.max_linear,
     ]
     g93 = machine.feeds.rotary_mode == "g93"
     distance = get_dialect(machine.dialect).feed_distance(dxyz * scale, dturn, tcp)
@@ -476,6 +476,26 @@ def _feed_words(rows: dict[str, np.ndarray], moves: PostMoves, machine: Machine)
         f = 1.0 / t if g93 else distance / t
     out[i] = np.where(t > 0, f, np.nan)
     return out
+
+
+def _linear_reach(chain: Chain, xyz0, xyz1, turn0, turn1, tcp: bool) -> np.ndarray:
+    """``(M,)`` the distance the linear axes would cover at their fastest: ``|dXYZ|`` without
+    tool-centre-point control (they run straight and uniformly); with it the machine X Y Z
+    follow a curve as the tip runs straight and the rotary axes turn, so the fastest of
+    PATH_SUBSTEPS pieces times their number (a block time ``t >= that / max_linear`` keeps every
+    piece within the machine's linear maximum)."""
+    if not tcp:
+        return np.linalg.norm(xyz1 - xyz0, axis=1)
+    steps = PATH_SUBSTEPS
+    fastest = np.zeros(len(xyz0))
+    prev = chain.inverse_position(chain.to_part(xyz0), turn0, tcp=False)
+    for s in range(1, steps + 1):  # a loop over sub-steps, each over all blocks
+        t = s / steps
+        here = chain.inverse_position(chain.to_part(xyz0 + t * (xyz1 - xyz0)),
+                                      turn0 + t * (turn1 - turn0), tcp=False)
+        fastest = np.maximum(fastest, np.linalg.norm(here - prev, axis=1))
+        prev = here
+    return fastest * steps
 
 
 def _spindle_block(rpm: float, code) -> str:

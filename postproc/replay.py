@@ -24,7 +24,8 @@ _LETTERS = "ABC"
 
 @dataclass(frozen=True)
 class PartMotions:
-    """Tool positions in the part frame, one row per block end (arcs: per chord end).
+    """Tool positions in the part frame, one row per block end (arcs: per chord end; blocks
+    turning a rotary axis: per step).
     ``tip (N,3)`` mm, ``axis (N,3)`` unit (tip -> spindle), ``b_deg (N,)`` the part rotation
     about +Y that gives the axis (DESIGN.md b; meaningful for 4-axis B tables), ``joints (N,k)``
     the machine's rotary positions (deg, continuous, ``names`` order), ``xyz (N,3)`` program
@@ -47,9 +48,26 @@ class PartMotions:
     tcp: np.ndarray | None = None
     minutes: np.ndarray | None = None
     feed_mode: np.ndarray | None = None
+    block: np.ndarray | None = None  # (N,) the motion row (block) each row belongs to
+    end: np.ndarray | None = None  # (N,) the row ends its block
 
     def __len__(self) -> int:
         return len(self.line)
+
+    def block_feed(self) -> np.ndarray:
+        """``(N,)`` the tip speed relative to the part averaged over each row's whole block
+        (path length / block time, mm/min; nan where unknown): the feed the program asked for,
+        where ``feed`` is the speed over each piece (it varies along a block that turns a rotary
+        axis without tool-centre-point control)."""
+        ok = np.isfinite(self.feed) & np.isfinite(self.minutes)
+        length = np.where(ok, self.feed * np.where(ok, self.minutes, 0.0), 0.0)
+        n = int(self.block.max()) + 1 if len(self.block) else 0
+        total_l = np.bincount(self.block, weights=length, minlength=n)
+        total_t = np.bincount(self.block, weights=np.where(ok, self.minutes, 0.0), minlength=n)
+        bad = np.bincount(self.block, weights=(~ok).astype(float), minlength=n) > 0
+        with np.errstate(invalid="ignore", divide="ignore"):
+            avg = np.where(bad | (total_t <= 0), np.nan, total_l / total_t)
+        return avg[self.block]
 
 
 def _rotary_words(moves: GcodeMoves, machine: Machine) -> np.ndarray:
@@ -94,10 +112,12 @@ def table_position(moves: GcodeMoves, machine: Machine) -> np.ndarray:
     return out
 
 
-def _chords(moves: GcodeMoves, turn: np.ndarray, tolerance: float):
-    """Block ends with arcs split into chords of sagitta <= tolerance (mm): end points ``(M,3)``,
-    rotary positions ``(M,k)``, the row each came from ``(M,)`` and the chord count of that
-    row."""
+def _chords(moves: GcodeMoves, turn: np.ndarray, tolerance: float, rotary_step: float):
+    """Block ends with arcs split into chords of sagitta <= tolerance (mm) and blocks that turn
+    a rotary axis split every ``rotary_step`` degrees (X Y Z and the words run linearly, as the
+    control moves them: the part-frame path between is the real, curved one): end points
+    ``(M,3)``, rotary positions ``(M,k)``, the row each came from ``(M,)`` and the piece count of
+    that row."""
     n = len(moves)
     start = np.vstack([moves.xyz[:1], moves.xyz[:-1]]) if n else moves.xyz
     arc = np.isin(moves.motion, (2, 3)) & np.isfinite(moves.center).all(axis=1)
@@ -120,11 +140,14 @@ def _chords(moves: GcodeMoves, turn: np.ndarray, tolerance: float):
     with np.errstate(invalid="ignore", divide="ignore"):
         step = 2 * np.arccos(np.clip(1 - tolerance / radius, -1.0, 1.0))
         count = np.where(arc, np.maximum(1, np.ceil(np.abs(sweep) / np.maximum(step, 1e-6))), 1)
-    count = np.minimum(count, 100000).astype(int)
+    prev_turn = np.vstack([turn[:1], turn[:-1]])
+    rot = np.nan_to_num(np.abs(turn - prev_turn)).max(axis=1, initial=0.0)
+    placed = np.isfinite(start).all(axis=1) & np.isfinite(moves.xyz).all(axis=1)
+    count = np.where(placed, np.maximum(count, np.ceil(rot / rotary_step - 1e-9)), count)
+    count = np.clip(count, 1, 100000).astype(int)
     src = np.repeat(rows, count)
     j = np.arange(src.size) - np.repeat(np.cumsum(count) - count, count) + 1
     t = j / count[src]
-    prev_turn = np.vstack([turn[:1], turn[:-1]])
     pts = start[src] + t[:, None] * (moves.xyz[src] - start[src])  # lines and the helix axis
     on_arc = arc[src]
     ang = a0[src] + t * sweep[src]
@@ -138,12 +161,15 @@ def _chords(moves: GcodeMoves, turn: np.ndarray, tolerance: float):
 
 
 def part_motions(
-    moves: GcodeMoves, machine: Machine, *, chord_tolerance: float = 0.01
+    moves: GcodeMoves, machine: Machine, *, chord_tolerance: float = 0.01,
+    rotary_step: float = 1.0,
 ) -> PartMotions:
-    """The program's tool positions in the part frame for ``machine`` (see PartMotions)."""
+    """The program's tool positions in the part frame for ``machine`` (see PartMotions): arcs in
+    chords of sagitta ``chord_tolerance`` mm, blocks turning a rotary axis in steps of at most
+    ``rotary_step`` degrees."""
     chain = Chain(machine)
     turn = table_position(moves, machine)
-    xyz, turns, src, count = _chords(moves, turn, chord_tolerance)
+    xyz, turns, src, count = _chords(moves, turn, chord_tolerance, rotary_step)
     n = len(moves)
     tcp = moves.tcp if moves.tcp is not None else np.zeros(n, bool)
     tool_axis = moves.tool_axis if moves.tool_axis is not None else np.full((n, 3), np.nan)
@@ -198,6 +224,8 @@ def part_motions(
         tcp=tcp_rows,
         minutes=np.where(ok, minutes, np.nan),
         feed_mode=mode,
+        block=src,
+        end=np.concatenate([src[1:] != src[:-1], [True]]) if len(src) else np.zeros(0, bool),
     )
 
 

@@ -75,24 +75,28 @@ def round_trip(moves: PostMoves, machine: Machine):
 
 
 def _check_feeds(moves, machine, read, idx, src):
-    """The tip speed read back is the programmed feed, except where an axis would pass its
-    maximum speed: there the slowest axis runs exactly at its maximum."""
+    """The tip speed read back (averaged over each block) is the programmed feed, except where
+    an axis would pass its maximum speed: no piece of any block drives an axis beyond its
+    maximum, and in the slowed blocks the fastest axis runs at (close to) its maximum."""
     from postproc.checks import machine_xyz
 
-    rows = ~moves.rapid[src] & np.isfinite(read.feed[idx])
+    feed = read.block_feed()
+    rows = ~moves.rapid[src] & np.isfinite(feed[idx])
     assert rows.sum() > len(moves) // 2
-    got, want = read.feed[idx][rows], moves.feed[src][rows]
+    got, want = feed[idx][rows], moves.feed[src][rows]
     assert (got <= want * (1 + 2e-3)).all()
     slow = got < want * (1 - 2e-3)
     assert slow.mean() < 0.5
-    if slow.any():  # the limiting axis is at its maximum there
-        k = idx[rows][slow]
-        minutes = read.minutes[k]
-        rot = np.abs(read.joints[k] - read.joints[k - 1]) / minutes[:, None]
-        rot /= np.array([a.max_feed for a in machine.rotary_axes])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rot = np.abs(np.diff(read.joints, axis=0, prepend=read.joints[:1])) / read.minutes[:, None]
+        rot = (rot / np.array([a.max_feed for a in machine.rotary_axes])).max(axis=1)
         xyz = machine_xyz(read, machine)
-        lin = np.linalg.norm(xyz[k] - xyz[k - 1], axis=1) / minutes / machine.feeds.max_linear
-        assert np.allclose(np.maximum(rot.max(axis=1), lin), 1.0, rtol=5e-3)
+        lin = np.linalg.norm(np.diff(xyz, axis=0, prepend=xyz[:1]), axis=1) / read.minutes
+        load = np.maximum(rot, lin / machine.feeds.max_linear)
+    cutting = ~read.rapid & np.isfinite(load)
+    assert load[cutting].max() < 1 + 5e-3  # no axis beyond its maximum, anywhere
+    for block in read.block[idx[rows][slow]]:
+        assert load[read.block == block].max() > 0.95
 
 
 @pytest.mark.parametrize("tcp", [False, True], ids=["no-tcp", "tcp"])
@@ -148,8 +152,9 @@ def test_four_axis_job_same_motion_on_vertical_a_and_horizontal_b():
     ia = np.array([end_a[k] for k in common])
     assert np.abs(read_b.tip[ib] - read_a.tip[ia]).max() < 2e-4
     assert np.abs(read_b.axis[ib] - read_a.axis[ia]).max() < 2e-6
-    ok = np.isfinite(read_b.feed[ib]) & np.isfinite(read_a.feed[ia])
-    assert np.allclose(read_b.feed[ib][ok], read_a.feed[ia][ok], rtol=2e-3)
+    fb, fa = read_b.block_feed()[ib], read_a.block_feed()[ia]
+    ok = np.isfinite(fb) & np.isfinite(fa)
+    assert ok.sum() > len(moves) // 2 and np.allclose(fb[ok], fa[ok], rtol=2e-3)
     # the table angle is the same turn: A on the vertical machine = B on the horizontal one
     wa = read_a.joints[ia, 0]
     wb = read_b.joints[ib, 0]
@@ -208,5 +213,7 @@ def test_rotary_only_feed_in_g94_tcp_is_degrees_per_minute():
     """LinuxCNC with TCP kinematics, a pure rotary block at F1000: 45 deg at 1000 deg/min."""
     text = "G21 G94\nM428\nG0 X10 Y0 Z0 A0 C0\nG1 A45 F1000\n"
     read = part_motions(read_gcode_text(text, "linuxcnc"), load_machine("linuxcnc-xyzac-trt"))
-    assert read.minutes[-1] == pytest.approx(45.0 / 1000.0)
+    last = read.block == read.block[-1]
+    assert last.sum() == 45  # one piece per degree
+    assert read.minutes[last].sum() == pytest.approx(45.0 / 1000.0)
     assert read.tcp.all()

@@ -66,7 +66,7 @@ def _tangency(machine, moves) -> float:
     """Mean |t . a| over feed moves that turn a rotary axis: t the direction of the tip path
     in the part frame, a the tool axis. Contouring with the tool normal to the surface keeps it
     near 0; a wrong rotation sense scatters it."""
-    pm = part_motions(moves, machine)
+    pm = part_motions(moves, machine, rotary_step=1e9)  # block ends only
     ok = pm.known & ~pm.rapid
     ok[1:] &= pm.known[:-1]
     d = pm.tip[1:] - pm.tip[:-1]
