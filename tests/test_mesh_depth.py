@@ -443,6 +443,21 @@ def test_allowable_in_a_corner():
         s = allowable_on_mesh(idx, parse_cutter(text), cc, nrm, Z, tol=1e-6, s_max=20.0)
         assert s[0] == pytest.approx(want, abs=2e-6) and s[0] <= want + 1e-6
         assert s[1] == np.inf
+    # a ball whose axis leans away from the wall: still the ball itself limits it, r = 10
+    away = np.array([-np.sin(0.4), 0.0, np.cos(0.4)])
+    s = allowable_on_mesh(idx, parse_cutter("CUTTER/10,5"), cc, nrm, away, tol=1e-6, s_max=20.0)
+    assert s[0] == pytest.approx(10.0, abs=2e-6)
+
+
+def test_read_only_inputs():
+    """Read-only and broadcast inputs are taken (copied, not compiled for once more)."""
+    v, t = floor(0.3)
+    idx = MeshIndex.build(v, t)
+    pc = tool_pieces(parse_cutter("CUTTER/10"), with_holder=False)
+    tips = np.zeros((4, 3))
+    tips.flags.writeable = False
+    res = pose_depths(idx, pc, tips, np.broadcast_to(Z, (4, 3)), reach=1.0)
+    assert np.allclose(res.depth, 0.3)
 
 
 # ---- (d) chordal deviation ----------------------------------------------------------------------

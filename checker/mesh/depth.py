@@ -5,32 +5,43 @@ Definitions (tool frame: tip at the origin, axis +z; r radial distance, h height
 P = K (+) rho B, K the solid of revolution of a convex half-profile polygon (`tool.py`). For a set
 S of triangles the signed value is `signed = -(signed distance between P and S)`: the penetration
 depth max over x in S of dist(x, boundary of P) when S meets P, else minus the clearance
-dist(S, P). Per triangle T:
-- dist(T, K) > 0: signed = rho - dist(T, K), the distance by GJK (the triangle's support is its
-  best vertex; K's is the best profile vertex swung towards the direction: for a direction
-  (dx, dy, dz), s = |(dx, dy)|, the vertex maximising s r_j + dz h_j, at (r_j dx/s, r_j dy/s,
-  h_j));
-- T meets K: signed = rho + t*, t* = sup{t : T meets K (-) tB}. The erosion of K by a ball is the
-  solid of revolution of the profile with each side that is not on the axis moved inwards by t:
-  K = {a_i r + b_i h <= c_i} with outer unit normals (a_i, b_i), a_i >= 0 (convex profile with an
-  edge on the axis), and a_i r(x) + b_i h(x) is 1-Lipschitz in x and grows at rate exactly 1 along
-  (a_i w, b_i) (w the radial direction), so a point's depth in K is min_i (c_i - a_i r - b_i h)
-  and K (-) tB = {a_i r + b_i h <= c_i - t}: the profile clipped by the moved sides (exact for any
-  convex profile, not only the pieces here). t* is bracketed: an intersection at t gives t* >= t,
-  a separation at t by a distance d gives t - d <= t* < t (K_t (+) dB lies in K_(t-d)); the
-  bracket is shrunk to EPS_T by that lower bound, secant steps on d(t) and bisection.
-  A degenerate core (a segment on the axis: the ball) has no interior: t* = 0.
-Both are exact up to GJK's tolerance (GJK_EPS) and the bracket (EPS_T), far below 1e-7 mm; the
-value reported is the upper end (never below the true depth by more than rounding).
+dist(S, P). Per triangle T: signed = rho - min over x in T of sd_K(x), sd_K the signed distance
+to the core K (negative inside: minus the distance to K's boundary). Where T misses K that is
+rho - dist(T, K); where T meets K it is rho + sup{t : T meets K (-) tB}, because a point's depth
+in K is its distance to K's boundary.
 
-Per pose the result is the maximum over the pieces and the triangles, found by branch and bound:
-the BVH gives the triangles near the piece (its axis segment's box grown by the piece's radius
-plus rho minus the best value so far, at most `reach` of clearance), each gets a cheap upper bound
+K in the profile plane: K = {a_i r + b_i h <= c_i} over the sides that are not on the axis
+(outer unit normals (a_i, b_i), a_i >= 0: a convex profile with an edge on the axis), and
+a_i r(x) + b_i h(x) is 1-Lipschitz in x and grows at rate exactly 1 along (a_i w, b_i) (w the
+radial direction), so a point's depth in K is min_i (c_i - a_i r - b_i h) and the erosion
+K (-) tB = {a_i r + b_i h <= c_i - t}: the profile clipped by the moved sides (exact for any
+convex profile). A degenerate core (a segment on the axis: the ball) has no interior: t* = 0.
+
+Two exact methods (`method=`):
+- "slice" (default, `_exact_slice`): sd_K(x) = sd2(r(x), h(x)), sd2 the signed distance in the
+  profile plane to the mirrored (convex) profile, convex and even in r, hence nondecreasing in
+  r >= 0. On the horizontal slice of T at height h the minimum is at the slice's point nearest
+  the axis, r = m(h), m convex, so phi(h) = sd2(m(h), h) is a convex function of one variable
+  whose minimum over T's heights is signed's complement: bracketed by tangent lines with
+  guaranteed subgradient intervals, to SLICE_EPS (1e-10 mm);
+- "gjk" (`_exact`): dist(T, K) by GJK (the triangle's support is its best vertex; K's is the best
+  profile vertex swung towards the direction: for a direction (dx, dy, dz), s = |(dx, dy)|, the
+  vertex maximising s r_j + dz h_j, at (r_j dx/s, r_j dy/s, h_j)), and t* bracketed with GJK on
+  the eroded cores (an intersection at t gives t* >= t; a separation by d at t gives
+  t - d <= t* < t since K_t (+) dB lies in K_(t-d)), shrunk by that lower bound, secant steps and
+  bisection to EPS_T. Near a contact with a curved rim GJK converges slowly and may not certify a
+  separation; it then keeps the upper end of its bracket: it can over-state a depth by ~1e-6 mm.
+  It is kept as an independent cross-check of the slice method (tests/test_mesh_depth.py).
+
+Per pose the result is the maximum over the pieces and the triangles, by branch and bound: the BVH
+gives the triangles near the piece (its axis segment's box grown by the piece's radius plus rho
+minus the best value so far, i.e. at most `reach` of clearance); each gets cheap upper bounds
 (the sides' constraints: rho + min_i (c_i - min over T of a_i r + b_i h), with min r over T the
-distance from the axis to T's shadow along it) and a lower bound (the exact value at its vertices
-and at its point nearest the axis), and the exact value is computed only for triangles whose
-upper bound beats the best so far, in order of that bound. An unbounded piece is clipped per pose
-at a height above the mesh's box that keeps every distance within `reach` and every depth.
+distance from the axis to T's shadow along it; and T's plane against K's support function) and
+the exact value is computed only for triangles whose bound beats the best value so far, in order
+of that bound (their vertices' and nearest-to-axis point's values are computed first, as a lower
+bound). An unbounded piece is clipped per pose at a height above the mesh's box that keeps every
+distance within `reach` and every depth.
 
 The depth is measured against the triangles (the mesh's surface), not the solid they enclose: a
 tool entirely inside a closed mesh reports its clearance to the surface.
@@ -1062,11 +1073,17 @@ def _poses(node_lo, node_hi, node_left, node_right, node_start, node_count, tv, 
     return out_d, out_piece, out_tri, out_pt, stats
 
 
+def _arr(a, dtype) -> np.ndarray:
+    """C-contiguous and writable (a read-only array would make numba compile the kernel once
+    more for that type)."""
+    return np.require(a, dtype=dtype, requirements=["C", "W"])
+
+
 def _as_n3(a, name: str, n: int | None = None) -> np.ndarray:
     a = np.asarray(a, dtype=np.float64)
     if a.ndim == 1 and a.shape == (3,) and n is not None:
         a = np.broadcast_to(a, (n, 3))
-    a = np.ascontiguousarray(a)
+    a = _arr(a, np.float64)
     if a.ndim != 2 or a.shape[1] != 3:
         raise ValueError(f"{name} must have shape (N, 3), got {a.shape}")
     if n is not None and len(a) != n:
@@ -1080,7 +1097,7 @@ def _unit(axes: np.ndarray) -> np.ndarray:
     n = np.linalg.norm(axes, axis=1)
     if (n <= 0.0).any():
         raise ValueError("axes must be non-zero")
-    return np.ascontiguousarray(axes / n[:, None])
+    return _arr(axes / n[:, None], np.float64)
 
 
 METHODS = {"slice": 0, "gjk": 1}
@@ -1116,11 +1133,10 @@ def pose_depths(mesh_index: MeshIndex, pieces: ToolPieces, tips: np.ndarray, axe
                           np.zeros((0, 3)))
     tool_ptr = np.array([0, len(pieces)], dtype=np.int64)
     pose_tool = np.zeros(n, dtype=np.int64)
-    d, pc, tr, pt, _ = _run(mesh_index, np.ascontiguousarray(pieces.prof, dtype=np.float64),
-                         np.ascontiguousarray(pieces.nprof, dtype=np.int64),
-                         np.ascontiguousarray(pieces.rho, dtype=np.float64),
-                         np.ascontiguousarray(pieces.kind, dtype=np.int64), tool_ptr, pose_tool,
-                         tips, axes, -reach, reach, method)
+    d, pc, tr, pt, _ = _run(mesh_index, _arr(pieces.prof, np.float64),
+                            _arr(pieces.nprof, np.int64), _arr(pieces.rho, np.float64),
+                            _arr(pieces.kind, np.int64), tool_ptr, pose_tool, tips, axes,
+                            -reach, reach, method)
     return PoseDepths(d, pc, tr, pt)
 
 
@@ -1158,14 +1174,14 @@ def body_depths(mesh_index: MeshIndex, cutter, sizes: np.ndarray, tips: np.ndarr
                 axes: np.ndarray, *, floor: float) -> np.ndarray:
     """(N,) signed depth of the body of `cutter.with_size(sizes[i])` at pose i, values at or
     below `floor` (mm) reported as `floor` (only triangles beating it are examined)."""
-    sizes = np.ascontiguousarray(sizes, dtype=np.float64)
+    sizes = _arr(sizes, np.float64)
     r, R = _family_radii(cutter, sizes)
     prof, nprof = body_profiles(r, R, float(cutter.psi), float(cutter.theta), body_top(cutter))
     n = len(sizes)
-    d, _, _, _, _ = _run(mesh_index, prof, nprof, np.ascontiguousarray(r),
-                      np.zeros(n, dtype=np.int64), np.arange(n + 1, dtype=np.int64),
-                      np.arange(n, dtype=np.int64), tips, axes, float(floor),
-                      max(0.0, -float(floor)))
+    d, _, _, _, _ = _run(mesh_index, prof, nprof, _arr(r, np.float64),
+                         np.zeros(n, dtype=np.int64), np.arange(n + 1, dtype=np.int64),
+                         np.arange(n, dtype=np.int64), _arr(tips, np.float64),
+                         _arr(axes, np.float64), float(floor), max(0.0, -float(floor)))
     return d
 
 
