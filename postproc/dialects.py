@@ -108,7 +108,8 @@ class Dialect:
     comment_open: str = "("  # "(": (text); ";": ; text
     nested_comments: bool = False
     block_end: str = ""  # " *" for Heidenhain ISO
-    keywords: bool = False  # Sinumerik identifiers: TRAORI, SUPA, MCALL CYCLE81(...)
+    keywords: frozenset[str] = frozenset()  # Sinumerik identifiers: TRAORI, SUPA, MCALL, CR=
+    # (CYCLEnn(...) calls are known too); any other identifier is an error
     parameter_letter: str = "#"  # MillPlus E parameters: "B=E254"
     inverse_time: bool = True
     home_codes: frozenset[str] = frozenset({"28", "30"})  # reference-point returns
@@ -309,7 +310,17 @@ SIEMENS = Dialect(
     tcp_off_block="TRAFOOF",
     length_offset="",  # D words with the tool change
     comment_open=";",
-    keywords=True,
+    keywords=frozenset({
+        "TRAORI", "TRAFOOF", "SUPA", "MCALL", "TRANS", "ATRANS", "ROT", "AROT", "SCALE",
+        "ASCALE", "MIRROR", "AMIRROR", "CR", "AP", "RP", "SOFT", "BRISK", "FFWON", "FFWOF",
+        "CFC", "CFTCP", "CFIN", "ORIWKS", "ORIMKS", "ORIAXES", "ORIVECT", "FGROUP", "FGREF",
+        "COMPCAD", "COMPCURV", "COMPON", "COMPOF", "UPATH", "SPATH", "MSG", "STOPRE", "SPOS",
+        "SPOSA", "DIAMOF", "TOFRAME", "TOROT", "TCARR", "TCOABS", "TCOFR", "PAROT", "PAROTOF",
+        "ADIS", "ADISPOS", "OFFN", "CUT3DC", "CUT3DF", "ORIC", "ORID", "ORIEULER",
+        "ORIRPY", "ORIVIRT1", "ORIVIRT2", "ORIPLANE", "ORICONCW", "ORICONCCW", "ORICONIO",
+        "ORICONTO", "ORICURVE", "ORIPATH", "ORIPATHS", "ORIROTA", "ORIROTR", "ORIROTT",
+        "ORIROTC", "FIFOCTRL", "WALIMON", "WALIMOF", "RET",
+    }),
     home_codes=frozenset({"74", "75"}),
     header=("G17 G40 G90", "G54"),
     footer=("M5", "M9", "M30"),

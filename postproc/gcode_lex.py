@@ -223,9 +223,10 @@ def lex_block(raw: str, dialect: Dialect, params: dict[str, float], *, path=None
     return block
 
 
+_CYCLE_CALL = re.compile(r"CYCLE[0-9]+")
 #: a Sinumerik identifier (two letters or more) with its ( ... ) arguments or its = value
 _KEYWORD = re.compile(
-    r"(?<![A-Z0-9_.])([A-Z_][A-Z_][A-Z0-9_]*)(\s*\([^)]*\)|\s*=\s*[-+]?(?:[0-9]*\.?[0-9]+|[0-9]+\.))?"
+    r"(?<![A-Z0-9_.])([A-Z_][A-Z_][A-Z0-9_]*)(\s*\([^)]*\)|\s*=\s*[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))?"
 )
 
 
@@ -233,6 +234,12 @@ def _keyword(match, out: list, params, dialect: Dialect, path, line) -> str:
     """Record a Sinumerik identifier (``TRAORI``, ``SUPA``, ``MCALL``, ``CYCLE81(...)``,
     ``CR=5``) with its arguments (empty ones NaN, text ones NaN) and cut it from the block."""
     name, tail = match.group(1), (match.group(2) or "").strip()
+    if name not in dialect.keywords and not _CYCLE_CALL.fullmatch(name):
+        raise PathcheckError(
+            f"{name} is not a word of the {dialect.name} dialect as read by pathcheck: "
+            "expected an address letter with a value, a CYCLEnn(...) call or one of "
+            f"{', '.join(sorted(dialect.keywords)[:12])}, ...",
+            path=path, line=line, code="gcode")
     args: list[float] = []
     if tail.startswith("("):
         inner = "".join(tail[1:-1].split())

@@ -101,6 +101,10 @@ def test_home_machine_frame_and_parameters():
         ("linuxcnc", "M#<nothing>\n", r"M word has no known value"),
         ("linuxcnc", "G1 X1 E2 F100\n", r"E is not a word of the linuxcnc dialect"),
         ("fanuc", "G0 X" + "9" * 400 + "\n", r"expected a number of reasonable size"),
+        ("siemens", "N10 G0 X1\nN20 TRAORIX\n", r":2: TRAORIX is not a word of the siemens"),
+        ("siemens", "N10 G70\nN20 G20 X1\n", r":2: G20 is not a G code of the siemens"),
+        ("millplus", "G7 A5=E1\n", r":1: G7 plane angles A5= B5= C5= must be known numbers"),
+        ("heidenhain", "N10 G93 X1 *\n", r"G93 is not a G code of the heidenhain"),
     ],
 )
 def test_bad_programs_name_file_line_and_expectation(dialect, text, message):
@@ -283,3 +287,48 @@ def part_motions_or_error(moves) -> None:
     for name in ("fanuc-hmc", "fanuc-trunnion-ac", "heidenhain-head-table-bc"):
         with contextlib.suppress(PathcheckError):
             part_motions(moves, load_machine(name))
+
+
+def test_siemens_words_traori_cycles_cr_and_units():
+    text = (
+        "N1 G00 G90 G70 G40\nN2 SUPA G00 Z-.1 D0\nN3 T5 M6\nN4 TRAORI\n"
+        "N5 G00 X1. Y0 Z2. B10. C20.\nN6 G02 X0 Y1. CR=1. F10\nN7 F.4\n"
+        "N8 MCALL CYCLE81(2.,1.,.1,-.5,)\nN9 X2. Y2.\nN10 MCALL\nN11 TRAFOOF\nN12 G0 X3.\n"
+    )
+    moves = read_gcode_text(text, "siemens", path="s.mpf")
+    assert moves.units == "inch" and moves.tool.max() == 5
+    assert moves.kind[0] == MACHINE_FRAME and np.isnan(moves.xyz[0, 2])
+    arc = np.flatnonzero(moves.motion == 2)[0]
+    assert np.allclose(moves.center[arc, :2], [25.4, 25.4])  # R 1 in, (1,0) -> (0,1) CW: short
+    hole = moves.xyz[moves.kind == CYCLE] / 25.4  # rapid over, R + SDIS, depth DP, back to RTP
+    assert np.allclose(hole[:, 2], [2.0, 1.1, -0.5, 2.0]) and np.allclose(hole[:, :2], 2.0)
+    assert moves.tcp[1:-1].all() and not moves.tcp[-1]
+    assert np.allclose(moves.abc[1, 1:], [10.0, 20.0])
+
+
+def test_millplus_datum_tilted_plane_and_cycle_call():
+    """G93 shifts the datum; G7 A5= B5= C5= tilts the plane (X, then Y, then Z): X Y Z in the
+    tilted frame, the tool along its Z; G8x defines a hole, G79 drills it at X Y Z."""
+    text = (
+        "%\nO0001 (P)\nN10 G71\nN20 G93 X10. Y20. Z30.\nN30 G0 X1. Y0 Z0\n"
+        "N40 G7 A5=0 B5=90. C5=0 L1=1\nN50 G0 X0 Y0 Z5.\nN60 G81 Y2. Z-4. B10. F100\n"
+        "N70 G79 X0 Y0 Z0\nN80 G7 A5=0 B5=0 C5=0 L1=1\nN90 G0 X0 Y0 Z0\n%\n"
+    )
+    moves = read_gcode_text(text, "millplus", path="p.pm")
+    assert np.allclose(moves.xyz[0], [11.0, 20.0, 30.0])
+    # B5=90: tilted X is work -Z, tilted Z is work +X: Z5 in the plane is 5 mm along work +X
+    assert np.allclose(moves.xyz[1], [15.0, 20.0, 30.0])
+    assert np.allclose(moves.tool_axis[1], [1.0, 0.0, 0.0]) and moves.tcp[1]
+    hole = moves.xyz[moves.kind == CYCLE][:, 0] - 10.0  # along the tilted Z = work X
+    assert np.allclose(hole, [10.0, 2.0, -4.0, 10.0])
+    assert np.allclose(moves.xyz[-1], [10.0, 20.0, 30.0]) and not moves.tcp[-1]
+    m = load_machine("dmc160u-millplus")
+    pm = part_motions(moves, m)
+    assert np.allclose(pm.axis[pm.line == moves.line[1]][-1], [1.0, 0.0, 0.0])
+
+
+def test_heidenhain_program_frame_and_tool_call():
+    text = "%P G70 *\nN10 T3 G17 S1000 *\nN20 G00 X1 Y2 Z3 *\nN30 M128 *\nN99999999 %P G70 *\n"
+    moves = read_gcode_text(text, "heidenhain", path="p.h")
+    assert moves.units == "inch" and moves.tool[0] == 3
+    assert np.allclose(moves.xyz[0], np.array([1, 2, 3]) * 25.4)
