@@ -39,8 +39,8 @@ minus the best value so far, i.e. at most `reach` of clearance); each gets cheap
 (the sides' constraints: rho + min_i (c_i - min over T of a_i r + b_i h), with min r over T the
 distance from the axis to T's shadow along it; and T's plane against K's support function) and
 the exact value is computed only for triangles whose bound beats the best value so far, in order
-of that bound (their vertices' and nearest-to-axis point's values are computed first, as a lower
-bound). An unbounded piece is clipped per pose at a height above the mesh's box that keeps every
+of that bound (the value at their point nearest the axis is computed first, as a lower bound).
+An unbounded piece is clipped per pose at a height above the mesh's box that keeps every
 distance within `reach` and every depth.
 
 The depth is measured against the triangles (the mesh's surface), not the solid they enclose: a
@@ -529,20 +529,11 @@ def _upper(T, cn, cc, nc, solid, rho, rmax, hlo, hhi, out):
 
 @nb.njit(cache=True)
 def _lower(T, P, m, cn, cc, nc, solid, rho, out):
-    """Lower bound (out[1]) of the signed value of triangle T: the exact value at its vertices and
-    at its point nearest the axis (out[3:6] on entry), that point (out[3:6])."""
-    best = -np.inf
+    """Lower bound (out[1]) of the signed value of triangle T: the exact value at its point
+    nearest the axis (out[3:6], from `_upper`; exact for a floor under a flat bottom)."""
     x0, y0, z0 = out[3], out[4], out[5]
-    for k in range(4):
-        if k < 3:
-            px, py, pz = T[k, 0], T[k, 1], T[k, 2]
-        else:
-            px, py, pz = x0, y0, z0
-        sd, _, _ = _sd(P, m, cn, cc, nc, solid, 0.0, math.sqrt(px * px + py * py), pz)
-        if rho - sd > best:
-            best = rho - sd
-            out[3], out[4], out[5] = px, py, pz
-    out[1] = min(best, out[0])
+    sd, _, _ = _sd(P, m, cn, cc, nc, solid, 0.0, math.sqrt(x0 * x0 + y0 * y0), z0)
+    out[1] = min(rho - sd, out[0])
 
 
 @nb.njit(cache=True)
