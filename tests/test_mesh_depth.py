@@ -267,23 +267,28 @@ def random_triangles(rng, n: int, zlo: float, zhi: float, xy: float) -> np.ndarr
     return c[:, None, :] + size[:, None, None] * e
 
 
+def piece_functions(cutter: Cutter, with_pieces: bool) -> list:
+    """-signed distance of each piece, tool-frame points -> values: the body's by
+    `Cutter.signed_distance` (bodies unbounded upwards), else `piece_sd` per piece."""
+    if not with_pieces:
+        return [lambda pts: -cutter.signed_distance(pts)]
+    pc = tool_pieces(cutter, with_holder=True)
+    return [lambda pts, q=q: -piece_sd(pc.prof[q, : pc.nprof[q]], pc.rho[q], pts)
+            for q in range(len(pc))]
+
+
 def brute(cutter: Cutter, tri: np.ndarray, grid: np.ndarray, with_pieces: bool) -> float:
+    """Max over the grid's samples of the tool's -signed distance."""
     pts = grid @ tri
-    if with_pieces:
-        pc = tool_pieces(cutter, with_holder=True)
-        sd = np.full(len(pts), np.inf)
-        for p in range(len(pc)):
-            sd = np.minimum(sd, piece_sd(pc.prof[p, : pc.nprof[p]], pc.rho[p], pts))
-    else:
-        sd = cutter.signed_distance(pts)
-    return float(np.max(-sd))
+    return float(max(np.max(f(pts)) for f in piece_functions(cutter, with_pieces)))
 
 
 @pytest.mark.parametrize("name", list(CUTTERS) + list(HOLDERS))
 def test_brute_force_random_triangles(name):
     """Per random triangle and pose: exact >= sampled max of -signed_distance - 1e-9, and within
     the sampling resolution (the grid step times the longest edge; -signed_distance is
-    1-Lipschitz). Poses: the tool frame mapped by a random rigid motion."""
+    1-Lipschitz); the reported point lies on the triangle and -signed_distance there is the
+    reported value within 1e-6. Poses: the tool frame mapped by a random rigid motion."""
     cutter = CUTTERS.get(name) or HOLDERS[name]
     with_pieces = name in HOLDERS
     rng = np.random.default_rng(zlib.crc32(name.encode()))
@@ -309,12 +314,20 @@ def test_brute_force_random_triangles(name):
         worst_over = max(worst_over, res.depth[0] - ref)
         inside += res.depth[0] >= max(cutter.r, 0.1) - 1e-9   # the core reached
         pos += res.depth[0] > 0
-        # the reported point is on the triangle and has (about) the reported value
+        # the reported point is on the triangle and has the reported value (so the depth is
+        # not overstated; the samples show it is not understated): the deepest piece's when
+        # cutting, the nearest piece's when clear
         p_tool = (res.point[0] - off) @ Q
-        sd = (piece_sd(pc.prof[res.piece[0]][: pc.nprof[res.piece[0]]], pc.rho[res.piece[0]],
-                       p_tool[None]) if res.depth[0] > 0 else None)
-        if sd is not None:
-            assert -sd[0] == pytest.approx(res.depth[0], abs=1e-6)
+        bary = np.linalg.lstsq(np.c_[tri[1] - tri[0], tri[2] - tri[0]], p_tool - tri[0],
+                               rcond=None)[0]
+        assert np.allclose(tri[0] + (tri[1:] - tri[0]).T @ bary, p_tool, atol=1e-9)
+        assert bary.min() >= -1e-9 and bary.sum() <= 1 + 1e-9
+        vals = [float(f(p_tool[None])[0]) for f in piece_functions(cutter, with_pieces)]
+        assert max(vals) == pytest.approx(res.depth[0], abs=1e-6), (k, vals, res.depth[0])
+        if res.depth[0] > 0:
+            assert vals[res.piece[0]] == pytest.approx(res.depth[0], abs=1e-6)
+        else:
+            assert res.piece[0] == -1
     assert inside >= 3, "some random triangles should reach the core (cut deeper than r)"
     assert pos >= 20 and n - pos >= 10, "penetrations and clearances both"
 
