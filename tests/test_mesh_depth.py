@@ -292,7 +292,7 @@ def test_brute_force_random_triangles(name):
     cutter = CUTTERS.get(name) or HOLDERS[name]
     with_pieces = name in HOLDERS
     rng = np.random.default_rng(zlib.crc32(name.encode()))
-    n, ngrid = 120, 48
+    n, ngrid = 80, 48
     grid = bary_grid(ngrid)
     zhi = 40.0 if with_pieces else 14.0
     xy = 14.0 if with_pieces else 8.0
@@ -329,7 +329,7 @@ def test_brute_force_random_triangles(name):
         else:
             assert res.piece[0] == -1
     assert inside >= 3, "some random triangles should reach the core (cut deeper than r)"
-    assert pos >= 20 and n - pos >= 10, "penetrations and clearances both"
+    assert pos >= 10 and n - pos >= 8, "penetrations and clearances both"
 
 
 # ---- (c) the BVH against every triangle -------------------------------------------------------
