@@ -33,6 +33,9 @@ class CheckConfig(_Section):
     gouge_neighbourhood: PositiveFloat = 2.0
     arc_chord_tolerance: PositiveFloat = 0.01
     depth_tolerance: float = Field(0.02, ge=0)
+    part_deviation: PositiveFloat = 0.002
+    reach: PositiveFloat = 1.0
+    misaligned_fraction: float = Field(0.5, gt=0, le=1)
 
 
 class FourAxisConfig(_Section):
@@ -45,11 +48,6 @@ class FourAxisConfig(_Section):
     dp_weight_original: float = Field(0.1, ge=0)
     max_db_per_mm: PositiveFloat = 5.0
     axis_j_tolerance: PositiveFloat = 1e-6
-
-
-class IntermediateConfig(_Section):
-    max_chord: PositiveFloat = 0.5
-    max_db: PositiveFloat = 1.0
 
 
 class ServiceConfig(_Section):
@@ -97,7 +95,6 @@ class Config(_Section):
     geometry: GeometryConfig = GeometryConfig()
     check: CheckConfig = CheckConfig()
     four_axis: FourAxisConfig = FourAxisConfig()
-    intermediate: IntermediateConfig = IntermediateConfig()
     service: ServiceConfig = ServiceConfig()
     store: StoreConfig = StoreConfig()
     engine: EngineConfig = EngineConfig()

@@ -1,7 +1,9 @@
-"""The results document of one checked job (versioned JSON): per point the CC point and normal,
-the allowable size, the limiting point and its surface, the verdict, the margin, and for 4-axis
-jobs the best B, the feasible B intervals and the B chosen; plus a job summary. The terminal
-summary, the service's `check` reply, the store and the report are all views of this document.
+"""The results document of one checked job (versioned JSON): per checked pose of the written
+program the real tool's verdict, depth and where it reaches; at cutting poses the contact, the
+allowable size and the margin (advice), and for 4-axis jobs the best B, the feasible B
+intervals and the B written; per operation what was done with it; a job summary whose `status`
+is the one answer. The terminal summary, the service's `check` reply, the store and the report
+are all views of this document.
 
 Units: mm and degrees in the part frame (inch jobs: see `job.units`, numbers stay in mm here and
 `job.units` says how the CL file was written)."""
@@ -12,10 +14,15 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-SCHEMA_VERSION = "1.0"
+from checker import verdict
 
-Verdict = Literal["ok", "gouge", "interference", "holder", "inaccessible"]
-VERDICTS: tuple[str, ...] = ("ok", "gouge", "interference", "holder", "inaccessible")
+SCHEMA_VERSION = "2.0"
+
+Verdict = Literal["ok", "within_tolerance", "gouge", "interference", "holder", "crash",
+                  "inaccessible"]
+VERDICTS: tuple[str, ...] = verdict.VERDICTS
+Piece = Literal["body", "shank", "holder"]
+PointKind = Literal["cl", "cycle", "move"]
 Vec3 = tuple[float, float, float]
 
 
@@ -24,45 +31,52 @@ class _Model(BaseModel):
 
 
 class PointResult(_Model):
-    """One checked pose: a CC point of the path, or an intermediate pose between two of them."""
+    """One checked pose of the program that is written: the tool at a CL record (`cl`), at a
+    pose a canned cycle adds (`cycle`), or at the deepest pose along the move that ends at a CL
+    record (`move`). The verdict is the real tool's (`checker.verdict`); the contact, the
+    allowable size, the margin and the B search are advice about cutting poses."""
 
     index: int = Field(description="position in `points`")
-    kind: Literal["cc", "intermediate"]
-    move: int = Field(description="index of the motion (GOTO) this pose is at or follows")
+    kind: PointKind
+    move: int = Field(description="index of the motion (GOTO) this pose is at or moves to")
     line: int | None = Field(None, description="line of that record in the CL file")
-    cc: Vec3 = Field(description="cutter-contact point, part frame, mm")
-    normal: Vec3 = Field(description="unit surface normal at cc, out of the material")
-    tip: Vec3 | None = Field(None, description="tool tip of the real cutter, part frame, mm")
-    axis: Vec3 | None = Field(None, description="tool axis (tip -> spindle), part frame")
-    surface: int | None = Field(None, description="id of the surface that carries cc")
+    op: int = Field(0, description="index of the operation")
+    rapid: bool = Field(False, description="reached at rapid (a touch is a crash)")
+    tip: Vec3 = Field(description="tool tip, part frame, mm")
+    axis: Vec3 = Field(description="tool axis (tip -> spindle), part frame")
+    t: float | None = Field(None, description="move poses: fraction of the move (0..1)")
+    b: float | None = Field(None, description="table angle B written for this pose, degrees")
+    verdict: Verdict
+    depth: float | None = Field(
+        None, description="penetration of the real tool into the part, mm (> 0: penetrates; < 0: "
+        "clearance, down to the reach checked)")
+    piece: Piece | None = Field(None, description="the part of the tool that reaches deepest")
+    tolerance: float | None = Field(
+        None, description="penetration allowed at this pose, mm: the operation's tolerance plus "
+        "the part's deviation near `point`")
+    point: Vec3 | None = Field(None, description="deepest (or nearest) point of the part, mm")
+    surface: int | None = Field(None, description="surface that carries `point` (NURBS parts)")
+    cc: Vec3 | None = Field(None, description="cutter-contact point (advice), part frame, mm")
+    normal: Vec3 | None = Field(None, description="unit surface normal at cc, out of the material")
+    cc_surface: int | None = None
     allowable: float | None = Field(
-        description="allowable size (R for flat/bull-nose/APT, r for ball/tapered ball), mm; "
-        "null = unbounded"
-    )
+        None, description="allowable size at cc (R for flat/bull-nose/APT, r for ball/tapered "
+        "ball), mm; null = unbounded or not computed")
     limiting_point: Vec3 | None = None
     limiting_surface: int | None = None
-    verdict: Verdict
     margin: float | None = Field(
-        None, description="allowable - real size, mm (negative: the real cutter is too large)"
-    )
-    depth: float | None = Field(
-        None, description="penetration of the real cutter into the part, mm (>0: gouge)"
-    )
+        None, description="allowable - real size, mm (advice: negative means a smaller cutter "
+        "would be needed to touch cc with this axis)")
     b_original: float | None = Field(None, description="B of the CAM's orientation, degrees")
     b_best: float | None = Field(None, description="B that maximises the allowable size, degrees")
     allowable_at_best: float | None = None
     b_feasible: list[tuple[float, float]] | None = Field(
-        None, description="intervals [lo, hi] of B, degrees, where the real cutter is safe"
-    )
-    b_chosen: float | None = Field(None, description="B written to the G-code, degrees")
-    verdict_chosen: Verdict | None = Field(
-        None, description="verdict of the real cutter at b_chosen (4-axis); `verdict` is at the "
-        "CAM's orientation"
-    )
-    margin_chosen: float | None = Field(None, description="allowable - real size at b_chosen, mm")
+        None, description="intervals [lo, hi] of B, degrees, where the real cutter is safe")
+    verdict_cam: Verdict | None = Field(
+        None, description="re-oriented operations: the verdict at the CAM's own orientation")
+    depth_cam: float | None = None
     holder_clearance: float | None = Field(
-        None, description="minimum stick-out that clears the holder, mm (holder verdicts)"
-    )
+        None, description="minimum stick-out that clears the holder, mm (holder verdicts)")
 
 
 class JobInfo(_Model):
@@ -71,31 +85,59 @@ class JobInfo(_Model):
     units: Literal["mm", "inch"]
     part: str | None = None
     part_hash: str | None = None
-    cutter: str = Field(description="the real cutter as an APT CUTTER/ statement")
+    part_transform: list[float] | None = Field(
+        None, description="3x4 matrix (row by row) applied to the part, when given")
+    cutter: str = Field(description="the first operation's cutter as an APT CUTTER/ statement")
     cutter_kind: str
     cutter_size: float = Field(description="real size in the allowable variable, mm")
+    cutters: list[str] = Field(default_factory=list, description="every operation's cutter")
     machine: str | None = None
     axis_class: str
 
 
 class VerdictCounts(_Model):
     ok: int = 0
+    within_tolerance: int = 0
     gouge: int = 0
     interference: int = 0
     holder: int = 0
+    crash: int = 0
     inaccessible: int = 0
+
+
+class OperationResult(_Model):
+    """What was done with one operation of the job."""
+
+    index: int
+    name: str
+    cutter: str
+    axis_class: str = Field(description="3-axis, indexed (one tilted axis), 4-axis-Y, multi-axis")
+    handling: Literal["as-programmed", "re-oriented", "cam-kept"] = Field(
+        description="re-oriented: the B planned here is written; cam-kept: re-orientation did not "
+        "remove the findings, the CAM's angles are written")
+    b_written: list[float] | None = Field(
+        None, description="[min, max] of B written for the operation, degrees")
+    tolerance: float = Field(description="penetration allowed, mm (the job's INTOL/THICK or the "
+                             "config, plus the arc chord error; the part's deviation near each "
+                             "pose adds to it)")
+    tolerance_source: str
+    counts: VerdictCounts
+    counts_cam: VerdictCounts | None = None
 
 
 class Finding(_Model):
     """One of the worst findings, for the summary."""
 
     index: int
-    kind: Literal["cc", "intermediate"] = "cc"
+    kind: PointKind = "cl"
     verdict: Verdict
     line: int | None
-    cc: Vec3
+    op: int = 0
+    tip: Vec3
+    point: Vec3 | None
     depth: float | None
-    margin: float | None
+    b: float | None = None
+    margin: float | None = None
 
 
 class Orientation(_Model):
@@ -108,30 +150,39 @@ class Orientation(_Model):
 
 
 class Summary(_Model):
+    status: Literal["ok", "findings"] = Field(
+        description="of the program that is written: 'findings' when any pose is a gouge, "
+        "interference, holder hit or crash (exit code 1); the store, the report, the service "
+        "and the post hook read this")
     points: int
-    cc_points: int
-    intermediate_points: int
-    counts: VerdictCounts
-    counts_chosen: VerdictCounts | None = Field(
-        None, description="4-axis: CC verdicts at the chosen B (the corrected program)"
-    )
+    cl_points: int = Field(description="poses at CL records")
+    move_points: int = Field(description="moves checked along their length (their deepest poses)")
+    poses_checked: int = Field(description="poses evaluated, along the moves included")
+    counts: VerdictCounts = Field(description="verdicts of the written program: its poses "
+                                  "(cl_points) and its moves (move_points)")
+    counts_cam: VerdictCounts | None = Field(
+        None, description="the same at the CAM's own orientations, when any operation is "
+        "re-oriented")
+    tolerance: float = Field(description="largest tolerance of the job's operations, mm")
+    part_deviation: float = Field(description="typical deviation of the part's triangles from its "
+                                  "surfaces, mm (a mesh: its chordal deviation, estimated); the "
+                                  "deviation near each pose's deepest point adds to its tolerance")
     worst_margin: float | None
     worst_depth: float | None
     largest_safe_cutter: float | None = Field(
-        None, description="smallest allowable size over the path, mm: the largest safe size"
-    )
+        None, description="smallest allowable size over the cutting poses, mm (advice)")
     largest_safe_standard_cutter: str | None = Field(
-        None, description="name of the largest tool-library cutter of the family that is safe"
-    )
+        None, description="name of the largest tool-library cutter of the family that is safe")
     worst: list[Finding] = Field(default_factory=list)
     time_s: float
 
 
 class ResultsDocument(_Model):
-    schema_version: Literal["1.0"] = SCHEMA_VERSION
+    schema_version: Literal["2.0"] = SCHEMA_VERSION
     tool: Literal["pathcheck"] = "pathcheck"
     job: JobInfo
     summary: Summary
+    operations: list[OperationResult] = Field(default_factory=list)
     orientation: Orientation | None = None
     points: list[PointResult]
     gcode: str | None = Field(None, description="path of the corrected G-code, when written")

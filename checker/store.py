@@ -73,6 +73,10 @@ MIGRATIONS: tuple[str, ...] = (
     ALTER TABLE jobs ADD COLUMN cutter_kind TEXT;
     CREATE INDEX jobs_path ON jobs (job_path, recorded_at);
     """,
+    """
+    ALTER TABLE jobs ADD COLUMN n_within_tolerance INTEGER;
+    ALTER TABLE jobs ADD COLUMN n_crash INTEGER;
+    """,
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 
@@ -102,6 +106,8 @@ class JobRow:
     n_interference: int | None
     n_holder: int | None
     n_inaccessible: int | None
+    n_within_tolerance: int | None
+    n_crash: int | None
     worst_margin: float | None
     worst_depth: float | None
     largest_safe_cutter: float | None
@@ -115,25 +121,28 @@ _ROW_COLUMNS = ", ".join(JobRow.__dataclass_fields__)
 
 
 def point_arrays(doc: ResultsDocument) -> dict[str, np.ndarray]:
-    """Per-point arrays of a document: cc (N,3) mm, allowable/depth/b_best/b_chosen (N,) with nan
-    for null, verdict (N,) int8 code into VERDICTS, surface (N,) int32 (-1 null), kind (N,) bool
-    (True for a CC point, False for an intermediate pose)."""
+    """Per-point arrays of a document: cc (N,3) mm (the contact, else the deepest point, else the
+    tip), allowable/depth/b_best/b_chosen (the B written) (N,) with nan for null, verdict (N,)
+    int8 code into VERDICTS, surface (N,) int32 (-1 null), kind (N,) bool (True for a pose at a
+    CL record, False for a cycle or move pose)."""
     pts = doc.points
 
     def col(name: str) -> np.ndarray:
         return np.array([getattr(p, name) for p in pts], dtype=float).reshape(len(pts))
 
     return {
-        "cc": np.array([p.cc for p in pts], dtype=float).reshape(len(pts), 3),
+        "cc": np.array([p.cc or p.point or p.tip for p in pts], dtype=float).reshape(len(pts), 3),
         "allowable": col("allowable"),
         "verdict": np.array([VERDICT_CODE[p.verdict] for p in pts], dtype=np.int8),
         "depth": col("depth"),
         "b_best": col("b_best"),
-        "b_chosen": col("b_chosen"),
+        "b_chosen": col("b"),
         "surface": np.array(
-            [-1 if p.surface is None else p.surface for p in pts], dtype=np.int32
+            [-1 if (p.cc_surface if p.cc_surface is not None else p.surface) is None
+             else (p.cc_surface if p.cc_surface is not None else p.surface) for p in pts],
+            dtype=np.int32
         ),
-        "kind": np.array([p.kind == "cc" for p in pts], dtype=bool),
+        "kind": np.array([p.kind == "cl" for p in pts], dtype=bool),
     }
 
 
@@ -149,8 +158,8 @@ def _unpack_arrays(blob: bytes) -> dict[str, np.ndarray]:
 
 
 def job_status(doc: ResultsDocument) -> JobStatus:
-    """'ok' when every point is ok, else 'findings'."""
-    return "ok" if doc.summary.counts.ok == doc.summary.points else "findings"
+    """The document's own status ('ok' or 'findings'; `checker.verdict.status`)."""
+    return doc.summary.status
 
 
 

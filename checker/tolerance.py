@@ -2,8 +2,9 @@
 job's own inside tolerance (APT `INTOL/t`, or `TOLER/t`), plus the stock it is told to cut
 below the part (a negative part-surface thickness `THICK/-s`: the CAM meant to go s into the
 part), else `check.depth_tolerance` from the config; plus what the geometry adds: the deviation
-of the part's triangles from the surface they stand for (a mesh's chordal deviation) and the
-chord error of arcs sampled into straight moves. mm."""
+of the part's triangles from the surface they stand for (a mesh's chordal deviation, near the
+deepest point: `checker.written` adds it per pose) and the chord error of arcs sampled into
+straight moves. mm."""
 
 from __future__ import annotations
 
@@ -19,7 +20,8 @@ _WORDS = frozenset({"INTOL", "TOLER", "THICK"})
 @dataclass(frozen=True)
 class Tolerances:
     """Per operation (K,): the tolerance in effect (mm) and where it comes from ("INTOL",
-    "config"); the part's deviation and the arc chord error included in it (mm)."""
+    "config"), the arc chord error included in it; the part's typical deviation (mm), which
+    is not included (the deviation near each pose's deepest point is)."""
 
     value: np.ndarray
     source: list[str]
@@ -51,7 +53,6 @@ def operation_tolerances(toolpath: ToolPath, default: float, part_deviation: flo
                 thick = value * scale
             else:
                 intol = abs(value) * scale
-        values.append((default if intol is None else intol) + max(-thick, 0.0)
-                      + part_deviation + arc_chord)
+        values.append((default if intol is None else intol) + max(-thick, 0.0) + arc_chord)
         sources.append("config" if intol is None else "INTOL")
     return Tolerances(np.asarray(values, dtype=float), sources, part_deviation, arc_chord)

@@ -205,3 +205,13 @@ def load_tool_library(path: str | Path | None = None) -> ToolLibrary:
         seen.add(spec.name)
         tools.append(spec.to_cutter())
     return ToolLibrary(tools, path)
+
+
+def largest_standard(cutter: Cutter, size: float | None) -> str | None:
+    """Name of the largest cutter of the shipped library in `cutter`'s family (same kind,
+    corner radius and taper) whose size is at most `size` mm; None when none fits."""
+    if size is None:
+        return None
+    r = None if cutter.kind in BALL_FAMILY else cutter.r
+    best = load_tool_library().largest_not_exceeding(cutter.kind, size, r, theta=cutter.theta)
+    return None if best is None else best.name

@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-VERDICTS: tuple[str, ...] = ("ok", "within_tolerance", "gouge", "interference", "holder",
-                             "crash", "inaccessible")
+# the order is the stores' per-point code (checker.store): new verdicts go at the end
+VERDICTS: tuple[str, ...] = ("ok", "gouge", "interference", "holder", "inaccessible",
+                             "within_tolerance", "crash")
 FINDINGS: tuple[str, ...] = ("gouge", "interference", "holder", "crash")
 BODY, SHANK, HOLDER = 0, 1, 2  # tool pieces, as `checker.mesh.tool` numbers them
 

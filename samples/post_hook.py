@@ -78,10 +78,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"post_hook: {err}", file=sys.stderr)
         return 2
     counts = summary["counts"]
-    findings = counts["gouge"] + counts["interference"] + counts["holder"]
-    print(f"{out}: {summary['points']} points, {counts['gouge']} gouge, "
-          f"{counts['interference']} interference, {counts['holder']} holder")
-    return 1 if findings else 0
+    print(f"{out}: {summary['status']}: {summary['points']} points, {counts['gouge']} gouge, "
+          f"{counts['interference']} interference, {counts['holder']} holder, "
+          f"{counts['crash']} crash")
+    return 1 if summary["status"] == "findings" else 0
 
 
 if __name__ == "__main__":

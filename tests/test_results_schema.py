@@ -26,15 +26,17 @@ def test_published_schema_is_up_to_date():
 
 
 def _document(verdict: str = "gouge") -> ResultsDocument:
-    point = PointResult(index=0, kind="cc", move=0, line=12, cc=(1.0, 2.0, 3.0),
-                        normal=(0.0, 0.0, 1.0), allowable=2.5, verdict=verdict, margin=-0.5,
-                        b_best=12.5, b_feasible=[(-10.0, 30.0)], b_chosen=0.0)
+    point = PointResult(index=0, kind="cl", move=0, line=12, tip=(1.0, 2.0, 6.0),
+                        axis=(0.0, 0.0, 1.0), verdict=verdict, depth=0.05, piece="body",
+                        point=(1.0, 2.0, 3.0), cc=(1.0, 2.0, 3.0), normal=(0.0, 0.0, 1.0),
+                        allowable=2.5, margin=-0.5, b_best=12.5, b_feasible=[(-10.0, 30.0)],
+                        b=0.0)
     return ResultsDocument(
         job=JobInfo(path="job.apt", dialect="apt", units="mm", cutter="CUTTER/6,3",
                     cutter_kind="ball", cutter_size=3.0, axis_class="4-axis-Y"),
-        summary=Summary(points=1, cc_points=1, intermediate_points=0,
-                        counts=VerdictCounts(gouge=1), worst_margin=-0.5, worst_depth=0.01,
-                        time_s=0.1),
+        summary=Summary(status="findings", points=1, cl_points=1, move_points=0,
+                        poses_checked=1, counts=VerdictCounts(gouge=1), tolerance=0.02,
+                        part_deviation=0.0, worst_margin=-0.5, worst_depth=0.05, time_s=0.1),
         points=[point],
     )
 

@@ -34,7 +34,9 @@ def test_round_trip_of_a_41x41_job(tmp_path, doc):
         assert row.status == "findings"  # the synthetic mould gouges
         c = doc.summary.counts
         assert (row.n_ok, row.n_gouge, row.n_interference) == (c.ok, c.gouge, c.interference)
-        assert row.n_ok + row.n_gouge + row.n_interference == 41 * 41 == row.points
+        assert row.n_within_tolerance == c.within_tolerance
+        assert (row.n_ok + row.n_gouge + row.n_interference + row.n_within_tolerance
+                == 41 * 41 == row.points)
         assert row.worst_depth == doc.summary.worst_depth
         assert row.worst_margin == doc.summary.worst_margin
         assert (row.part_hash, row.cutter, row.cutter_kind) == (
@@ -153,6 +155,8 @@ def test_cli_reports_a_corrupt_store_in_one_line(tmp_path, monkeypatch, capsys):
 
 
 def test_migration_from_version_1_keeps_rows(tmp_path, doc):
+    """A store of version 1 is migrated through 2 (per-point arrays) and 3 (the
+    within-tolerance and crash counts) and keeps its rows."""
     path = tmp_path / "old.sqlite"
     con = sqlite3.connect(path)
     con.executescript(MIGRATIONS[0])
@@ -164,9 +168,10 @@ def test_migration_from_version_1_keeps_rows(tmp_path, doc):
     con.commit()
     con.close()
     with ResultsStore(path) as store:
-        assert store.schema_version == SCHEMA_VERSION == 2
+        assert store.schema_version == SCHEMA_VERSION == 3
         (old,) = store.jobs()
-        assert (old.job_path, old.n_gouge, old.cutter_kind) == ("old.apt", 7, None)
+        assert (old.job_path, old.n_gouge, old.cutter_kind, old.n_crash) == ("old.apt", 7, None,
+                                                                      None)
         assert store.arrays(old.id) is None
         store.record_job(doc, elapsed_s=1.0)
         assert len(store.jobs()) == 2

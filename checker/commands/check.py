@@ -1,5 +1,6 @@
 """`pathcheck JOB.apt [--part PART] [--cutter "CUTTER/..."] [--json OUT] [-o JOB.nc]`: check a
-job; exit 0 when clean, 1 with findings (gouge, interference, holder), 2 on bad input."""
+job; exit 0 when clean, 1 with findings (gouge, interference, holder, crash) in the program
+that is written, 2 on bad input."""
 
 from __future__ import annotations
 
@@ -9,47 +10,60 @@ from pathlib import Path
 import click
 
 
+def _counts_line(c) -> str:
+    return (f"ok {c.ok}  within tolerance {c.within_tolerance}  gouge {c.gouge}  interference "
+            f"{c.interference}  holder {c.holder}  crash {c.crash}  inaccessible {c.inaccessible}")
+
+
 def summary_view(doc):
-    """Rich renderables of the results document: the job line, verdict counts, worst findings
-    (line, depth, location) and the largest safe cutter."""
+    """Rich renderables of the results document: the job line, per operation what was done and
+    its verdicts, the worst findings (line, depth, where, B) and the largest safe cutter (all
+    of the program that is written)."""
     from rich.table import Table
 
     s, j = doc.summary, doc.job
     var = "r" if j.cutter_kind in ("ball", "tapered_ball") else "R"
-    c = s.counts
-    head = (f"{j.path}: {s.cc_points} CC points, cutter {j.cutter} ({j.cutter_kind}, {var} = "
-            f"{j.cutter_size:g} mm), {j.axis_class}, {s.time_s:.2f} s\n"
-            f"ok {c.ok}  gouge {c.gouge}  interference {c.interference}  holder {c.holder}  "
-            f"inaccessible {c.inaccessible}")
-    safe = ("largest safe cutter: " + ("unbounded" if s.largest_safe_cutter is None
-                                       else f"{var} = {s.largest_safe_cutter:.4f} mm")
-            + f"; largest safe standard cutter: {s.largest_safe_standard_cutter or 'none'}")
-    if s.intermediate_points:
-        head += f"\n{s.intermediate_points} intermediate poses checked"
-    if s.counts_chosen is not None:
-        k = s.counts_chosen
-        head += (f"\nat the chosen B (corrected program, with its intermediate poses): ok {k.ok}"
-                 f"  gouge {k.gouge}  interference {k.interference}  holder {k.holder}  "
-                 f"inaccessible {k.inaccessible}")
+    head = (f"{j.path}: {s.cl_points} poses, {s.move_points} moves ({s.poses_checked} poses "
+            f"checked), {len(doc.operations)} operation(s), {j.axis_class}, tolerance up to "
+            f"{s.tolerance:.4f} mm (part deviation {s.part_deviation:.4f}), {s.time_s:.2f} s\n"
+            f"{'FINDINGS' if s.status == 'findings' else 'clean'}: {_counts_line(s.counts)}")
+    if s.counts_cam is not None:
+        head += f"\nat the CAM's own angles: {_counts_line(s.counts_cam)}"
     if doc.orientation is not None:
         o = doc.orientation
         head += (f"\nrotary motion: chosen {o.dp_total_rotation:.1f} deg (shortest path), "
                  f"greedy {o.greedy_total_rotation:.1f} deg, CAM {o.original_total_rotation:.1f}"
                  f" deg; {o.infeasible_points} points with no feasible B")
     if doc.gcode:
-        head += f"\ncorrected G-code: {doc.gcode}"
+        head += f"\nG-code written: {doc.gcode}"
     out = [head]
+    if len(doc.operations) > 1 or any(op.handling != "as-programmed" for op in doc.operations):
+        t = Table(title="operations")
+        for col in ("#", "cutter", "class", "written", "B (deg)", "tol (mm)", "findings"):
+            t.add_column(col)
+        for op in doc.operations:
+            c = op.counts
+            b = "-" if op.b_written is None else (
+                f"{op.b_written[0]:.3f}" if op.b_written[0] == op.b_written[1]
+                else f"{op.b_written[0]:.1f}..{op.b_written[1]:.1f}")
+            t.add_row(str(op.index + 1), op.cutter.removeprefix("CUTTER/"), op.axis_class,
+                      op.handling, b, f"{op.tolerance:.4f}",
+                      str(c.gouge + c.interference + c.holder + c.crash))
+        out.append(t)
     if s.worst:
         t = Table(title="worst findings")
-        for col in ("line", "pose", "verdict", "depth (mm)", "margin (mm)", "cc (mm)"):
+        for col in ("line", "pose", "verdict", "depth (mm)", "B", "where (mm)"):
             t.add_column(col)
         for f in s.worst:
-            pose = "CC" if f.kind == "cc" else "between"
-            t.add_row(str(f.line), pose, f.verdict, f"{f.depth or 0:.4f}",
-                      "-" if f.margin is None else f"{f.margin:.4f}",
-                      ", ".join(f"{x:.3f}" for x in f.cc))
+            where = f.point if f.point is not None else f.tip
+            t.add_row(str(f.line), "CL" if f.kind == "cl" else f.kind, f.verdict,
+                      f"{f.depth or 0:.4f}", "-" if f.b is None else f"{f.b:.3f}",
+                      ", ".join(f"{x:.3f}" for x in where))
         out.append(t)
-    out.append(safe)
+    out.append("largest safe cutter (advice): " + (
+        "unbounded" if s.largest_safe_cutter is None
+        else f"{var} = {s.largest_safe_cutter:.4f} mm")
+        + f"; largest safe standard cutter: {s.largest_safe_standard_cutter or 'none'}")
     return out
 
 
@@ -101,9 +115,12 @@ def record(doc, console) -> None:
 @click.option("--tool", "tool_name", default=None,
               help="the real cutter from the tool library, with its shank "
                    "and holder, e.g. BALL-D6")
+@click.option("--part-transform", default=None, metavar="RX,RY,RZ,DX,DY,DZ|3x4",
+              help="place a part exported in another frame: rotations about X, Y, Z (degrees) "
+                   "then an offset (mm), or a 3x4 matrix row by row")
 @click.option("--no-store", is_flag=True, help="do not record this check in the results store")
 def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine, b_range,
-          reorient, tool_name, no_store) -> None:
+          reorient, tool_name, part_transform, no_store) -> None:
     """Check JOB (APT-CL or NX CLSF) against its part: allowable cutter, verdict and margin at
     every CC point.
 
@@ -125,7 +142,7 @@ def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine
         cutter = load_tool_library()[tool_name]
     doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
                     output=gcode_out, machine=machine, b_range=parse_b_range(b_range),
-                    reorient=reorient)
+                    reorient=reorient, part_transform=part_transform)
     finish(doc, json_out, store=not no_store)
 
 
@@ -143,6 +160,5 @@ def finish(doc, json_out: Path | None, *, store: bool) -> None:
         write_file(json_out, doc.model_dump_json(indent=1), what="results JSON")
     if store:
         record(doc, console)
-    c = doc.summary.counts
-    if c.gouge + c.interference + c.holder:
+    if doc.summary.status == "findings":
         sys.exit(1)

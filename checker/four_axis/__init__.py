@@ -1,2 +1,2 @@
 """4-axis: best table angle B per CC point, feasible B intervals, orientation along the
-path, intermediate poses."""
+path (the plan of an operation; the real tool along what is written is `checker.verify`)."""

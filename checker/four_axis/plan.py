@@ -1,8 +1,7 @@
 """The 4-axis plan of a path: per CC point the allowable size as a function of the table angle B,
 the best B and the feasible B intervals for the real cutter; along the path the B chosen by the
-shortest path (and the seed-002 greedy smoothing beside it); and the checks of the real cutter at
-the chosen B: at every CC point, at the intermediate poses the machine passes through between
-them, and for the shank and holder. Part frame, mm, degrees.
+shortest path (and the seed-002 greedy smoothing beside it). The real tool along the program
+that is written is checked by `checker.verify`. Part frame, mm, degrees.
 """
 
 from __future__ import annotations
@@ -14,7 +13,6 @@ import numpy as np
 from checker.config import Config
 from checker.four_axis.axes import axis_for_b
 from checker.four_axis.best_b import BestB, best_b
-from checker.four_axis.holder import HolderCheck, check_holder
 from checker.four_axis.orientation import (
     Orientation,
     greedy_smoothing,
@@ -22,7 +20,6 @@ from checker.four_axis.orientation import (
     shortest_path_orientation,
     total_rotation,
 )
-from checker.four_axis.poses import Poses, intermediate_poses
 
 
 @dataclass(frozen=True)
@@ -100,43 +97,6 @@ def plan_orientations(
     return Orientations(b_original, best, chosen, greedy)
 
 
-@dataclass(frozen=True)
-class PoseCheck:
-    """The real cutter at intermediate poses: the poses, their contact points (`contacts`),
-    penetration depth (mm, >= 0), allowable size, verdict and margin."""
-
-    poses: Poses
-    contacts: object
-    depth: np.ndarray
-    size: np.ndarray
-    verdict: np.ndarray
-    margin: np.ndarray
-    limiting_point: np.ndarray
-    limiting_surface: np.ndarray
-
-
-def check_poses(test_points, part, cutter, tips, b_deg, segments, cfg: Config, center) -> PoseCheck:
-    """Poses between consecutive cutting blocks (`segments`: indices i of moves i -> i+1), the
-    real cutter checked at each: contact, penetration and allowable size."""
-    from checker.engine import allowable
-    from checker.geometry.contact import cl_to_cc
-
-    poses = intermediate_poses(tips, b_deg, center, max_chord=cfg.intermediate.max_chord,
-                               max_db=cfg.intermediate.max_db, moves=segments)
-    if len(poses.t) == 0:
-        empty = np.zeros(0)
-        return PoseCheck(poses, None, empty, empty, np.zeros(0, dtype=object), empty,
-                         np.zeros((0, 3)), np.zeros(0, dtype=np.int64))
-    con = cl_to_cc(part, test_points, cutter, poses.tip, poses.axis)
-    res = allowable(test_points, part, cutter, con.cc, con.normal, poses.axis,
-                    cc_surface=con.surface, cc_uv=con.uv, toward=poses.tip - con.cc, config=cfg)
-    depth = np.maximum(-con.gap, 0.0)
-    verdict = res.verdict.astype(object)
-    verdict[(depth > cfg.check.depth_tolerance) & (verdict != "interference")] = "gouge"
-    return PoseCheck(poses, con, depth, res.size, verdict, res.margin, res.limiting_point,
-                     res.limiting_surface)
-
-
 def holder_of(cutter) -> dict | None:
     """Shank/holder dimensions of a cutter for `check_holder`, None when it has no holder."""
     if not cutter.holder_diameter or not cutter.stickout:
@@ -146,11 +106,3 @@ def holder_of(cutter) -> dict | None:
                 shank_diameter=float(cutter.shank_diameter or cutter.d),
                 holder_diameter=float(cutter.holder_diameter),
                 holder_length=float(cutter.holder_length or 100.0))
-
-
-def holder_check(test_points, cutter, tips, axes) -> HolderCheck | None:
-    """Shank and holder at the given poses, or None when the cutter carries no holder data."""
-    spec = holder_of(cutter)
-    if spec is None:
-        return None
-    return check_holder(test_points.points, tips, axes, **spec)

@@ -25,19 +25,20 @@ import math
 import numpy as np
 
 
-def edge_sagittas(vertices: np.ndarray, triangles: np.ndarray,
-                  max_turn: float = math.radians(20.0)) -> np.ndarray:
-    """Sagitta estimate (mm) of every edge shared by exactly two triangles whose normals turn by
-    more than 1e-9 rad and less than `max_turn` (rad)."""
+def _curved_edges(vertices: np.ndarray, triangles: np.ndarray, max_turn: float):
+    """(sagitta (E,), first triangle (E,), second triangle (E,)) of the edges shared by exactly
+    two triangles whose normals turn by more than 1e-9 rad and less than `max_turn` (rad);
+    triangle indices into `triangles`."""
     v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
     t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     p0, p1, p2 = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
     cr = np.cross(p1 - p0, p2 - p0)
     area2 = np.linalg.norm(cr, axis=1)
-    keep = area2 > 0.0
+    keep = np.flatnonzero(area2 > 0.0)
     t, cr, area2 = t[keep], cr[keep], area2[keep]
     if len(t) < 2:
-        return np.zeros(0)
+        z = np.zeros(0, dtype=np.int64)
+        return np.zeros(0), z, z
     nrm = cr / area2[:, None]
     # directed edges a -> b of each triangle, keyed by the unordered pair
     a = t[:, [0, 1, 2]].ravel()
@@ -62,7 +63,30 @@ def edge_sagittas(vertices: np.ndarray, triangles: np.ndarray,
     elen = np.linalg.norm(v[hi[i1]] - v[lo[i1]], axis=1)
     width = 0.5 * (area2[t1] + area2[t2]) / elen       # the mean height over the edge
     curved = (theta > 1e-9) & (theta < max_turn)
-    return 0.5 * width[curved] * np.tan(0.25 * theta[curved])
+    sag = 0.5 * width[curved] * np.tan(0.25 * theta[curved])
+    return sag, keep[t1[curved]], keep[t2[curved]]
+
+
+def edge_sagittas(vertices: np.ndarray, triangles: np.ndarray,
+                  max_turn: float = math.radians(20.0)) -> np.ndarray:
+    """Sagitta estimate (mm) of every edge shared by exactly two triangles whose normals turn by
+    more than 1e-9 rad and less than `max_turn` (rad)."""
+    return _curved_edges(vertices, triangles, max_turn)[0]
+
+
+def triangle_deviations(vertices: np.ndarray, triangles: np.ndarray,
+                        max_turn: float = math.radians(20.0)) -> np.ndarray:
+    """(T,) mm: per triangle, the largest sagitta of the curved edges around its vertices (0
+    in a planar region): how far the surface it stands for may lie from it. Through the
+    vertices, a planar face's triangles along a tessellated curve (a boss's top at its wall)
+    get the curve's deviation too: a tool touching that rim touches the curve."""
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    sag, t1, t2 = _curved_edges(vertices, t, max_turn)
+    at_vertex = np.zeros(len(np.asarray(vertices).reshape(-1, 3)))
+    for tri in (t1, t2):
+        for k in range(3):
+            np.maximum.at(at_vertex, t[tri, k], sag)
+    return at_vertex[t].max(axis=1) if len(t) else np.zeros(0)
 
 
 def chordal_deviation(vertices: np.ndarray, triangles: np.ndarray,

@@ -38,7 +38,7 @@ PANEL_PX = (330, 270)  # width, height of one picture, pixels
 ALLOWABLE_RANGE = (0.5, 50.0)  # mm, the fixed colour scale so that jobs compare at a glance
 VERDICT_COLOURS = {
     "ok": "#c8c8c8", "gouge": "#d62728", "interference": "#ff7f0e", "holder": "#9467bd",
-    "inaccessible": "#000000",
+    "inaccessible": "#000000", "within_tolerance": "#8fbc8f", "crash": "#8b0000",
 }
 STANDARD_NONE = "#d62728"  # no standard cutter fits
 B_RANGES = (10.0, 30.0, 60.0, 90.0, 180.0)  # degrees: the fixed scales of the B panel

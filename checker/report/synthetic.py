@@ -2,7 +2,8 @@
 before real jobs exist: a raster path of n x n CC points over a wavy mould surface
 z = A sin(x/a) cos(y/b) (mm, part frame), ball cutter, allowable radius from the concave
 curvature (1/k where the surface is concave, unbounded where convex), 4-axis B values from the
-slope along x. Valleys tighter than the cutter are gouges; a wall at the far edge interferes."""
+slope along x. Valleys tighter than the cutter are gouged (a depth of 20 % of the excess, over
+the 0.02 mm tolerance: a gouge); a wall at the far edge interferes."""
 
 from __future__ import annotations
 
@@ -57,34 +58,41 @@ def synthetic_document(
     allowable = np.minimum(allowable, 80.0)
     margin = allowable - cutter_r
     bad = margin < -1e-3
-    verdict = np.where(bad, np.where(wall, "interference", "gouge"), "ok")
-    depth = np.where(bad, 0.02 * -margin, 0.0)
+    depth = np.where(bad, 0.2 * -margin, 0.0)
+    verdict = np.where(depth > 0.02, np.where(wall, "interference", "gouge"),
+                       np.where(bad, "within_tolerance", "ok"))
     b_best = np.degrees(np.arctan(-normal[:, 0] / normal[:, 2])) if four_axis else None
     if b_best is not None:
         b_chosen = np.convolve(np.pad(b_best, 7, mode="edge"), np.ones(15) / 15, "valid")
     points = [
         PointResult(
-            index=i, kind="cc", move=i, line=10 + i, cc=(x[i], y[i], z[i]),
-            normal=tuple(normal[i]), surface=int(x[i] > 50.0), allowable=float(allowable[i]),
+            index=i, kind="cl", move=i, line=10 + i, tip=(x[i], y[i], z[i]),
+            axis=(0.0, 0.0, 1.0), cc=(x[i], y[i], z[i]), normal=tuple(normal[i]),
+            cc_surface=int(x[i] > 50.0), surface=int(x[i] > 50.0), point=(x[i], y[i], z[i]),
+            piece="body", allowable=float(allowable[i]),
             limiting_point=(x[i] + 1.0, y[i], z[i]), limiting_surface=int(x[i] > 50.0),
             verdict=verdict[i], margin=float(margin[i]), depth=float(depth[i]),
             b_best=None if b_best is None else float(b_best[i]),
-            b_chosen=None if b_best is None else float(b_chosen[i]),
+            b=None if b_best is None else float(b_chosen[i]),
             b_feasible=None if b_best is None else [(float(b_best[i] - 20), float(b_best[i] + 20))],
         )
         for i in range(n * n)
     ]
-    counts = {v: int(np.sum(verdict == v)) for v in ("ok", "gouge", "interference")}
-    worst = np.argsort(margin)[:5]
+    counts = {v: int(np.sum(verdict == v))
+              for v in ("ok", "within_tolerance", "gouge", "interference")}
+    worst = np.argsort(-depth)[:5]
+    finding = np.isin(verdict, ("gouge", "interference"))
     summary = Summary(
-        points=n * n, cc_points=n * n, intermediate_points=0, counts=VerdictCounts(**counts),
+        status="findings" if finding.any() else "ok", points=n * n, cl_points=n * n,
+        move_points=n * n - 1, poses_checked=n * n, counts=VerdictCounts(**counts),
+        tolerance=0.02, part_deviation=0.0,
         worst_margin=float(margin.min()), worst_depth=float(depth.max()),
         largest_safe_cutter=float(allowable.min()),
         largest_safe_standard_cutter=None,
         worst=[
-            Finding(index=int(i), verdict=verdict[i], line=10 + int(i), cc=(x[i], y[i], z[i]),
-                    depth=float(depth[i]), margin=float(margin[i]))
-            for i in worst if bad[i]
+            Finding(index=int(i), verdict=verdict[i], line=10 + int(i), tip=(x[i], y[i], z[i]),
+                    point=(x[i], y[i], z[i]), depth=float(depth[i]), margin=float(margin[i]))
+            for i in worst if finding[i]
         ],
         time_s=1.0 + rng.random(),
     )

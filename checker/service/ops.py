@@ -111,7 +111,8 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
         try:
             doc = check_job(apt_path, part_path=part_path, cutter=req.cutter,
                             machine=req.machine, config=config, output=gcode_path,
-                            b_range=req.b_range, reorient=req.reorient)
+                            b_range=req.b_range, reorient=req.reorient,
+                            part_transform=req.part_transform)
         except PathcheckError as err:
             if req.apt is None or err.path != str(apt_path):
                 raise
@@ -126,7 +127,7 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
 
 
 INLINE_APT = "<apt>"
-OPTION_SECTIONS = ("geometry", "check", "four_axis", "intermediate", "engine")
+OPTION_SECTIONS = ("geometry", "check", "four_axis", "engine")
 
 
 def _with_options(config: Config, options: dict[str, Any]) -> Config:

@@ -112,6 +112,9 @@ class CheckRequest(_Request):
     options: dict[str, float | int | str | bool] = Field(default_factory=dict)
     b_range: tuple[float, float] | None = None
     reorient: bool = False
+    part_transform: str | None = Field(
+        None, max_length=400, description="'rx,ry,rz,dx,dy,dz' or a 3x4 matrix: the part's "
+        "placement in the CL frame (as `pathcheck --part-transform`)")
     post: bool = False
 
     @model_validator(mode="after")

@@ -1,0 +1,178 @@
+"""The real tool at the real pose: how deep the tool (the cutter's body, its shank and holder)
+goes into the part at every pose a job's moves pass through, and along every move, against the
+part's triangles (`geometry.tessellate`) with the exact tests of `checker.mesh`.
+
+Along a move the depth is bounded between checked poses. The depth is a signed distance
+between the tool and the part, so moving the tool changes it by at most the distance its points
+travel: over a stretch of a move on which the tool's points (those that can reach the part)
+travel at most L, with depths da and db at its ends, no pose is deeper than (da + db + L) / 2
+(the two cones from the ends meet there). Stretches whose bound is above the tolerance are
+halved and their middles checked, until every stretch is certified within the tolerance or
+the move's deepest pose is found to a fraction of it (`along_moves`). A move in the air is
+certified from its clearances in a few halvings; in contact, stretches of about twice the
+tolerance remain: the number of poses follows the length in contact with the part, never the
+length of a move. mm, part frame."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.four_axis.axes import axis_for_b, b_for_axis, rotate_about_y
+from checker.moves import START, Moves
+
+_MAX_ROUNDS = 60  # halvings at most (2^-60 of a move: far below any tolerance)
+_DEPTH_PRECISION = 0.1  # a move's deepest pose is found to this fraction of its depth
+
+
+@dataclass(frozen=True)
+class Depths:
+    """Per checked pose: `depth` mm (> 0: penetration; < 0: clearance, capped at the reach),
+    `piece` of the tool that reaches deepest (0 body, 1 shank, 2 holder; -1 clear), `point`
+    (3,) the deepest (or nearest) point of the part, `triangle` its triangle, `height` its
+    height above the tool tip along the axis (mm)."""
+
+    depth: np.ndarray
+    piece: np.ndarray
+    point: np.ndarray
+    triangle: np.ndarray
+    height: np.ndarray
+
+    @staticmethod
+    def empty(n: int) -> Depths:
+        return Depths(np.full(n, -np.inf), np.full(n, -1, dtype=np.int64),
+                      np.full((n, 3), np.nan), np.full(n, -1, dtype=np.int64), np.full(n, np.nan))
+
+    def put(self, rows: np.ndarray, other: Depths, idx: np.ndarray | slice = slice(None)) -> None:
+        """Rows `rows` of this one from rows `idx` of `other` (in place)."""
+        self.depth[rows] = other.depth[idx]
+        self.piece[rows] = other.piece[idx]
+        self.point[rows] = other.point[idx]
+        self.triangle[rows] = other.triangle[idx]
+        self.height[rows] = other.height[idx]
+
+
+class PoseProbe:
+    """Depths of poses of one tool against the part: `(tips (N, 3), axes (N, 3)) -> Depths`,
+    through `checker.mesh.pose_depths` with the tool's pieces, clearances capped at `reach`."""
+
+    def __init__(self, index, pieces, reach: float) -> None:
+        self.index, self.pieces, self.reach = index, pieces, float(reach)
+
+    def __call__(self, tips: np.ndarray, axes: np.ndarray) -> Depths:
+        from checker.mesh.depth import pose_depths
+
+        r = pose_depths(self.index, self.pieces, np.ascontiguousarray(tips, dtype=float),
+                        np.ascontiguousarray(axes, dtype=float), reach=self.reach)
+        height = np.einsum("ij,ij->i", r.point - tips, axes)
+        return Depths(np.asarray(r.depth, float), np.asarray(r.piece, np.int64),
+                      np.asarray(r.point, float), np.asarray(r.triangle, np.int64), height)
+
+
+@dataclass(frozen=True)
+class MoveDepths:
+    """Per move (ending at pose `end`): the deepest of its poses (`depths`, the end poses
+    excluded: they are checked as poses), `t` in (0, 1) where along the move, `tip` and `axis`
+    there, and how many poses were checked along it."""
+
+    end: np.ndarray
+    depths: Depths
+    t: np.ndarray
+    tip: np.ndarray
+    axis: np.ndarray
+    poses: np.ndarray
+
+
+def _pose_at(moves: Moves, end: np.ndarray, t: np.ndarray, b: np.ndarray | None,
+             center: np.ndarray):
+    """(tips, axes) at fraction t of the moves ending at `end`. With table angles `b` (per pose,
+    degrees) the machine moves linearly in X, Y, Z and B (the part turns about Y through
+    `center`); otherwise the tool translates with its axis turning linearly."""
+    a, e = end - 1, end
+    if b is None:
+        tip = moves.tip[a] + t[:, None] * (moves.tip[e] - moves.tip[a])
+        ax = moves.axis[a] + t[:, None] * (moves.axis[e] - moves.axis[a])
+        return tip, ax / np.linalg.norm(ax, axis=1)[:, None]
+    ma = rotate_about_y(moves.tip[a], b[a], center)
+    me = rotate_about_y(moves.tip[e], b[e], center)
+    bt = b[a] + t * (b[e] - b[a])
+    return rotate_about_y(ma + t[:, None] * (me - ma), -bt, center), axis_for_b(bt)
+
+
+def move_lengths(moves: Moves, end: np.ndarray, box: np.ndarray, b: np.ndarray | None = None,
+                 center: np.ndarray | None = None) -> np.ndarray:
+    """(M,) mm: how far any point of the tool that can touch the part (a point inside the
+    part's box `box (2, 3)`, grown by the reach) travels along each move, at most. The tool
+    translating and its axis turning by dθ: |Δtip| + dθ times the farthest such point from the
+    tip. The table turning by dB (machine-linear moves): |Δ machine tip| + dB times the
+    farthest point of the box from the table's axis (Y through `center`)."""
+    a = end - 1
+    corners = np.array([[box[i, 0], box[j, 1], box[k, 2]] for i in (0, 1) for j in (0, 1)
+                        for k in (0, 1)])
+    if b is None:
+        turn = np.arccos(np.clip(np.einsum("ij,ij->i", moves.axis[a], moves.axis[end]),
+                                 -1.0, 1.0))
+        far = np.linalg.norm(corners[None] - moves.tip[a][:, None], axis=2).max(axis=1)
+        return np.linalg.norm(moves.tip[end] - moves.tip[a], axis=1) + turn * far
+    c = np.zeros(3) if center is None else center
+    far = np.hypot(corners[:, 0] - c[0], corners[:, 2] - c[2]).max()
+    shift = (rotate_about_y(moves.tip[end], b[end], c) - rotate_about_y(moves.tip[a], b[a], c))
+    return np.linalg.norm(shift, axis=1) + np.radians(np.abs(b[end] - b[a])) * far
+
+
+def along_moves(probe: PoseProbe, moves: Moves, end: np.ndarray, end_depths: np.ndarray,
+                tolerance: np.ndarray, box: np.ndarray, b: np.ndarray | None = None,
+                center: np.ndarray | None = None, precision: float = 0.25) -> MoveDepths:
+    """The deepest pose along each move ending at poses `end` (see the module docstring):
+    `end_depths (P,)` the depths at all poses, `tolerance (M,)` mm. A stretch of a move between
+    two checked poses with depths da, db and length L (mm, `move_lengths`) cannot go deeper
+    than (da + db + L) / 2 (the depth changes by at most the distance moved); stretches whose
+    bound exceeds the tolerance, and the deepest depth found on the move by more than
+    `precision` times the tolerance and _DEPTH_PRECISION times that depth, are split at their
+    middle and checked again: a move is certified within the tolerance, or its deepest pose is
+    found to that precision."""
+    center = np.zeros(3) if center is None else np.asarray(center, float)
+    m = len(end)
+    best = Depths.empty(m)
+    t_best = np.full(m, np.nan)
+    tip_best, axis_best = np.full((m, 3), np.nan), np.full((m, 3), np.nan)
+    length = move_lengths(moves, end, box, b, center)
+    count = np.zeros(m, dtype=np.int64)
+    ends = np.maximum(end_depths[end - 1], end_depths[end])  # the deepest known at the ends
+    # the open stretches: move k, from t0 to t1 with depths d0, d1 there
+    k = np.flatnonzero(length > 0.0)
+    t0, t1 = np.zeros(len(k)), np.ones(len(k))
+    d0, d1 = end_depths[end[k] - 1], end_depths[end[k]]
+    for _ in range(_MAX_ROUNDS):
+        bound = 0.5 * (d0 + d1 + (t1 - t0) * length[k])
+        known = np.maximum(best.depth[k], ends[k])
+        slack = np.maximum(precision * tolerance[k], _DEPTH_PRECISION * known)
+        open_ = (bound > tolerance[k]) & (bound > known + slack)
+        k, t0, t1, d0, d1 = k[open_], t0[open_], t1[open_], d0[open_], d1[open_]
+        if k.size == 0:
+            break
+        tm = 0.5 * (t0 + t1)
+        tips, axes = _pose_at(moves, end[k], tm, b, center)
+        got = probe(tips, axes)
+        np.add.at(count, k, 1)
+        order = np.lexsort((-got.depth, k))  # per move its deepest new pose first
+        first = order[np.r_[True, k[order][1:] != k[order][:-1]]]
+        take = first[got.depth[first] > best.depth[k[first]]]
+        rows = k[take]
+        best.put(rows, got, take)
+        t_best[rows], tip_best[rows], axis_best[rows] = tm[take], tips[take], axes[take]
+        k = np.r_[k, k]
+        t0, t1 = np.r_[t0, tm], np.r_[tm, t1]
+        d0, d1 = np.r_[d0, got.depth], np.r_[got.depth, d1]
+    return MoveDepths(end, best, t_best, tip_best, axis_best, count)
+
+
+def moves_of(moves: Moves, poses: np.ndarray) -> np.ndarray:
+    """Of the poses `poses`, those a move reaches (not a START)."""
+    return poses[moves.kind[poses] != START]
+
+
+def table_angles(moves: Moves) -> np.ndarray:
+    """B (degrees) of every pose from its axis (4-axis about Y)."""
+    return b_for_axis(moves.axis)

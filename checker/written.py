@@ -1,0 +1,281 @@
+"""The program that is written, and the real tool along it.
+
+Per operation, by its axis class: 3-axis and indexed operations are written as programmed (an
+indexed operation keeps its one B). A 4-axis operation (or a 3-axis one asked to be
+re-oriented) gets a B per cutting pose from the allowable-cutter engine (`checker.four_axis`:
+best B, feasible intervals, shortest path), its other moves following the nearest cutting pose;
+that program is checked, and where it does not have fewer findings than the CAM's own angles,
+the CAM's are written instead: a corrected program is never worse. What is written is what is
+checked, verdicted and reported. Part frame, mm, degrees."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from checker import verdict as vd
+from checker.errors import PathcheckError
+from checker.four_axis.axes import b_for_axis, rotate_about_y
+from checker.moves import RAPID, START, Moves, machine_moves
+from checker.verify import Depths, MoveDepths, PoseProbe, along_moves
+
+
+@dataclass
+class Verified:
+    """The real tool along one version of the motions: the poses and moves (`moves`), the
+    depths at every pose and along every move (`along`, per move end), their verdicts and the
+    tolerance of each pose and move (the operation's plus the part's deviation near the deepest
+    point)."""
+
+    moves: Moves
+    poses: Depths
+    along: MoveDepths
+    pose_verdict: np.ndarray
+    move_verdict: np.ndarray
+    tolerance: np.ndarray
+    move_tolerance: np.ndarray
+
+    def findings(self, poses: np.ndarray) -> int:
+        """Findings at the poses `poses` and along the moves that reach them."""
+        at_move = np.isin(self.along.end, poses)
+        return int(vd.is_finding(self.pose_verdict[poses]).sum()
+                   + vd.is_finding(self.move_verdict[at_move]).sum())
+
+
+@dataclass
+class Plan:
+    """A planned (4-axis) operation: its cutting rows, contacts, orientations (best, chosen)
+    and what the planned program is."""
+
+    rows: np.ndarray
+    contacts: object
+    orientations: object
+    b_rows: np.ndarray
+    tip_rows: np.ndarray
+
+
+@dataclass
+class Program:
+    """The written program: per motion row its tip, axis and table angle B (nan: none), the
+    real tool along it (`written`), along the CAM's own motions (`cam`, when any operation was
+    re-oriented), per operation how it was handled, and the plans of planned operations."""
+
+    tip: np.ndarray
+    axis: np.ndarray
+    b: np.ndarray
+    written: Verified
+    cam: Verified | None
+    handling: dict[int, str]
+    plans: dict[int, Plan] = field(default_factory=dict)
+
+
+def verify(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray, cutters: dict, tol,
+           center: np.ndarray) -> Verified:
+    """The real tool at every pose of the motions (tips, axes per motion row) and along every
+    move; rows with a table angle `b` (not nan) move linearly in machine X Y Z B."""
+    from checker.mesh.tool import tool_pieces
+
+    cfg = job.cfg
+    moves = machine_moves(replace(job.m, tip=tip, axis=axis))
+    n = len(moves)
+    op_of = job.m.op[moves.row]
+    poses = Depths.empty(n)
+    tolerance = tol.value[op_of]
+    b_pose = b[moves.row]
+    v = job.triangles.vertices
+    box = np.array([v.min(axis=0), v.max(axis=0)]) + [[-cfg.check.reach], [cfg.check.reach]]
+    ends_all, along_parts = [], []
+    for o in np.unique(op_of):
+        c = cutters[int(o)]
+        probe = PoseProbe(job.index, tool_pieces(c, with_holder=True), cfg.check.reach)
+        P = np.flatnonzero(op_of == o)
+        poses.put(P, probe(moves.tip[P], moves.axis[P]))
+        ends = P[moves.kind[P] != START]
+        turning = np.isfinite(b_pose[ends]).all() and len(ends)
+        along_parts.append(along_moves(probe, moves, ends, poses.depth, tolerance[ends], box,
+                                       b_pose if turning else None, center))
+        ends_all.append(ends)
+    along = _concat_moves(along_parts, n)
+    near = _near(job, moves, cutters, poses.height)
+    rapid_pose = (moves.kind == RAPID) | ((moves.kind == START) & job.m.rapid[moves.row])
+    local = _local_deviation(job, poses.triangle)
+    pose_verdict = vd.decide(poses.depth, poses.piece, rapid_pose, near, tolerance + local)
+    move_near = _near(job, moves, cutters, along.depths.height, along.end)
+    move_tol = tolerance[along.end] + _local_deviation(job, along.depths.triangle)
+    move_verdict = vd.decide(along.depths.depth, along.depths.piece,
+                             moves.kind[along.end] == RAPID, move_near, move_tol)
+    return Verified(moves, poses, along, pose_verdict, move_verdict, tolerance + local, move_tol)
+
+
+def _local_deviation(job, triangle: np.ndarray) -> np.ndarray:
+    """The deviation of the part's triangles from its surfaces at the deepest triangles
+    (0 where there is none)."""
+    dev = job.triangles.deviation
+    return np.where(triangle >= 0, dev[np.maximum(triangle, 0)], 0.0)
+
+
+def _near(job, moves: Moves, cutters: dict, height: np.ndarray, at: np.ndarray | None = None):
+    """Whether the deepest point is on the cutting end of the cutter (within
+    `check.gouge_neighbourhood` radii of the tip): where a penetration is a gouge."""
+    at = np.arange(len(moves)) if at is None else at
+    op_of = job.m.op[moves.row[at]]
+    reach = np.array([job.cfg.check.gouge_neighbourhood * 0.5 * cutters[int(o)].d
+                      for o in op_of]) if len(at) else np.zeros(0)
+    return np.nan_to_num(height, nan=np.inf) <= reach
+
+
+def _concat_moves(parts: list[MoveDepths], n: int) -> MoveDepths:
+    """The moves of all operations in pose order."""
+    if not parts:
+        z = np.zeros(0, dtype=np.int64)
+        return MoveDepths(z, Depths.empty(0), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), z)
+    end = np.concatenate([p.end for p in parts])
+    order = np.argsort(end, kind="stable")
+    cat = lambda f: np.concatenate([f(p) for p in parts])[order]  # noqa: E731
+    d = Depths(cat(lambda p: p.depths.depth), cat(lambda p: p.depths.piece),
+               cat(lambda p: p.depths.point), cat(lambda p: p.depths.triangle),
+               cat(lambda p: p.depths.height))
+    return MoveDepths(end[order], d, cat(lambda p: p.t), cat(lambda p: p.tip),
+                      cat(lambda p: p.axis), cat(lambda p: p.poses))
+
+
+def check_frames(job, verified: Verified, cutters: dict) -> None:
+    """A part in another frame than its path: most cutting poses deep inside it. The depth
+    into the part's surface saturates at the cutter's inradius when a pose is buried (the
+    deepest point of the surface inside the cutter is at most a radius from its side), so deep
+    means more than half the cutter radius. One line with the boxes and their offset, instead
+    of a finding per pose."""
+    mv = verified.moves
+    cutting = np.flatnonzero((mv.kind != RAPID) & ~mv.hole & ~job.m.rapid[mv.row])
+    if len(cutting) < 10:
+        return
+    radius = np.array([0.5 * cutters[int(o)].d for o in job.m.op[mv.row[cutting]]])
+    deep = verified.poses.depth[cutting] > 0.5 * radius
+    share = float(deep.mean())
+    if share < job.cfg.check.misaligned_fraction:
+        return
+    path_box = np.array([mv.tip[cutting].min(axis=0), mv.tip[cutting].max(axis=0)])
+    part_box = np.array([job.triangles.vertices.min(axis=0), job.triangles.vertices.max(axis=0)])
+    off = path_box.mean(axis=0) - part_box.mean(axis=0)
+    fmt = lambda v: "(" + ", ".join(f"{x:.3f}" for x in v) + ")"  # noqa: E731
+    raise PathcheckError(
+        f"part and path do not line up: {share:.0%} of the cutting poses are deeper in the part "
+        f"than half the cutter radius; path box {fmt(path_box[0])}..{fmt(path_box[1])}, part box "
+        f"{fmt(part_box[0])}..{fmt(part_box[1])}, centres offset by {fmt(off)} mm: give "
+        f"--part-transform with the part's placement in the CL frame",
+        path=job.apt_path, code="frames")
+
+
+def cutting_rows(job, rows: np.ndarray) -> np.ndarray:
+    """Of the motion rows `rows`, the cutting ones: feed moves that are not canned-cycle
+    holes (the advice and the B planning are for them)."""
+    m = job.m
+    return rows[~m.rapid[rows] & ~m.cycle[rows]]
+
+
+def _plan(job, o: int, cutter, b_range, mach) -> Plan | None:
+    """The 4-axis plan of operation o (NURBS parts: the allowable-cutter engine), or None
+    where there is nothing to plan (no cutting rows, or a mesh part)."""
+    from checker.four_axis.job import plan_b
+    from checker.geometry.contact import cl_to_cc, contact_from_toolpath
+
+    m = job.m
+    rows = cutting_rows(job, np.flatnonzero(m.op == o))
+    if rows.size == 0 or not job.part.surfaces:
+        return None
+    samples = job.test_points()
+    given = contact_from_toolpath(job.toolpath, m.line[rows])
+    con = cl_to_cc(job.part, samples, cutter, m.tip[rows], m.axis[rows], contact=given)
+    orient, b_chosen, tips_chosen = plan_b(
+        test_points=samples, part=job.part, cutter=cutter, contacts=con, tips=m.tip[rows],
+        axes=m.axis[rows], lines=m.line[rows], b_range=b_range,
+        machine_limits=_limits(mach), path=str(job.apt_path), cfg=job.cfg)
+    op_rows = np.flatnonzero(m.op == o)
+    # every row of the operation follows its nearest cutting row, moved with it
+    k = np.clip(np.searchsorted(rows, op_rows), 0, len(rows) - 1)
+    prev = np.clip(k - 1, 0, len(rows) - 1)
+    k = np.where(np.abs(rows[prev] - op_rows) < np.abs(rows[k] - op_rows), prev, k)
+    b_old = b_for_axis(m.axis[rows[k]])
+    b_new = b_chosen[k]
+    tip = tips_chosen[k] + rotate_about_y(m.tip[op_rows] - m.tip[rows[k]], b_old - b_new,
+                                          np.zeros(3))
+    tip[np.searchsorted(op_rows, rows)] = tips_chosen
+    return Plan(rows, con, orient, b_new, tip)
+
+
+def _limits(mach) -> tuple[float, float]:
+    if mach is not None and mach.rotary.wrap == "limited":
+        return mach.rotary.b_min, mach.rotary.b_max
+    return -360.0, 360.0
+
+
+def _center(mach) -> np.ndarray:
+    return np.zeros(3) if mach is None else np.asarray(mach.kinematics.table_center, float)
+
+
+def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, mach) -> Program:
+    """The program to write and the real tool along it (see the module docstring)."""
+    from checker.four_axis.axes import axis_for_b
+
+    m = job.m
+    center = _center(mach)
+    j_ok = np.abs(m.axis[:, 1]) <= job.cfg.four_axis.axis_j_tolerance
+    b_cam = np.where(j_ok, b_for_axis(m.axis), np.nan)
+    turning = np.isin(m.op, [o for o, c in classes.items() if c == "4-axis-Y"])
+    b_move = np.where(turning, b_cam, np.nan)  # the CAM's 4-axis moves turn the table too
+    cam = verify(job, m.tip, m.axis, b_move, cutters, tol, center)
+    check_frames(job, cam, cutters)
+    handling = {o: "as-programmed" for o in classes}
+    plans = {}
+    for o in sorted(planned):
+        p = _plan(job, o, cutters[o], b_range, mach)
+        if p is not None:
+            plans[o] = p
+    if not plans:
+        return Program(m.tip, m.axis, b_cam, cam, None, handling)
+    tip, axis, b = m.tip.copy(), m.axis.copy(), b_cam.copy()
+    b_turn = b_move.copy()
+    for o, p in plans.items():
+        op_rows = np.flatnonzero(m.op == o)
+        tip[op_rows], b[op_rows], b_turn[op_rows] = p.tip_rows, p.b_rows, p.b_rows
+        axis[op_rows] = axis_for_b(p.b_rows)
+    new = verify(job, tip, axis, b_turn, cutters, tol, center)
+    for o in plans:
+        mine_new = np.flatnonzero(job.m.op[new.moves.row] == o)
+        mine_cam = np.flatnonzero(job.m.op[cam.moves.row] == o)
+        planned_n, cam_n = new.findings(mine_new), cam.findings(mine_cam)
+        if planned_n < cam_n or planned_n == cam_n == 0:
+            handling[o] = "re-oriented"
+            continue
+        handling[o] = "cam-kept"
+        op_rows = np.flatnonzero(m.op == o)
+        tip[op_rows], axis[op_rows], b[op_rows] = m.tip[op_rows], m.axis[op_rows], b_cam[op_rows]
+        b_turn[op_rows] = b_move[op_rows]
+    if all(h != "re-oriented" for h in handling.values()):
+        return Program(m.tip, m.axis, b_cam, cam, None, handling, plans)
+    if any(h == "cam-kept" for h in handling.values()):
+        new = verify(job, tip, axis, b_turn, cutters, tol, center)
+    return Program(tip, axis, b, new, cam, handling, plans)
+
+
+def post(job, program: Program, output, mach):
+    """Write the program (`postproc.post.post_toolpath`), findings as comments; a multi-axis
+    program cannot be posted for a B-table machine."""
+    from postproc.post import post_toolpath
+
+    if np.isnan(program.b).any():
+        bad = int(job.m.line[np.flatnonzero(np.isnan(program.b))[0]])
+        raise PathcheckError("cannot post a multi-axis path for a 4-axis machine: expected tool "
+                             "axes perpendicular to Y (j = 0)", path=job.apt_path, line=bad,
+                             code="not-4-axis")
+    w = program.written
+    comments = [""] * len(job.m)
+    bad = np.flatnonzero(vd.is_finding(w.pose_verdict))
+    for i in bad[::-1]:
+        row = int(w.moves.row[i])
+        comments[row] = (f"PATHCHECK {str(w.pose_verdict[i]).upper()} CL LINE "
+                         f"{int(job.m.line[row])} DEPTH {w.poses.depth[i]:.4f}")
+    return post_toolpath(job.toolpath, output, machine=None if mach is None else mach.name,
+                         b_deg=program.b, comments=comments,
+                         arc_chord_tol=job.cfg.check.arc_chord_tolerance, tip=program.tip)
