@@ -80,8 +80,8 @@ def compare(job: str, **check_options) -> Comparison:
     return Comparison(
         job=job, seconds=seconds, oracle_seconds=oracle_seconds, compared=len(covered),
         both=int(both.sum()),
-        oracle_only=[(covered[i].line, covered[i].kind, float(oracle[i]), covered[i].verdict)
-                     for i in np.flatnonzero(deep & ~flagged)],
+        oracle_only=[(covered[i].line, covered[i].kind, float(oracle[i]), covered[i].verdict,
+                      covered[i].tolerance) for i in np.flatnonzero(deep & ~flagged)],
         pathcheck_only=[(covered[i].line, covered[i].kind, float(oracle[i]), float(ours[i]))
                         for i in np.flatnonzero(shallow & flagged)],
         max_depth_difference=float(np.abs(oracle - ours)[pen].max()) if pen.any() else 0.0,

@@ -105,6 +105,8 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
     n_rows = len(cc)
     normals = _unit(_rows3(normals, n_rows, "normals"), "normals")
     axes = _unit(_rows3(axes, n_rows, "axes"), "axes")
+    if part.mesh is not None:
+        return _on_mesh(part, cutter, cc, normals, axes, cfg)
     tw = None if toward is None else _rows3(toward, n_rows, "toward")
     tp = test_points
     if cc_surface is None:
@@ -148,6 +150,39 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
                        cfg.check.gouge_neighbourhood * 0.5 * float(cutter.d))
     size[faces_away] = 0.0
     return AllowableResult(size, lim_p, lim_s, lim_uv, verdict, size - real, evals)
+
+
+_MESH_INDEX: dict[str, object] = {}
+
+
+def _on_mesh(part: Part, cutter, cc: np.ndarray, normals: np.ndarray, axes: np.ndarray,
+             cfg: Config) -> AllowableResult:
+    """A mesh part: the allowable size by the exact triangle tests (`mesh.allowable_on_mesh`,
+    bisection on the size, up to the part's diagonal: larger is unbounded); no limiting point
+    (the bisection gives none); verdicts by the same rule as on surfaces, every limit counted
+    on the CC point's own surface (a mesh has no surfaces to tell them apart)."""
+    from checker.mesh import MeshIndex
+    from checker.mesh.depth import allowable_on_mesh
+
+    m = part.mesh
+    index = _MESH_INDEX.get(part.content_hash)
+    if index is None:
+        _MESH_INDEX.clear()  # one mesh kept: the service's part cache keeps the others
+        index = _MESH_INDEX[part.content_hash] = MeshIndex.build(m.vertices, m.triangles)
+    n = len(cc)
+    faces_away = np.einsum("ij,ij->i", normals, axes) <= 1e-12
+    size = np.zeros(n)
+    cap = min(cfg.engine.max_size, float(np.linalg.norm(np.ptp(m.vertices, axis=0))))
+    ok = ~faces_away
+    if ok.any():
+        size[ok] = allowable_on_mesh(index, cutter, cc[ok], normals[ok], axes[ok],
+                                     tol=max(cfg.check.tolerance, 1e-6), s_max=cap)
+    nowhere = np.full((n, 3), np.nan)
+    verdict = verdicts(size, float(cutter.size), cfg.check.tolerance, faces_away,
+                       np.ones(n, bool), np.zeros(n), 0.0)
+    return AllowableResult(size, nowhere, np.full(n, -1, dtype=np.int64),
+                           np.full((n, 2), np.nan), verdict, size - float(cutter.size),
+                           np.zeros(n, dtype=np.int64))
 
 
 def _snap(tp: TestPoints, part: Part, cc: np.ndarray, normals: np.ndarray):

@@ -54,7 +54,7 @@ def sample_part(
     if hit is not None:
         return hit
     if part.mesh is not None:
-        pts, nrm, sid, uv, spc = _sample_mesh(part.mesh, cfg.max_spacing)
+        pts, nrm, sid, uv, spc = _sample_mesh(part.mesh)
     else:
         chunks = [_sample_surface(s, sag, cfg) for s in part.surfaces]
         pts, nrm, sid, uv, spc = (np.concatenate([c[i] for c in chunks]) for i in range(5))
@@ -172,34 +172,18 @@ def _boundary(s: Surface, step: float):
     return ev.points, ev.normals, uv
 
 
-def _sample_mesh(mesh: MeshPart, max_spacing: float):
-    """Mesh vertices (area-weighted normals) and a barycentric lattice on every triangle fine
-    enough for `max_spacing` (triangle normals)."""
+def _sample_mesh(mesh: MeshPart):
+    """A mesh part's test points: its vertices with area-weighted normals (the exact checks on
+    meshes use the triangles themselves, `checker.mesh`; memory stays in O(triangles)).
+    `spacing` is the longest edge at each vertex."""
     V, T, N = mesh.vertices, mesh.triangles, mesh.normals
     tri = V[T]
     edges = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
-    k = np.maximum(np.ceil(edges / max_spacing), 1).astype(np.int64)
     area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
     vn = np.zeros_like(V)
     np.add.at(vn, T.ravel(), np.repeat(N * area[:, None], 3, axis=0))
     vn /= np.maximum(np.linalg.norm(vn, axis=1), 1e-300)[:, None]
-    vspc = np.zeros(len(V))
-    np.maximum.at(vspc, T.ravel(), np.repeat(edges / k, 3))
-    pts, nrm, spc = [V], [vn], [vspc]
-    for kk in np.unique(k):  # one pass per subdivision level (a handful), vectorised inside
-        sel = np.flatnonzero(k == kk)
-        i, j = np.meshgrid(np.arange(kk + 1), np.arange(kk + 1), indexing="ij")
-        lat = np.column_stack([i.ravel(), j.ravel()])
-        lat = lat[(lat.sum(axis=1) <= kk)]
-        corner = (lat.max(axis=1) == kk) | (lat.sum(axis=1) == 0)
-        lat = lat[~corner] / kk
-        if lat.size == 0:
-            continue
-        b = np.column_stack([1.0 - lat.sum(axis=1), lat])  # (L, 3) barycentric
-        p = np.einsum("lc,tcx->tlx", b, tri[sel]).reshape(-1, 3)
-        pts.append(p)
-        nrm.append(np.repeat(N[sel], len(b), axis=0))
-        spc.append(np.repeat(edges[sel] / kk, len(b)))
-    pts, nrm, spc = np.concatenate(pts), np.concatenate(nrm), np.concatenate(spc)
-    m = len(pts)
-    return pts, nrm, np.full(m, -1, dtype=np.int32), np.full((m, 2), np.nan), spc
+    spc = np.zeros(len(V))
+    np.maximum.at(spc, T.ravel(), np.repeat(edges, 3))
+    m = len(V)
+    return V, vn, np.full(m, -1, dtype=np.int32), np.full((m, 2), np.nan), spc
