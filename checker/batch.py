@@ -11,6 +11,7 @@ import traceback
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
+from multiprocessing import get_context
 from pathlib import Path
 
 from checker.errors import PathcheckError
@@ -90,7 +91,9 @@ def _local(paths: list[str], workers: int, job_function: str) -> Iterator[JobOut
     if workers <= 1:
         yield from (run_one(p, job_function) for p in paths)
         return
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    # spawned, not forked: a fork of a process whose compiled kernels already started their
+    # thread pool leaves the child's pool broken (its first parallel kernel fails)
+    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
         futures = {pool.submit(run_one, p, job_function): p for p in paths}
         for future in as_completed(futures):
             yield _outcome(future, futures[future], "worker process")

@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from checker.cutter_core import Core
+from checker.cutter_core import signed_distance as core_signed_distance
 from checker.errors import PathcheckError
 
 KINDS = ("flat", "ball", "bullnose", "apt", "tapered_ball")
@@ -83,6 +85,44 @@ class Cutter:
     def size(self) -> float:
         """The allowable variable: R for flat, bull-nose and APT; r for ball and tapered ball."""
         return self.r if self.kind in BALL_FAMILY else self.R
+
+    @property
+    def ball_family(self) -> bool:
+        """Ball and tapered ball: the allowable variable is the ball radius r."""
+        return self.kind in BALL_FAMILY
+
+    @property
+    def size_symbol(self) -> str:
+        """'r' (ball family) or 'R' (flat, bull-nose, APT): the allowable variable's name."""
+        return "r" if self.ball_family else "R"
+
+    @property
+    def flat_bottomed(self) -> bool:
+        """Whether the cutter has a flat bottom (a bottom plane below which it cuts nothing)."""
+        return not self.ball_family and self.psi == 0.0
+
+    @property
+    def flat_end(self) -> bool:
+        """A flat end-mill: flat bottom, sharp corner."""
+        return self.flat_bottomed and self.r == 0.0
+
+    @property
+    def family_corner(self) -> float | None:
+        """The corner radius that names the cutter's family in a tool library; None for the
+        ball family (there r is the size)."""
+        return None if self.ball_family else self.r
+
+    @property
+    def core(self) -> Core:
+        """The cutter's solid as a core grown by a ball of radius r (`checker.cutter_core`)."""
+        return Core(float(self.r), float(self.R), float(self.psi), float(self.theta))
+
+    def radii(self, sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(r, R) (N,) of the cutters of this family with the allowable sizes `sizes` (mm)."""
+        s = np.asarray(sizes, dtype=float)
+        if self.ball_family:
+            return s.copy(), np.zeros_like(s)
+        return np.full_like(s, float(self.r)), s.copy()
 
     @property
     def family(self) -> int:
@@ -164,12 +204,15 @@ class Cutter:
         )
 
     def tip_from_contact(
-        self, cc: np.ndarray, n: np.ndarray, axis: np.ndarray, e: np.ndarray | None = None
+        self, cc: np.ndarray, n: np.ndarray, axis: np.ndarray, e: np.ndarray | None = None,
+        sizes: np.ndarray | None = None,
     ) -> np.ndarray:
-        """(N,3) tool tip (part frame, mm) of this cutter touching cc with unit normal n at tool
-        axis `axis` (N,3 or 3). Fillet contact: tip = cc + r n + R e - (R tan psi + r sec psi) a;
-        tip contact (psi > 0, n.a > cos psi): tip = cc; normal along the axis: e from `e` (N,3),
-        else the axis passes through cc (tip = cc: cc at the centre of the flat bottom)."""
+        """(N,3) tool tip (part frame, mm) of this cutter (or, row by row, of the cutter of its
+        family with allowable size `sizes[i]`) touching cc with unit normal n at tool axis
+        `axis` (N,3 or 3). Fillet contact: tip = cc + r n + R e - (R tan psi + r sec psi) a;
+        tip contact (psi > 0, n.a > cos psi): tip = cc; normal along the axis: e from `e`
+        (N,3), else the axis passes through cc (tip = cc: cc at the centre of the flat
+        bottom)."""
         cc, n = _as_k3(cc, "cc"), _as_k3(n, "n")
         a = np.broadcast_to(np.asarray(axis, dtype=float), cc.shape)
         a = a / np.linalg.norm(a, axis=1, keepdims=True)
@@ -185,7 +228,12 @@ class Cutter:
             en = np.linalg.norm(eg, axis=1)
             use = vertical & (en > _kernels().EPS_H)
             ev[use] = eg[use] / en[use, None]
-        tip = cc + self.r * n + self.R * ev - self.f * a
+        if sizes is None:
+            r, R = np.full(len(cc), float(self.r)), np.full(len(cc), float(self.R))
+        else:
+            r, R = self.radii(np.broadcast_to(np.asarray(sizes, dtype=float), (len(cc),)))
+        f = R * math.tan(self.psi) + r / math.cos(self.psi)
+        tip = cc + r[:, None] * n + R[:, None] * ev - f[:, None] * a
         if self.psi > 0.0:
             tipc = na > math.cos(self.psi)
             tip[tipc] = cc[tipc]
@@ -212,26 +260,20 @@ class Cutter:
 
     def signed_distance(self, pts: np.ndarray) -> np.ndarray:
         """(N,) signed distance (mm) from tool-frame points (tip at origin, axis +z) to the
-        cutter solid (flutes up to H; unbounded above when H = 0): negative inside."""
+        cutter solid (flutes up to H; unbounded above when H = 0): negative inside. The solid
+        is the core grown by r (`checker.cutter_core`), cut at H by a plane."""
         pts = _as_k3(pts, "pts")
+        n = len(pts)
+        d = core_signed_distance(self.core, pts, np.zeros((n, 3)), np.tile([0.0, 0.0, 1.0], (n, 1)))
+        if self.H <= 0.0:
+            return d
+        above = pts[:, 2] - self.H  # > 0 above the top plane
         rho = np.hypot(pts[:, 0], pts[:, 1])
-        z = pts[:, 2]
-        R = 0.0 if self.kind in BALL_FAMILY else self.R
-        r, psi, th = self.r, self.psi, self.theta
-        zo = self.f
-        c = np.array([R + r * math.sin(psi), zo - r * math.cos(psi)])
-        b = np.array([R + r * math.cos(th), zo - r * math.sin(th)])
-        top = self.H if self.H > 0.0 else max(1e6, 10.0 * (zo + R + r))
-        a = np.array([b[0] + (top - b[1]) * math.tan(th), top])
-        q = np.stack([rho, z], axis=1)
-        dist = np.minimum(_seg_dist(q, np.zeros(2), c), _seg_dist(q, b, a))
-        if self.H > 0.0:
-            dist = np.minimum(dist, _seg_dist(q, a, np.array([0.0, top])))
-        if r > 0.0:
-            dist = np.minimum(dist, _arc_dist(q, np.array([R, zo]), r, -(math.pi / 2 - psi), -th))
-        prof = self.profile_radius(z)
-        inside = (z >= 0.0) & (rho <= prof) & (z <= top)
-        return np.where(inside, -dist, dist)
+        rim = self.profile_radius(np.full(n, self.H))
+        over = (above > 0.0) & (rho > rim)  # beyond the top's rim: distance to the rim circle
+        out = np.maximum(d, above)
+        out[over] = np.hypot(above[over], rho[over] - rim[over])
+        return out
 
 
 @lru_cache(maxsize=256)
@@ -239,26 +281,6 @@ def _params(r: float, psi: float, theta: float, tol: float) -> np.ndarray:
     out = _kernels().params(r, psi, theta, tol)
     out.flags.writeable = False
     return out
-
-
-def _seg_dist(q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distance from 2D points q (N,2) to the segment a-b."""
-    ab = b - a
-    L2 = float(ab @ ab)
-    t = np.clip(((q - a) @ ab) / L2, 0.0, 1.0) if L2 > 0 else np.zeros(len(q))
-    return np.linalg.norm(q - (a + t[:, None] * ab), axis=1)
-
-
-def _arc_dist(q: np.ndarray, o: np.ndarray, r: float, a0: float, a1: float) -> np.ndarray:
-    """Distance from 2D points q (N,2) to the arc of radius r about o between angles a0 < a1."""
-    v = q - o
-    ang = np.arctan2(v[:, 1], v[:, 0])
-    on = (ang >= a0) & (ang <= a1)
-    d_arc = np.abs(np.hypot(v[:, 0], v[:, 1]) - r)
-    e0 = o + r * np.array([math.cos(a0), math.sin(a0)])
-    e1 = o + r * np.array([math.cos(a1), math.sin(a1)])
-    d_end = np.minimum(np.linalg.norm(q - e0, axis=1), np.linalg.norm(q - e1, axis=1))
-    return np.where(on, d_arc, d_end)
 
 
 def _as_k3(a: np.ndarray, name: str) -> np.ndarray:

@@ -212,6 +212,6 @@ def largest_standard(cutter: Cutter, size: float | None) -> str | None:
     corner radius and taper) whose size is at most `size` mm; None when none fits."""
     if size is None:
         return None
-    r = None if cutter.kind in BALL_FAMILY else cutter.r
+    r = cutter.family_corner
     best = load_tool_library().largest_not_exceeding(cutter.kind, size, r, theta=cutter.theta)
     return None if best is None else best.name

@@ -20,8 +20,8 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from checker.cutter import Cutter, cutter_from_apt  # noqa: E402
+from checker.cutter_core import Core, signed_distance  # noqa: E402
 from checker.geometry import load_part  # noqa: E402
-from checker.geometry.contact import Core, signed_distance  # noqa: E402
 from checker.geometry.evaluate import evaluate  # noqa: E402
 from checker.part import Part  # noqa: E402
 from checker.resources import resource  # noqa: E402
@@ -410,7 +410,7 @@ def main() -> None:
     copy_warmup_job()
     for name, res in (("compressor", comp), ("mould", mould)):
         pts = dense_points(res["part"])
-        core = Core.of(res["cutter"])
+        core = res["cutter"].core
         for ps in res["passes"]:
             c = clearance(pts, core, ps.tips, ps.axes, 60.0)
             print(f"{name}: {len(ps.tips)} CL points, GOTO {res['goto']}, clearance min "

@@ -12,14 +12,9 @@ from geomdl import NURBS, exchange, multi
 from checker.apt import read_cl
 from checker.apt.read import read_cl_text
 from checker.cutter import cutter_from_apt
+from checker.cutter_core import Core, project_to_core, signed_distance
 from checker.geometry import load_part
-from checker.geometry.contact import (
-    Core,
-    cl_to_cc,
-    contact_from_toolpath,
-    project_to_core,
-    signed_distance,
-)
+from checker.geometry.contact import cl_to_cc, contact_from_toolpath
 from checker.geometry.evaluate import evaluate
 from checker.geometry.sampling import sample_part
 
@@ -163,7 +158,7 @@ def test_deep_penetration(sphere, values, push):
     t = np.linspace(0, 1, 500)
     U, V = np.meshgrid(t, np.linspace(0.02, 0.98, 500))
     dense = evaluate(part.surfaces[0], U.ravel(), V.ravel()).points
-    core = Core.of(cutter)
+    core = cutter.core
     for i in range(10):
         tip = np.broadcast_to(tips[i], dense.shape)
         brute = signed_distance(core, dense, tip, np.broadcast_to(axes[i], dense.shape)).min()
@@ -190,7 +185,7 @@ def test_signed_distance_matches_cutter_model():
     for values in ([6.0, 3.0], [10.0, 2.0], [8.0], TAPERED):
         cutter = cutter_from_apt(values)
         pts = rng.uniform([-12, -12, -4], [12, 12, 20], (4000, 3))
-        core = Core.of(cutter)
+        core = cutter.core
         ours = signed_distance(core, pts, np.zeros_like(pts), np.tile([0, 0, 1.0], (len(pts), 1)))
         theirs = cutter.signed_distance(pts)
         keep = theirs > -cutter.r

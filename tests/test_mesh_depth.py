@@ -12,7 +12,6 @@ import pytest
 
 from checker.cutter import Cutter, diameter_from, parse_cutter
 from checker.mesh import MeshIndex, allowable_on_mesh, chordal_deviation, pose_depths, tool_pieces
-from checker.mesh.depth import tips_from_contact
 from checker.mesh.tool import UNBOUNDED
 
 Z = np.array([0.0, 0.0, 1.0])
@@ -424,7 +423,9 @@ def test_tool_pieces():
 # ---- allowable size ---------------------------------------------------------------------------
 
 
-def test_tips_from_contact_rowwise():
+def test_tip_from_contact_with_rowwise_sizes():
+    """`Cutter.tip_from_contact(..., sizes=)` (the allowable search's tips) row by row equals
+    the tip of `with_size(s)`."""
     rng = np.random.default_rng(3)
     n = 40
     cc = rng.normal(size=(n, 3))
@@ -435,7 +436,7 @@ def test_tips_from_contact_rowwise():
     axes = np.tile(Z, (n, 1))
     s = rng.uniform(0.5, 5, n)
     for c in list(CUTTERS.values()):
-        got = tips_from_contact(c, s, cc, nrm, axes)
+        got = c.tip_from_contact(cc, nrm, axes, sizes=s)
         want = np.array([c.with_size(s[i]).tip_from_contact(cc[i:i + 1], nrm[i:i + 1], Z)[0]
                          for i in range(n)])
         assert np.allclose(got, want, atol=1e-12)

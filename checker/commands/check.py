@@ -21,8 +21,10 @@ def summary_view(doc):
     of the program that is written)."""
     from rich.table import Table
 
+    from checker.cutter import parse_cutter
+
     s, j = doc.summary, doc.job
-    var = "r" if j.cutter_kind in ("ball", "tapered_ball") else "R"
+    var = parse_cutter(j.cutter).size_symbol
     head = (f"{j.path}: {s.cl_points} poses, {s.move_points} moves ({s.poses_checked} poses "
             f"checked), {len(doc.operations)} operation(s), {j.axis_class}, tolerance up to "
             f"{s.tolerance:.4f} mm (part deviation {s.part_deviation:.4f}), {s.time_s:.2f} s\n"

@@ -47,7 +47,7 @@ def map_command(part_path, cutter_text, grid_text, tools_path, out_dir) -> None:
     cutter = parse_cutter(cutter_text)
     grid = parse_grid(grid_text)
     lib = load_tool_library(tools_path)
-    r = None if cutter.kind in ("ball", "tapered_ball") else cutter.r
+    r = cutter.family_corner
     tools = lib.family(cutter.kind, r, theta=cutter.theta)
     part = load_part(part_path)
     if not part.surfaces:

@@ -8,7 +8,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.config import Config, default_config
-from checker.cutter import BALL_FAMILY
 from checker.engine import limits
 from checker.engine.bins import binned_scan, part_tops
 from checker.engine.family import family_bounds
@@ -228,7 +227,7 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     slack = 0.5 * spacing + cfg.geometry.sag_tolerance
     s0 = max(float(cutter.size), 4.0 * spacing, 1e-3)
     s_start = np.where(np.isfinite(s_ub), s_ub, s0)
-    flat = cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0
+    flat = cutter.flat_bottomed
     cross = (_CONTOUR_SEEDS, 0.5 * spacing) if flat and part.surfaces else None
     # s_start can be far above the minimum (a convex spot); a small first trial finds the same
     # answer from fewer candidates (scan: `first`). Contour crossings need the full disc.

@@ -38,7 +38,7 @@ def allowable_document(res: AllowableResult, cc: np.ndarray, normals: np.ndarray
     ]
     return {
         "cutter": {"apt": cutter.to_apt(), "kind": cutter.kind, "size": float(cutter.size),
-                   "variable": "r" if cutter.kind in ("ball", "tapered_ball") else "R"},
+                   "variable": cutter.size_symbol},
         "method": method,
         "points": points,
         "timing": {k: round(v, 6) for k, v in timing.items()},

@@ -20,8 +20,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.cutter import BALL_FAMILY
-
 
 @dataclass
 class FamilyBounds:
@@ -77,7 +75,7 @@ class FamilyBounds:
 
 def is_ball_family(cutter) -> bool:
     """True when the allowable variable is the ball radius r (ball, tapered ball)."""
-    return cutter.kind in BALL_FAMILY
+    return cutter.ball_family
 
 
 def cutter_length(cutter) -> float:

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.cutter import BALL_FAMILY
 from checker.engine.frames import rotate_rows
 from checker.engine.sizes import RowFrame
 from checker.geometry.evaluate import evaluate_mixed
@@ -26,7 +25,7 @@ from checker.part import Part
 
 def applies(cutter) -> bool:
     """True for the cutters whose bottom plane passes through the CC point (flat, r = 0)."""
-    return cutter.kind not in BALL_FAMILY and float(cutter.r) == 0.0 and float(cutter.psi) == 0.0
+    return cutter.flat_end
 
 
 def flat_contour_limit(part: Part, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,

@@ -105,7 +105,7 @@ def draw_maps(maps: list[SurfaceMap], cutter, tools: list, out_dir: Path) -> lis
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
     out_dir.mkdir(parents=True, exist_ok=True)
-    var = "r" if cutter.kind in ("ball", "tapered_ball") else "R"
+    var = cutter.size_symbol
     finite = np.concatenate([m.size[np.isfinite(m.size)] for m in maps] + [np.zeros(1)])
     vmax = float(np.percentile(finite, 98)) if finite.size > 1 else 1.0
     n = len(maps)

@@ -29,7 +29,6 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from checker.cutter import BALL_FAMILY
 from checker.engine.frames import heights, rotate_rows, rotated
 from checker.engine.sizes import RowFrame, pair_sizes, point_size, size_args
 from checker.geometry.evaluate import SurfaceEval, evaluate_mixed
@@ -462,7 +461,7 @@ class _Objective:
         self.part, self.cutter, self.frame, self.Q = part, cutter, frame, Q
         self.trimmed = [s.id for s in part.surfaces if s.trim is not None]
         self.dom = np.array([s.domain for s in part.surfaces], dtype=np.float64)
-        flat = cutter.kind not in BALL_FAMILY and float(cutter.psi) == 0.0
+        flat = cutter.flat_bottomed
         self.floor = frame.fam.z0 + _ABOVE if flat else None
         self.sz = size_args(cutter, frame, np.arange(len(frame.cc)))
         self.trims = pack_trims([s.trim for s in part.surfaces])

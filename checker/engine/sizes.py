@@ -10,7 +10,6 @@ import numba as nb
 import numpy as np
 
 from checker import kernels
-from checker.cutter import BALL_FAMILY
 from checker.engine.family import FamilyBounds
 
 _EPS_H = 1e-9
@@ -64,7 +63,7 @@ def size_args(cutter, frame: RowFrame, rows: np.ndarray) -> tuple:
     return (np.ascontiguousarray(frame.cc[rows]), np.ascontiguousarray(frame.n[rows]),
             np.ascontiguousarray(frame.e[rows]), np.ascontiguousarray(fam.z0[rows]),
             np.ascontiguousarray(fam.t[rows]), cutter.kernel_params(),
-            cutter.kind in BALL_FAMILY, float(fam.length), frame.exclusion ** 2)
+            cutter.ball_family, float(fam.length), frame.exclusion ** 2)
 
 
 @nb.njit(cache=True, inline="always")

@@ -1,14 +1,8 @@
 """CL -> CC: the contact point of a cutter at a CL position (tip, axis) on a part, by the
 closest approach between the cutter and the exact NURBS surfaces.
 
-Distance from points to a cutter goes through its core: every cutter of the APT family with a
-flat or conical bottom is the core (a solid of revolution of a wedge in the profile plane) grown
-by a ball of the corner radius r. The core's wedge has its corner at the fillet centre
-C = (rho = R, h = h_O), h_O = R tan(psi) + r sec(psi) above the tip; its lower side rises from C
-towards the axis with slope tan(psi) (the bottom offset by r), its outer side leaves C upwards
-with taper theta (the side offset by r). Signed distance to the cutter = distance to the core - r
-(exact outside the core; at a conical tip, psi > 0, the grown core is rounded where the real
-tip is sharp, short of it by r (sec(psi) - 1) along the axis).
+Distance from points to a cutter goes through its core (`checker.cutter_core`, the cutter's
+own solid: a core grown by a ball of the corner radius).
 
 All inputs in mm in the part frame: tips (N,3), unit axes (N,3) (tip -> spindle), points (N,3).
 The contact minimises the core distance over the part: start at the best of the k test points
@@ -25,6 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from checker.cutter_core import Core, project_to_core, signed_distance, tool_coordinates
 from checker.geometry.evaluate import evaluate_mixed
 from checker.geometry.sampling import TestPoints
 from checker.part import Part
@@ -42,111 +37,6 @@ _REACHED = 1e-4        # mm: phase 1 ending this near the core goes on to look i
 _NUM = r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*"
 _CONTACT_COMMENT = re.compile(f"^{_NUM},{_NUM},{_NUM}$")
 _INCH = 25.4
-
-
-@dataclass(frozen=True)
-class Core:
-    """The core of a cutter: corner radius `r`, corner-centre radius `R`, bottom cone angle
-    `psi` and taper angle `theta` (rad); mm. `h_o` is the corner-centre height above the tip."""
-
-    r: float
-    R: float
-    psi: float = 0.0
-    theta: float = 0.0
-
-    @property
-    def h_o(self) -> float:
-        return self.R * np.tan(self.psi) + self.r / np.cos(self.psi)
-
-    @classmethod
-    def of(cls, cutter) -> Core:
-        """The core of any object with `r`, `R`, `psi`, `theta` attributes (a `Cutter`)."""
-        return cls(float(cutter.r), float(cutter.R), float(getattr(cutter, "psi", 0.0) or 0.0),
-                   float(getattr(cutter, "theta", 0.0) or 0.0))
-
-
-@dataclass
-class CoreProjection:
-    """Nearest core points of N points: `q (N,3)` on the core, `dist (N,)` (0 inside the core),
-    `hess (N,3,3)` the Hessian of dist^2/2 with respect to the point (exact for psi = theta = 0,
-    the in-plane part exact and the circumferential part approximate otherwise), `signed (N,)`
-    the distance, negative inside the core (minus the distance to its boundary)."""
-
-    q: np.ndarray
-    dist: np.ndarray
-    hess: np.ndarray
-    signed: np.ndarray
-
-
-def _frame(points: np.ndarray, tips: np.ndarray, axes: np.ndarray):
-    """Height h above the tip, radial distance rho and unit radial direction w (N,3)."""
-    d = points - tips
-    h = np.einsum("ij,ij->i", d, axes)
-    wv = d - h[:, None] * axes
-    rho = np.linalg.norm(wv, axis=1)
-    # any direction perpendicular to the axis where the point is on it
-    perp = np.cross(axes, np.where(np.abs(axes[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
-    perp /= np.linalg.norm(perp, axis=1)[:, None]
-    safe = rho > 1e-12
-    w = np.where(safe[:, None], wv / np.where(safe, rho, 1.0)[:, None], perp)
-    return h, rho, w
-
-
-def _profile_nearest(core: Core, rho: np.ndarray, h: np.ndarray):
-    """Nearest point (rq, hq) of the core's wedge in the profile plane, which piece holds it
-    (0 inside, 1 lower side, 2 corner C, 3 outer side), and for inside points minus their
-    distance to the wedge's boundary (the wedge is convex: the nearer of its two sides)."""
-    R, ho = core.R, core.h_o
-    # lower side: from C towards the axis, direction t1 = (-cos psi, -sin psi); outer normal
-    t1 = np.array([-np.cos(core.psi), -np.sin(core.psi)])
-    n1 = np.array([np.sin(core.psi), -np.cos(core.psi)])
-    # outer side: from C upwards, direction t3 = (sin theta, cos theta); outer normal
-    t3 = np.array([np.sin(core.theta), np.cos(core.theta)])
-    n3 = np.array([np.cos(core.theta), -np.sin(core.theta)])
-    dr, dh = rho - R, h - ho
-    s1 = dr * n1[0] + dh * n1[1]          # > 0 below the lower side
-    s3 = dr * n3[0] + dh * n3[1]          # > 0 outside the outer side
-    a1 = dr * t1[0] + dh * t1[1]          # along the lower side from C
-    a3 = dr * t3[0] + dh * t3[1]          # along the outer side from C
-    len1 = R / np.cos(core.psi)           # the lower side reaches the axis
-    piece = np.zeros(rho.shape, dtype=np.int8)
-    on1 = (s1 > 0) & (a1 > 0)
-    on3 = (s3 > 0) & (a3 > 0) & ~on1
-    corner = ((s1 > 0) | (s3 > 0)) & ~on1 & ~on3
-    piece[on1], piece[corner], piece[on3] = 1, 2, 3
-    a1c = np.minimum(a1, len1)
-    rq = np.where(on1, R + a1c * t1[0], np.where(on3, R + a3 * t3[0], np.where(corner, R, rho)))
-    hq = np.where(on1, ho + a1c * t1[1], np.where(on3, ho + a3 * t3[1], np.where(corner, ho, h)))
-    depth = np.where(piece == 0, np.maximum(s1, s3), 0.0)   # inside: minus the distance to a side
-    return rq, hq, piece, (n1, n3), depth
-
-
-def project_to_core(
-    core: Core, points: np.ndarray, tips: np.ndarray, axes: np.ndarray
-) -> CoreProjection:
-    """Nearest core point of each point (N,3), its distance and the Hessian of dist^2/2."""
-    h, rho, w = _frame(points, tips, axes)
-    rq, hq, piece, (n1, n3), depth = _profile_nearest(core, rho, h)
-    q = tips + hq[:, None] * axes + rq[:, None] * w
-    dist = np.hypot(rho - rq, h - hq)
-    aa = np.einsum("ni,nj->nij", axes, axes)
-    ww = np.einsum("ni,nj->nij", w, w)
-    circ = np.eye(3)[None] - aa - ww
-    # in-plane Hessian: n n^T on a side, the identity at the corner, zero inside
-    nl = np.where((piece == 1)[:, None], n1[0] * w + n1[1] * axes, n3[0] * w + n3[1] * axes)
-    inplane = np.where((piece == 2)[:, None, None], aa + ww, np.einsum("ni,nj->nij", nl, nl))
-    inplane = np.where((piece == 0)[:, None, None], 0.0, inplane)
-    ratio = np.where(rho > 1e-12, 1.0 - rq / np.where(rho > 1e-12, rho, 1.0), 0.0)
-    hess = inplane + np.where((piece == 0)[:, None, None], 0.0, ratio[:, None, None] * circ)
-    return CoreProjection(q, dist, hess, np.where(piece == 0, depth, dist))
-
-
-def signed_distance(
-    core: Core, points: np.ndarray, tips: np.ndarray, axes: np.ndarray
-) -> np.ndarray:
-    """Signed distance (N,) mm of each point to the cutter solid (negative inside), via the core:
-    exact, inside too (the core is convex, so a point t inside it is t + r inside the cutter)."""
-    return project_to_core(core, points, tips, axes).signed - core.r
 
 
 @dataclass
@@ -179,7 +69,7 @@ def cl_to_cc(part: Part, test_points: TestPoints, cutter, tips: np.ndarray, axes
     tips = np.ascontiguousarray(tips, dtype=np.float64).reshape(-1, 3)
     axes = np.ascontiguousarray(axes, dtype=np.float64).reshape(-1, 3)
     axes = axes / np.linalg.norm(axes, axis=1)[:, None]
-    core = Core.of(cutter)
+    core = cutter.core
     if len(tips) == 0:
         z3 = np.zeros((0, 3))
         return Contacts(z3, z3, np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0))
@@ -271,7 +161,7 @@ def _depth_model(core: Core, points, tips, axes, J=None):
     nearer side's normal; where both sides are about as near (within _CORNER), the combination
     of the two normals whose part along the surface (tangent plane spanned by J (K,3,2)) is
     shortest."""
-    h, rho, w = _frame(points, tips, axes)
+    h, rho, w = tool_coordinates(points, tips, axes)
     proj = project_to_core(core, points, tips, axes)
     if J is None:
         return proj.signed, None, None

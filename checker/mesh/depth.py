@@ -55,7 +55,6 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from checker.cutter import BALL_FAMILY
 from checker.mesh.bvh import STACK, MeshIndex, query_capsule
 from checker.mesh.tool import ToolPieces, body_profiles, body_top
 
@@ -1134,39 +1133,12 @@ def pose_depths(mesh_index: MeshIndex, pieces: ToolPieces, tips: np.ndarray, axe
 # ---- allowable size --------------------------------------------------------------------------
 
 
-def _family_radii(cutter, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(r, R) (N,) of the cutters of `cutter`'s family with sizes s."""
-    if cutter.kind in BALL_FAMILY:
-        return s.copy(), np.zeros_like(s)
-    return np.full_like(s, float(cutter.r)), s.copy()
-
-
-def tips_from_contact(cutter, s: np.ndarray, cc: np.ndarray, n: np.ndarray,
-                      axes: np.ndarray) -> np.ndarray:
-    """(N, 3) tips of the cutters `cutter.with_size(s[i])` touching cc[i] with normal n[i] at
-    axis axes[i] (row-wise sizes; the formula of `Cutter.tip_from_contact` without `e`)."""
-    r, R = _family_radii(cutter, s)
-    psi = float(cutter.psi)
-    a = axes
-    na = np.einsum("ij,ij->i", n, a)
-    perp = n - na[:, None] * a
-    nh = np.linalg.norm(perp, axis=1)
-    vertical = nh <= EPS_H
-    ev = np.where(vertical[:, None], 0.0, perp / np.where(vertical, 1.0, nh)[:, None])
-    f = R * math.tan(psi) + r / math.cos(psi)
-    tip = cc + r[:, None] * n + R[:, None] * ev - f[:, None] * a
-    if psi > 0.0:
-        tipc = na > math.cos(psi)
-        tip[tipc] = cc[tipc]
-    return tip
-
-
 def body_depths(mesh_index: MeshIndex, cutter, sizes: np.ndarray, tips: np.ndarray,
                 axes: np.ndarray, *, floor: float) -> np.ndarray:
     """(N,) signed depth of the body of `cutter.with_size(sizes[i])` at pose i, values at or
     below `floor` (mm) reported as `floor` (only triangles beating it are examined)."""
     sizes = _arr(sizes, np.float64)
-    r, R = _family_radii(cutter, sizes)
+    r, R = cutter.radii(sizes)
     prof, nprof = body_profiles(r, R, float(cutter.psi), float(cutter.theta), body_top(cutter))
     n = len(sizes)
     d, _, _, _, _ = _run(mesh_index, prof, nprof, _arr(r, np.float64),
@@ -1197,7 +1169,7 @@ def allowable_on_mesh(mesh_index: MeshIndex, cutter, cc: np.ndarray, normals: np
         return np.zeros(0)
 
     def unsafe(s: np.ndarray) -> np.ndarray:
-        tips = tips_from_contact(cutter, s, cc, normals, axes)
+        tips = cutter.tip_from_contact(cc, normals, axes, sizes=s)
         return body_depths(mesh_index, cutter, s, tips, axes, floor=tol) > tol
 
     lo = np.zeros(n)

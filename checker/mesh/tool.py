@@ -7,7 +7,7 @@ the axis, so the solid is convex; the polygon may be degenerate (a segment on th
 end-mill's core). Vertices are stored counter-clockwise in (r, h) (r to the right, h up).
 
 Pieces of a `Cutter` (`tool_pieces`):
-- kind 0, the body: exactly `Core.of(cutter)` (checker/geometry/contact.py) grown by the corner
+- kind 0, the body: exactly `cutter.core` (checker/cutter_core.py) grown by the corner
   radius r. The core's profile is the wedge with its corner at C = (R, h_o), h_o = R tan(psi) +
   r sec(psi): its lower side goes from C to the axis at (0, r sec(psi)) (the bottom offset by r),
   its outer side leaves C upwards with taper theta (the side offset by r), its top is at `top`.
@@ -32,8 +32,6 @@ from dataclasses import dataclass
 
 import numba as nb
 import numpy as np
-
-from checker.cutter import BALL_FAMILY
 
 MAXV = 8           # profile vertices per piece at most (the pieces here need 4)
 UNBOUNDED = 1e6    # mm: the top of a body whose length is not known
@@ -118,8 +116,8 @@ def body_top(cutter) -> float:
 def tool_pieces(cutter, *, with_holder: bool) -> ToolPieces:
     """The pieces of `cutter` (a `checker.cutter.Cutter`): its body, its shank when known and,
     with `with_holder`, its holder when known (module docstring)."""
-    R = 0.0 if cutter.kind in BALL_FAMILY else float(cutter.R)
-    r, psi, theta = float(cutter.r), float(cutter.psi), float(cutter.theta)
+    core = cutter.core
+    R, r, psi, theta = core.R, core.r, core.psi, core.theta
     profs, rhos, kinds = [], [], []
     buf = np.zeros((MAXV, 2))
     m = body_profile(r, R, psi, theta, body_top(cutter), buf)

@@ -5,17 +5,14 @@ family the library lacks falls back to `report.standard_diameters` of the config
 
 from __future__ import annotations
 
-import math
-import re
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
-from checker.cutter import BALL_FAMILY
+from checker.cutter import parse_cutter
+from checker.errors import PathcheckError
 from checker.tool_library import ToolLibrary, load_tool_library
-
-_NUMBERS = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 @dataclass(frozen=True)
@@ -45,6 +42,17 @@ def _library() -> ToolLibrary:
     return load_tool_library()
 
 
+def _parsed(cutter: str | None):
+    """The real cutter of a stored `CUTTER/...` statement, None when there is none or it does
+    not parse (a store written by another version)."""
+    if not cutter:
+        return None
+    try:
+        return parse_cutter(cutter)
+    except PathcheckError:
+        return None
+
+
 def standard_cutters(
     kind: str | None, cutter: str | None, cutter_size: float | None,
     diameters: tuple[float, ...],
@@ -53,17 +61,16 @@ def standard_cutters(
     statement and its size, mm). Library family: same kind (and corner radius r for the R
     families, taper angle b for tapered balls); otherwise the config diameters D with size
     D/2 - (d/2 - size of the real cutter), i.e. the real cutter's corner kept."""
-    numbers = [float(x) for x in _NUMBERS.findall((cutter or "").partition("/")[2])]
-    if kind:
-        r = numbers[1] if len(numbers) > 1 and kind not in BALL_FAMILY else None
-        theta = math.radians(numbers[5]) if kind == "tapered_ball" and len(numbers) > 5 else None
-        family = _library().family(kind, r, theta=theta)
+    real = _parsed(cutter)
+    if kind and real is not None:
+        theta = real.theta if real.ball_family and real.theta > 0.0 else None
+        family = _library().family(kind, real.family_corner, theta=theta)
         if family:
             return StandardCutters(
                 tuple(t.name or f"D{t.d:g}" for t in family),
                 np.array([t.size for t in family], dtype=float),
             )
-    offset = max(numbers[0] / 2.0 - cutter_size, 0.0) if numbers and cutter_size else 0.0
+    offset = max(real.d / 2.0 - cutter_size, 0.0) if real is not None and cutter_size else 0.0
     d = np.sort(np.asarray(diameters, dtype=float))
     return StandardCutters(tuple(f"D{x:g}" for x in d), d / 2.0 - offset)
 
