@@ -1,7 +1,8 @@
 """Compile the kernels once per install, into the per-user cache (`checker.cache`). Two
-processes compile the two big independent families at once (on 2 cores, about half the time):
+processes compile the big independent families at once (on 2 cores, about half the time):
 the exact tool-vs-triangle depth (`checker.mesh`: a tool over a few triangles, its allowable
-size there) and the allowable-cutter engine (`checker.engine`: a few CC points of the warm-up
+size there) with the 4-axis plan (the best-B scan's coarse engine, the orientation along a
+path), and the allowable-cutter engine (`checker.engine`: a few CC points of the warm-up
 part); then the bundled warm-up job (the demo job: the 4-axis compressor sample with a ball
 D12, 90 CC points, flagged) is checked and posted as `pathcheck JOB -o JOB.nc` does, loading
 those and compiling what is left. Afterwards that job compiles nothing; a job that needs more
@@ -20,11 +21,12 @@ from checker.cache import kernel_cache_dir
 from checker.resources import resource
 
 WARMUP_JOB = resource("warmup", "warmup.apt")
-_FAMILIES = ("mesh", "engine")
+_FAMILIES = ("mesh_and_plan", "engine")
 
 
-def compile_mesh() -> None:
-    """The mesh kernels: the tree, the depth of a tool's pieces, the allowable size."""
+def compile_mesh_and_plan() -> None:
+    """The mesh kernels (the tree, the depth of a tool's pieces, the allowable size) and the
+    4-axis plan's (the coarse engine of the best-B scan, the shortest path over B)."""
     import numpy as np
 
     from checker.cutter import parse_cutter
@@ -38,10 +40,33 @@ def compile_mesh() -> None:
     axes = np.tile([0.0, 0, 1], (2, 1))
     pose_depths(index, tool_pieces(cutter, with_holder=True), tips, axes, reach=1.0)
     allowable_on_mesh(index, cutter, np.zeros((1, 3)), axes[:1], axes[:1], tol=1e-6, s_max=10.0)
+    _plan()
+
+
+def _plan() -> None:
+    import numpy as np
+
+    from checker.config import default_config
+    from checker.four_axis.orientation import shortest_path_orientation
+    from checker.four_axis.plan import coarse_config
+
+    cfg = default_config()
+    _allowable_at_the_warm_up_part(coarse_config(cfg))
+    fa = cfg.four_axis
+    n = 4
+    shortest_path_orientation(
+        [[(-10.0, 10.0)]] * n, np.zeros(n), np.zeros(n), np.ones(n), b_min=-30.0, b_max=30.0,
+        grid_step=fa.dp_b_step, w_change=fa.dp_weight_change,
+        w_original=fa.dp_weight_original, max_db_per_mm=fa.max_db_per_mm)
 
 
 def compile_engine() -> None:
     """The engine's kernels: the allowable size at a few CC points of the warm-up part."""
+    _allowable_at_the_warm_up_part(None)
+
+
+def _allowable_at_the_warm_up_part(config) -> None:
+    """The allowable size of a ball D12 at three points of the warm-up part's blade."""
     import numpy as np
 
     from checker.cutter import parse_cutter
@@ -51,9 +76,10 @@ def compile_engine() -> None:
     from checker.geometry.sampling import sample_part
 
     part = load_part(WARMUP_JOB.with_suffix(".json"))
-    ev = evaluate(part.surfaces[3], np.array([0.3, 0.5, 0.7]), np.array([0.5, 0.5, 0.5]))
+    u, v = np.array([0.3, 0.5, 0.7]), np.full(3, 0.5)
+    ev = evaluate(part.surfaces[3], u, v)
     allowable(sample_part(part), part, parse_cutter("CUTTER/12,6"), ev.points, ev.normals,
-              ev.normals, cc_surface=np.full(3, 3), cc_uv=np.array([[0.3, .5], [.5, .5], [.7, .5]]))
+              ev.normals, cc_surface=np.full(3, 3), cc_uv=np.column_stack([u, v]), config=config)
 
 
 def warm_kernels() -> tuple[Path, float]:
