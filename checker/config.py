@@ -33,7 +33,7 @@ class CheckConfig(_Section):
     gouge_neighbourhood: PositiveFloat = 2.0
     arc_chord_tolerance: PositiveFloat = 0.01
     depth_tolerance: float = Field(0.02, ge=0)
-    part_deviation: PositiveFloat = 0.002
+    part_deviation: PositiveFloat = 0.005
     reach: PositiveFloat = 1.0
     misaligned_fraction: float = Field(0.5, gt=0, le=1)
 
