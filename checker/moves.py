@@ -21,14 +21,17 @@ START, RAPID, FEED = 0, 1, 2  # how a pose is reached: not at all (a start), at 
 class Moves:
     """P poses: `tip (P, 3)`, unit `axis (P, 3)`, `kind (P,)` of the move that reaches each
     (START, RAPID or FEED), `row (P,)` the motion row it comes from (index into the
-    MotionArrays), `hole (P,)` True for the poses a canned cycle adds. The moves are the pairs
-    (i - 1, i) with kind[i] != START."""
+    MotionArrays), `hole (P,)` True for the poses a canned cycle adds, `retract (P,)` True where
+    the move is a cycle's rapid back out of its hole: it retraces the feed to the bottom, so it
+    sweeps no volume that feed did not, and what it touches is that feed's gouge, not a crash.
+    The moves are the pairs (i - 1, i) with kind[i] != START."""
 
     tip: np.ndarray
     axis: np.ndarray
     kind: np.ndarray
     row: np.ndarray
     hole: np.ndarray
+    retract: np.ndarray
 
     def __len__(self) -> int:
         return len(self.kind)
@@ -60,6 +63,7 @@ def machine_moves(m: MotionArrays) -> Moves:
     row = np.repeat(np.arange(n), count)
     out_kind = np.repeat(kind, count)
     hole = np.repeat(holes, count)
+    retracing = np.zeros(p, dtype=bool)
     plain = ~holes
     tip[at[plain]] = m.tip[plain]
     h = np.flatnonzero(holes)
@@ -78,4 +82,5 @@ def machine_moves(m: MotionArrays) -> Moves:
         out_kind[at[h] + 1] = RAPID
         out_kind[at[h] + 2] = FEED
         out_kind[at[h] + 3] = RAPID
-    return Moves(tip, axis, out_kind, row, hole)
+        retracing[at[h] + 3] = True
+    return Moves(tip, axis, out_kind, row, hole, retracing)

@@ -1,7 +1,8 @@
 """The one verdict rule. A checked pose (or move) is a finding when the real tool at its real
 pose penetrates the part by more than the job's tolerance:
 - `crash`: a rapid move in which any part of the tool touches the part (penetration above the
-  tolerance);
+  tolerance); a canned cycle's rapid back out of its hole retraces the feed in, and is judged
+  as a feed move;
 - `holder`: the shank or the holder penetrates (a feed move);
 - `gouge`: the cutter's body penetrates near the contact, on the surface being cut (within the
   gouge neighbourhood of the contact point, on its surface where the part has surfaces);

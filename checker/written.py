@@ -104,7 +104,8 @@ def verify(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray, cutters: dict,
     move_near = _near(job, moves, cutters, along.depths.height, along.end)
     move_tol = tolerance[along.end] + _local_deviation(job, along.depths.triangle)
     move_verdict = vd.decide(along.depths.depth, along.depths.piece,
-                             moves.kind[along.end] == RAPID, move_near, move_tol)
+                             (moves.kind[along.end] == RAPID) & ~moves.retract[along.end],
+                             move_near, move_tol)
     return Verified(moves, poses, along, pose_verdict, move_verdict, tolerance + local, move_tol)
 
 
