@@ -58,6 +58,8 @@ class ServiceConfig(_Section):
     max_points: PositiveInt = 200_000
     part_cache_bytes: PositiveInt = 512 * 1024 * 1024
     debug_ops: bool = False
+    worker_memory_bytes: PositiveInt = 4 * 1024**3
+    heartbeat_s: PositiveFloat = 1.0
 
 
 class StoreConfig(_Section):
