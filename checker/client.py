@@ -1,6 +1,9 @@
 """Python client of the pathcheck service (docs/protocol.md): a REQ or DEALER socket, a timeout
 per attempt and retries ("lazy pirate": a REQ socket that timed out is closed and reopened, a
-DEALER client drops stale replies by request id).
+DEALER client drops stale replies by request id). Only silence is retried: every reply, a
+refusal included (`limit`, `worker`, `crashed`, ...), is returned as it is, and a request over
+`max_message_bytes` is refused here without being sent. With `curve_keys` (a key folder from
+`pathcheck serve --new-keys`) the connection is encrypted and the client authenticated.
 
     with Client("tcp://127.0.0.1:5555") as client:
         reply = client.call("allowable", part={"path": "part.json"}, cc=[[0, 0, 0, 0, 0, 1]],
@@ -13,6 +16,7 @@ import itertools
 import json
 import os
 import time
+from pathlib import Path
 from typing import Any, Literal
 
 import zmq
@@ -23,9 +27,10 @@ Kind = Literal["req", "dealer"]
 
 
 class Client:
-    """Calls the service at `address`. Each attempt waits `timeout_s`; after a timeout, or an
-    error reply whose code is in `retry_codes` (a worker died), the request is sent again, up to
-    `retries` more times. All attempts timing out raises PathcheckError (code `unavailable`)."""
+    """Calls the service at `address`. Each attempt waits `timeout_s`; after a timeout (no
+    reply at all) the request is sent again, up to `retries` more times; all attempts timing
+    out raises PathcheckError (code `unavailable`). A request larger than `max_message_bytes`
+    (the service's default limit) raises PathcheckError (code `limit`) without being sent."""
 
     def __init__(
         self,
@@ -34,7 +39,8 @@ class Client:
         timeout_s: float = 60.0,
         retries: int = 2,
         kind: Kind = "req",
-        retry_codes: tuple[str, ...] = ("worker",),
+        max_message_bytes: int | None = None,
+        curve_keys: str | Path | None = None,
     ) -> None:
         if kind not in ("req", "dealer"):
             raise ValueError(f"kind must be 'req' or 'dealer', got {kind!r}")
@@ -42,7 +48,16 @@ class Client:
         self.timeout_s = timeout_s
         self.retries = retries
         self.kind = kind
-        self.retry_codes = retry_codes
+        if max_message_bytes is None:
+            from checker.config import default_config
+
+            max_message_bytes = default_config().service.max_message_bytes
+        self.max_message_bytes = max_message_bytes
+        self._curve = None
+        if curve_keys is not None:
+            from checker.service.keys import client_keys
+
+            self._curve = client_keys(curve_keys)
         self._ctx = zmq.Context.instance()
         self._sock: zmq.Socket | None = None
         self._ids = itertools.count(1)
@@ -69,17 +84,14 @@ class Client:
     def request(self, message: dict | bytes) -> dict:
         """Send one request (an object, or raw bytes sent as they are) and return the reply."""
         body = message if isinstance(message, bytes) else json.dumps(message).encode()
+        if len(body) > self.max_message_bytes:
+            raise PathcheckError(f"request is {len(body)} bytes, the limit is "
+                                 f"{self.max_message_bytes} bytes; not sent", code="limit")
         want_id = message.get("id") if isinstance(message, dict) else None
-        reply: dict | None = None
         for _attempt in range(self.retries + 1):
             reply = self._attempt(body, want_id)
-            if reply is None:
-                continue
-            code = (reply.get("error") or {}).get("code")
-            if reply.get("ok") or code not in self.retry_codes:
+            if reply is not None:
                 return reply
-        if reply is not None:
-            return reply
         raise PathcheckError(
             f"no reply from {self.address} after {self.retries + 1} attempt(s) of "
             f"{self.timeout_s:g} s", code="unavailable")
@@ -88,6 +100,8 @@ class Client:
         if self._sock is None:
             sock = self._ctx.socket(zmq.REQ if self.kind == "req" else zmq.DEALER)
             sock.setsockopt(zmq.LINGER, 0)
+            if self._curve is not None:
+                sock.curve_serverkey, sock.curve_publickey, sock.curve_secretkey = self._curve
             sock.connect(self.address)
             self._sock = sock
         return self._sock

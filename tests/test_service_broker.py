@@ -1,5 +1,6 @@
 """The service over real sockets on 127.0.0.1: a broker with 2 worker processes, REQ and DEALER
-clients, concurrency, a storm of malformed requests, a slow job, a killed worker, a timeout."""
+clients, concurrency, a storm of malformed requests, a slow job, a killed worker (and the same
+request refused by its content hash), a timeout, a hung worker, CURVE and the bind rule."""
 
 from __future__ import annotations
 
@@ -56,7 +57,7 @@ def test_ping_req_and_dealer(broker):
             reply = c.call("ping", id="abc")
         assert reply["ok"] is True and reply["pong"] is True
         assert reply["id"] == "abc" and reply["op"] == "ping" and reply["v"] == 1
-        assert reply["worker"] in broker.worker_pids()
+        assert reply["broker"] == os.getpid()  # answered by the broker, not a worker
 
 
 def test_plain_dealer_without_delimiter_gets_a_reply_in_the_same_shape(broker):
@@ -75,14 +76,18 @@ def test_plain_dealer_without_delimiter_gets_a_reply_in_the_same_shape(broker):
     assert sorted(r["id"] for r in replies) == [0, 1, 2] and all(r["ok"] for r in replies)
 
 
-def test_stats_reports_broker_and_worker(broker):
+def test_stats_reports_broker_and_workers(broker):
     with _client(broker) as c:
+        c.call("sleep", seconds=0)
+        c.call("sleep", seconds=0)
         reply = c.call("stats")
     assert reply["ok"]
-    assert reply["broker"]["workers"] == 2
+    assert reply["broker"]["workers"] == 2 and reply["broker"]["pid"] == os.getpid()
     assert sorted(reply["broker"]["pids"]) == sorted(broker.worker_pids())
-    assert reply["worker"]["pid"] in broker.worker_pids()
-    assert reply["cache"]["entries"] == 0 or reply["cache"]["bytes"] > 0
+    assert sorted(w["pid"] for w in reply["workers"]) == sorted(broker.worker_pids())
+    answered = [w for w in reply["workers"] if "cache" in w]
+    assert answered and all(w["worker"]["requests"] >= 1 for w in answered)
+    assert all(w["cache"]["entries"] == 0 or w["cache"]["bytes"] > 0 for w in answered)
 
 
 def test_8_clients_x_25_requests(broker):
@@ -112,7 +117,6 @@ def test_8_clients_x_25_requests(broker):
         assert reply["id"] == req["id"] and reply["op"] == req["op"]
         if req["op"] == "sleep":
             assert reply["slept"] == req["seconds"]
-        if req["op"] == "ping":
             workers_used.add(reply["worker"])
     assert workers_used == set(broker.worker_pids())  # the load was balanced over both
 
@@ -148,14 +152,17 @@ def _malformed() -> list[tuple[bytes, set[str]]]:
         (json.dumps({"op": "allowable", "part": {"path": "p.json"}, "cutter": "C",
                      "cc": [[0, 0, 0, 0, 0, 1]] * 1001}).encode(), {"limit"}),
         (json.dumps({"op": "allowable", "part": {"path": "/no/such/part.json"},
+                     "cc": [[0, 0, 0, 0, 0, 1]], "cutter": "CUTTER/10"}).encode(), {"forbidden"}),
+        (json.dumps({"op": "allowable", "part": {"path": "no/such/part.json"},
                      "cc": [[0, 0, 0, 0, 0, 1]], "cutter": "CUTTER/10"}).encode(), {"part"}),
         (json.dumps({"op": "allowable", "part": {"path": "/no/such/part.json"},
                      "cc": [[0, 0, 0, 0, 0, 0]], "cutter": "CUTTER/10"}).encode(), {"request"}),
         (json.dumps({"op": "check", "apt": "PARTNO T\nCUTTER/10\nGOTO/1,2,$\n",
-                     "part": {"path": "/no/such/part.step"}}).encode(), {"part"}),
+                     "part": {"path": "/no/such/part.step"}}).encode(), {"forbidden"}),
         (json.dumps({"op": "check", "apt": "PARTNO T\nCUTTER/10\nGOTO/1,2,$\n"}).encode(),
          {"parse", "input", "unavailable"}),
-        (json.dumps({"op": "check", "apt_path": "/no/such/job.apt"}).encode(), {"input"}),
+        (json.dumps({"op": "check", "apt_path": "/no/such/job.apt"}).encode(), {"forbidden"}),
+        (json.dumps({"op": "check", "apt_path": "no/such/job.apt"}).encode(), {"input"}),
         (json.dumps({"op": "check"}).encode(), {"request"}),
         (json.dumps({"op": "ping", "pad": "x" * (MAX_BYTES + 1)}).encode(), {"limit"}),
     ]
@@ -215,21 +222,24 @@ def _wait_busy(b: Broker, timeout_s: float = 10.0) -> int:
     return b.busy_pids()[0]
 
 
-def test_worker_killed_mid_request_gets_error_then_retry_succeeds(broker):
-    # no retries: the client gets the structured error
-    with _client(broker, retries=0) as c, ThreadPoolExecutor(1) as pool:
-        pending = pool.submit(c.call, "sleep", seconds=1.5)
+def test_worker_killed_mid_request_gets_error_then_the_same_request_is_refused(broker):
+    """A killed worker: its request gets `worker` with its id, the client does not re-send it,
+    and the same request sent again (a new id) is refused by content hash: `crashed`."""
+    requests_before = broker.counters.requests
+    with _client(broker, retries=2) as c, ThreadPoolExecutor(1) as pool:
+        pending = pool.submit(c.call, "sleep", seconds=1.5, id="victim-1")
         victim = _wait_busy(broker)
         os.kill(victim, signal.SIGKILL)
         reply = pending.result(10)
-    assert reply["ok"] is False and reply["error"]["code"] == "worker"
-    assert str(victim) in reply["error"]["message"]
-    # with a retry the same request succeeds on the replacement or the other worker
-    with _client(broker, retries=1) as c, ThreadPoolExecutor(1) as pool:
-        pending = pool.submit(c.call, "sleep", seconds=0.5)
-        os.kill(_wait_busy(broker), signal.SIGKILL)
-        reply = pending.result(10)
-    assert reply["ok"] is True and reply["slept"] == 0.5
+        assert reply["ok"] is False and reply["error"]["code"] == "worker"
+        assert reply["id"] == "victim-1" and reply["op"] == "sleep"
+        assert str(victim) in reply["error"]["message"] and "SIGKILL" in reply["error"]["message"]
+        assert broker.counters.requests == requests_before + 1  # not re-sent
+        again = c.call("sleep", seconds=1.5, id="victim-2")
+        assert again["ok"] is False and again["error"]["code"] == "crashed"
+        assert again["id"] == "victim-2" and "took worker" in again["error"]["message"]
+        other = c.call("sleep", seconds=0.25)  # another request runs as usual
+        assert other["ok"] is True and other["slept"] == 0.25
     broker.wait_started(30, ready_workers=2)
     assert len(broker.worker_pids()) == 2 and victim not in broker.worker_pids()
     with _client(broker) as c:
@@ -242,6 +252,7 @@ def test_request_over_the_time_limit_gets_timeout_error(broker):
         reply = c.call("sleep", seconds=30)
         took = time.perf_counter() - t0
         assert reply["ok"] is False and reply["error"]["code"] == "timeout"
+        assert reply["id"] is not None and reply["op"] == "sleep"
         assert TIMEOUT_S <= took < TIMEOUT_S + 2
         assert c.call("ping")["ok"]
     broker.wait_started(30, ready_workers=2)

@@ -75,13 +75,19 @@ def test_call_ping_prints_the_reply(server):
 
 
 def test_call_error_reply_is_one_line_and_exit_2(server):
-    done = server.call("allowable", "part.path=/no/such/part.json", "cutter=CUTTER/10",
+    done = server.call("allowable", "part.path=no/such/part.json", "cutter=CUTTER/10",
                        "cc=[[0,0,0,0,0,1]]")
     assert done.returncode == 2
     assert done.stdout == ""
     lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("pathcheck: /no/such/part.json: ")
+    assert len(lines) == 1 and lines[0].startswith("pathcheck: no/such/part.json: ")
     assert "expected a part file, found nothing" in lines[0]
+    outside = server.call("allowable", "part.path=/etc/passwd", "cutter=CUTTER/10",
+                          "cc=[[0,0,0,0,0,1]]")  # the default root is the working directory
+    assert outside.returncode == 2
+    assert outside.stderr.strip() == (
+        "pathcheck: /etc/passwd: outside the service's roots: expected a path under a folder "
+        "given to `pathcheck serve --root` (relative paths are taken from the first root)")
 
 
 def test_call_bad_field_syntax_is_a_usage_error(server):
@@ -101,7 +107,7 @@ def test_one_log_line_per_request_and_every_request_recorded(server):
     while sum("request client=" in line for line in server.lines) < before + 7:
         assert time.monotonic() < deadline, "".join(server.lines[-10:])
         time.sleep(0.05)
-    assert any("op=? ok=false code=json" in line for line in server.lines)
+    assert any("op=? id=null ok=false code=json" in line for line in server.lines)
     with ResultsStore(server.store) as store:
         rows = store.requests(since=t0)
     assert [r[1] for r in rows].count("ping") == 5
@@ -172,3 +178,25 @@ def test_serve_bad_bind_is_a_clean_error():
     )
     assert done.returncode == 2
     assert done.stderr.strip().splitlines()[-1].startswith("pathcheck: cannot bind nonsense://x")
+
+
+def test_bind_beyond_loopback_needs_curve_or_insecure():
+    from checker.service.broker import check_bind
+
+    for local in ("tcp://127.0.0.1:5555", "tcp://127.0.0.2:*", "tcp://[::1]:5555",
+                  "tcp://localhost:5555", "ipc:///tmp/pc", "inproc://x", "ws://127.0.0.1:80/p"):
+        check_bind(local, curve=False, insecure=False)
+    for exposed in ("tcp://0.0.0.0:5555", "tcp://*:5555", "tcp://eth0:5555",
+                    "tcp://192.168.1.4:5555", "tcp://[::]:5555", "udp://127.0.0.1:5555"):
+        with pytest.raises(PathcheckError, match="may be reachable from other machines"):
+            check_bind(exposed, curve=False, insecure=False)
+        check_bind(exposed, curve=True, insecure=False)
+        check_bind(exposed, curve=False, insecure=True)
+    done = subprocess.run(
+        [sys.executable, "-m", "checker.cli", "serve", "--bind", "tcp://0.0.0.0:*", "--no-store"],
+        cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2
+    assert done.stderr.strip() == (
+        "pathcheck: tcp://0.0.0.0:* may be reachable from other machines: give --curve-keys DIR "
+        "(keys from `pathcheck serve --new-keys DIR`) or --insecure, or bind "
+        "tcp://127.0.0.1:PORT")

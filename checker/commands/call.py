@@ -22,6 +22,9 @@ from checker.errors import PathcheckError
               "600 for allowable and check]")
 @click.option("--retries", type=click.IntRange(min=0), default=2, show_default=True)
 @click.option("--dealer", is_flag=True, help="use a DEALER socket instead of REQ")
+@click.option("--curve-keys", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="CURVE key folder (server.key, client.key_secret) for a service started "
+              "with --curve-keys")
 @click.option("--request", "request_file", type=click.File("r"), default=None,
               help="JSON object with the request fields ('-' reads stdin); FIELD=VALUE override")
 @click.option("--cc", "cc_csv", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -31,8 +34,8 @@ from checker.errors import PathcheckError
 @click.option("--gcode-out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="write the reply's `gcode` (check with post=true) to this file")
 def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float | None,
-         retries: int, dealer: bool, request_file: Any, cc_csv: Path | None, out: Path | None,
-         gcode_out: Path | None) -> None:
+         retries: int, dealer: bool, curve_keys: Path | None, request_file: Any,
+         cc_csv: Path | None, out: Path | None, gcode_out: Path | None) -> None:
     """Call the pathcheck service: OP is ping, stats, allowable or check; each FIELD=VALUE sets
     a request field (VALUE is JSON, else a string; @FILE reads the file's text; dotted names
     nest: part.path=part.json).
@@ -56,7 +59,7 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     if timeout_s is None:
         timeout_s = 10.0 if op in ("ping", "stats") else 600.0
     with Client(address or default_config().service.bind, timeout_s=timeout_s, retries=retries,
-                kind="dealer" if dealer else "req") as client:
+                kind="dealer" if dealer else "req", curve_keys=curve_keys) as client:
         reply = raise_for_error(client.call(**message))
     if gcode_out is not None:
         if not reply.get("gcode"):

@@ -4,61 +4,89 @@ pattern: a request goes only to an idle worker, so one slow job never blocks the
 most recently idle worker is taken first, so a client calling again for the same part finds it
 in that worker's part cache.
 
+The broker reads every request at once: `ping`, `stats` and malformed small requests are
+answered by the broker itself (never queued behind busy workers); the others wait in a bounded
+queue for an idle worker (`busy` when it is full). Broker and idle workers exchange heartbeats
+(pyzmq's paranoid pirate pattern): a worker silent for LIVENESS beats is hung, killed and
+replaced. A worker that dies is replaced and its request gets a `worker` error; a request
+running longer than the per-request timeout kills its worker and gets a `timeout` error;
+either way the request's content hash is remembered and the same request is refused next
+time (`crashed`) instead of taking another worker down. Requests over the size limit get a
+`limit` error without reaching a worker. Every error reply carries the request's id.
+
 It is steerable like pyzmq's steerable proxy: `TERMINATE` on its control socket (`stop()`), or
-`request_stop()` from a signal handler, makes it drain: requests in flight are finished, requests
-that arrive meanwhile get an `unavailable` error, then the workers exit and `run()` returns.
-A worker that dies is replaced and its request gets a `worker` error reply; a request running
-longer than the per-request timeout kills its worker and gets a `timeout` error reply. Requests
-over the size limit get a `limit` error without reaching a worker. One log line per request;
-the workers record the requests they answer, the broker those it answers itself.
+`request_stop()` from a signal handler, makes it drain: requests in flight are finished, queued
+ones and those that arrive meanwhile get an `unavailable` error, then the workers exit and
+`run()` returns. The front end binds beyond loopback only with CURVE keys (`curve_keys`,
+`checker.service.keys`) or `insecure=True`. One log line per request.
 """
 
 from __future__ import annotations
 
 import contextlib
+import ipaddress
 import itertools
 import json
 import logging
 import os
+import re
 import secrets
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
 import threading
 import time
-from collections import deque
+from collections import OrderedDict, deque
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import zmq
 
 from checker.config import Config
 from checker.errors import PathcheckError
 from checker.service import protocol as p
-from checker.service.recorder import NullRecorder, Recorder, open_recorder
-from checker.service.worker import EXIT, READY, REPLY, REQ
+from checker.service.recorder import BackgroundRecorder
+from checker.service.roots import Roots
+from checker.service.worker import EXIT, HEARTBEAT, LIVENESS, READY, REPLY, REQ, STARTED
 
 log = logging.getLogger("pathcheck.service")
 
 POLL_MS = 50
 MAX_START_FAILURES = 5
+START_TIMEOUT_S = 120.0  # a worker not READY by then is hung at start
 EXIT_WAIT_S = 5.0
+BROKER_PARSE_BYTES = 4096  # requests up to this size are validated by the broker itself
+PEEK_BYTES = 64 * 1024  # larger requests: their id is found by a scan, not a JSON parse
+MAX_QUEUED = 10_000
+MAX_REFUSED = 256  # content hashes of requests that took a worker down
 REPO_ROOT = Path(__file__).resolve().parents[2]
+NETWORK_TRANSPORTS = ("tcp", "ws", "wss", "udp", "pgm", "epgm", "norm", "tipc", "vmci")
 
 
 @dataclass
 class _Job:
     envelope: list[bytes]
+    body: bytes
     started: float
+    id: Any = None
+    op: str | None = None
+    key: str | None = None  # content hash, once the worker has said STARTED
+    known: bool = False
 
 
 @dataclass
 class _Worker:
     identity: bytes
     proc: subprocess.Popen
+    spawned: float = field(default_factory=time.monotonic)
+    seen: float = field(default_factory=time.monotonic)
     ready: bool = False
+    retiring: bool = False  # it answered and exits (memory over the limit): not given work
     job: _Job | None = None
+    meta: dict = field(default_factory=dict)  # its counters and cache, from its last reply
 
 
 @dataclass
@@ -71,7 +99,8 @@ class _Counters:
 
 class Broker:
     """Front end at `bind` (e.g. `tcp://127.0.0.1:5555`; port `*` picks a free one, see
-    `address`), `workers` worker processes behind it. `run()` blocks until stopped."""
+    `address`), `workers` worker processes behind it reading files only inside `roots`.
+    `run()` blocks until stopped."""
 
     def __init__(
         self,
@@ -80,12 +109,18 @@ class Broker:
         bind: str | None = None,
         workers: int | None = None,
         store: str | None = None,
+        roots: Roots | None = None,
+        curve_keys: str | Path | None = None,
+        insecure: bool = False,
     ) -> None:
         self.config = config
         self.limits = config.service
         self.bind = bind or self.limits.bind
         self.n_workers = workers or self.limits.workers
         self.store = store
+        self.roots = roots or Roots(())
+        self.curve_keys = curve_keys
+        self.insecure = insecure
         self.address: str | None = None
         self.started = threading.Event()
         self.ctx = zmq.Context()
@@ -94,11 +129,16 @@ class Broker:
         self._draining = False
         self._workers: dict[bytes, _Worker] = {}
         self._idle: deque[_Worker] = deque()
+        self._queue: deque[tuple[list[bytes], bytes]] = deque()
+        self._queued_bytes = 0
+        self._refused: OrderedDict[str, str] = OrderedDict()
         self._ids = itertools.count(1)
         self._start_failures = 0
         self._backend_dir = ""
+        self._next_beat = 0.0
+        self._auth = None
         self.counters = _Counters()
-        self.recorder: Recorder = NullRecorder()
+        self.recorder: BackgroundRecorder | None = None
 
     # --- steering (thread- and signal-safe) ------------------------------------------------
 
@@ -131,26 +171,29 @@ class Broker:
 
     @property
     def ready_workers(self) -> int:
-        return sum(w.ready for w in list(self._workers.values()))
+        return sum(w.ready and not w.retiring for w in list(self._workers.values()))
 
     def worker_pids(self) -> list[int]:
         """Process ids of the live workers."""
         return [w.proc.pid for w in list(self._workers.values())]
 
     def busy_pids(self) -> list[int]:
-        """Process ids of the workers answering a request now."""
-        return [w.proc.pid for w in list(self._workers.values()) if w.job is not None]
+        """Process ids of the workers running a request's op now (it has said STARTED)."""
+        return [w.proc.pid for w in list(self._workers.values()) if w.job and w.job.key]
 
     # --- the loop ------------------------------------------------------------------------
 
     def run(self) -> None:
         """Bind, start the workers, broker until stopped, drain, stop the workers."""
+        check_bind(self.bind, curve=self.curve_keys is not None, insecure=self.insecure)
         self.frontend = self.ctx.socket(zmq.ROUTER)
         self.backend = self.ctx.socket(zmq.ROUTER)
         self.control = self.ctx.socket(zmq.PAIR)
         try:
             self.frontend.setsockopt(zmq.LINGER, 2000)
             self.frontend.setsockopt(zmq.MAXMSGSIZE, 4 * self.limits.max_message_bytes + 4096)
+            if self.curve_keys is not None:
+                self._curve(self.curve_keys)
             self.backend.setsockopt(zmq.LINGER, 0)
             self.backend.setsockopt(zmq.ROUTER_MANDATORY, 1)
             try:
@@ -160,14 +203,30 @@ class Broker:
             self.address = self.frontend.getsockopt_string(zmq.LAST_ENDPOINT)
             self.backend_addr = self._bind_backend()
             self.control.bind(self._control_addr)
-            self.recorder = open_recorder(self.store)  # the requests no worker answers
+            self.recorder = BackgroundRecorder(self.store)
             for _ in range(self.n_workers):
                 self._spawn()
-            log.info("listening on %s with %d workers", self.address, self.n_workers)
+            log.info("listening on %s with %d workers%s", self.address, self.n_workers,
+                     " (CURVE)" if self.curve_keys is not None else "")
             self.started.set()
             self._loop()
         finally:
             self._shutdown()
+
+    def _curve(self, folder: str | Path) -> None:
+        """CURVE on the front end; a ZAP handler (pyzmq's ThreadAuthenticator) lets in only
+        the clients whose public keys are in the key folder's `clients/`."""
+        from zmq.auth.thread import ThreadAuthenticator
+
+        from checker.service.keys import server_keys
+
+        public, secret, clients = server_keys(folder)
+        self._auth = ThreadAuthenticator(self.ctx, log=logging.getLogger("pathcheck.zap"))
+        self._auth.start()
+        self._auth.configure_curve(domain="*", location=str(clients))
+        self.frontend.curve_secretkey = secret
+        self.frontend.curve_publickey = public
+        self.frontend.curve_server = True
 
     def _bind_backend(self) -> str:
         """An ipc endpoint in a fresh directory only this user can enter (workers only)."""
@@ -176,17 +235,15 @@ class Broker:
         return self.backend.getsockopt_string(zmq.LAST_ENDPOINT)
 
     def _loop(self) -> None:
+        poller = zmq.Poller()
+        for sock in (self.backend, self.control, self.frontend):
+            poller.register(sock, zmq.POLLIN)
         while True:
             if self._stop_requested and not self._draining:
                 self._begin_drain()
             if self._draining and not any(w.job for w in self._workers.values()):
-                self._from_clients()  # answer what is still queued: `unavailable`
+                self._from_clients()  # answer what is still arriving: `unavailable`
                 return
-            poller = zmq.Poller()
-            poller.register(self.backend, zmq.POLLIN)
-            poller.register(self.control, zmq.POLLIN)
-            if self._idle or self._draining:
-                poller.register(self.frontend, zmq.POLLIN)
             events = dict(poller.poll(POLL_MS))
             if self.control in events and self.control.recv() == b"TERMINATE":
                 self._stop_requested = True
@@ -194,15 +251,21 @@ class Broker:
                 self._from_workers()
             if self.frontend in events:
                 self._from_clients()
+            self._dispatch_queued()
             self._check_workers()
+            self._beat()
 
     def _begin_drain(self) -> None:
         self._draining = True
         busy = sum(w.job is not None for w in self._workers.values())
-        log.info("draining: %d request(s) in flight", busy)
+        log.info("draining: %d request(s) in flight, %d queued", busy, len(self._queue))
+        while self._queue:
+            envelope, body = self._queue.popleft()
+            self._refuse_unavailable(envelope, body)
+        self._queued_bytes = 0
 
     def _from_clients(self) -> None:
-        while self._idle or self._draining:
+        for _ in range(1000):  # then serve the workers again
             try:
                 frames = self.frontend.recv_multipart(zmq.NOBLOCK)
             except zmq.Again:
@@ -217,33 +280,86 @@ class Broker:
             elif len(body) > self.limits.max_message_bytes:
                 self._reject(envelope, PathcheckError(
                     f"request is {len(body)} bytes, the limit is "
-                    f"{self.limits.max_message_bytes} bytes", code="limit"))
+                    f"{self.limits.max_message_bytes} bytes", code="limit"), *peek(body))
             elif self._draining:
-                rid, op = p.peek(body)
-                self._reject(envelope, PathcheckError(
-                    "service is shutting down; retry another instance", code="unavailable"),
-                    rid, op)
-            else:
-                self._dispatch(self._idle.pop(), envelope, body)  # most recently idle first
+                self._refuse_unavailable(envelope, body)
+            elif len(body) > BROKER_PARSE_BYTES or not self._answer_small(envelope, body):
+                self._enqueue(envelope, body)
 
-    def _dispatch(self, worker: _Worker, envelope: list[bytes], body: bytes) -> None:
-        worker.job = _Job(envelope, time.monotonic())
-        # unreachable: it died before we noticed; _check_workers replies to its request
-        with contextlib.suppress(zmq.ZMQError):
-            self.backend.send_multipart([worker.identity, REQ, body, self._stats_frame()])
+    def _answer_small(self, envelope: list[bytes], body: bytes) -> bool:
+        """Answer a small request here when it is `ping`, `stats` or malformed; False: it is
+        work for a worker."""
+        t0 = time.perf_counter()
+        try:
+            request = p.parse_request(body, max_bytes=self.limits.max_message_bytes,
+                                      max_points=self.limits.max_points,
+                                      debug_ops=self.limits.debug_ops)
+        except PathcheckError as err:
+            self._reject(envelope, err, *p.peek(body))
+            return True
+        if isinstance(request, p.PingRequest):
+            result = {"pong": True, "broker": os.getpid(), "time": time.time()}
+        elif isinstance(request, p.StatsRequest):
+            result = self._stats()
+        else:
+            return False
+        reply = p.ok_reply(result, request_id=request.id, op=request.op)
+        self._send(envelope, p.encode(reply))
+        elapsed = time.perf_counter() - t0
+        self.recorder.record(request.op, reply, elapsed)
+        self._log(envelope, request.op, request.id, True, None, None, elapsed)
+        return True
 
-    def _stats_frame(self) -> bytes:
+    def _stats(self) -> dict:
+        now = time.monotonic()
         c = self.counters
-        return json.dumps({
-            "workers": len(self._workers),
-            "ready": self.ready_workers,
-            "busy": sum(w.job is not None for w in self._workers.values()),
-            "pids": [w.proc.pid for w in self._workers.values()],
-            "requests": c.requests,
-            "errors": c.errors,
-            "replaced": c.replaced,
-            "uptime_s": round(time.time() - c.started, 3),
-        }).encode()
+        workers = []
+        for w in self._workers.values():
+            job = w.job
+            workers.append({
+                "pid": w.proc.pid, "ready": w.ready, "busy": job is not None,
+                "request": None if job is None else {
+                    "id": job.id, "op": job.op, "running_s": round(now - job.started, 3)},
+                **w.meta,
+            })
+        return {
+            "protocol": p.PROTOCOL_VERSION,
+            "broker": {
+                "pid": os.getpid(),
+                "workers": len(self._workers),
+                "ready": self.ready_workers,
+                "busy": sum(w.job is not None for w in self._workers.values()),
+                "queued": len(self._queue),
+                "pids": [w.proc.pid for w in self._workers.values()],
+                "requests": c.requests,
+                "errors": c.errors,
+                "replaced": c.replaced,
+                "refused_keys": len(self._refused),
+                "uptime_s": round(time.time() - c.started, 3),
+            },
+            "workers": workers,
+        }
+
+    def _enqueue(self, envelope: list[bytes], body: bytes) -> None:
+        room = 4 * self.limits.max_message_bytes - self._queued_bytes
+        if len(self._queue) >= MAX_QUEUED or len(body) > room:
+            self._reject(envelope, PathcheckError(
+                f"the service is busy: {len(self._queue)} requests ({self._queued_bytes} bytes) "
+                "are waiting for a worker; retry later", code="busy"), *peek(body))
+            return
+        self._queue.append((envelope, body))
+        self._queued_bytes += len(body)
+
+    def _dispatch_queued(self) -> None:
+        while self._idle and self._queue and not self._draining:
+            envelope, body = self._queue.popleft()
+            self._queued_bytes -= len(body)
+            worker = self._idle.pop()  # most recently idle first
+            worker.job = _Job(envelope, body, time.monotonic())
+            context = json.dumps({"refused": dict(self._refused)}).encode()
+            # unreachable: it died before we noticed; _check_workers replies to its request
+            with contextlib.suppress(zmq.ZMQError):
+                self.backend.send_multipart([worker.identity, REQ, body, context])
 
     def _from_workers(self) -> None:
         while True:
@@ -254,50 +370,73 @@ class Broker:
             worker = self._workers.get(frames[0])
             if worker is None or len(frames) < 2:
                 continue
-            if frames[1] == READY:
+            worker.seen = time.monotonic()
+            kind = frames[1]
+            if kind == READY and not worker.ready:
                 worker.ready = True
                 self._start_failures = 0
                 self._idle.append(worker)
-            elif frames[1] == REPLY and len(frames) == 4 and worker.job is not None:
-                job, worker.job = worker.job, None
-                self._idle.append(worker)
-                self._send(job.envelope, frames[2])
-                try:
-                    meta = json.loads(frames[3])
-                except ValueError:
-                    meta = {}
-                if not meta.get("ok", True):
-                    self.counters.errors += 1
-                self._log(job.envelope, meta.get("op"), meta.get("ok"), meta.get("code"),
-                          worker, time.monotonic() - job.started)
+            elif kind == STARTED and len(frames) == 3 and worker.job is not None:
+                with contextlib.suppress(ValueError, AttributeError):
+                    info = json.loads(frames[2])
+                    job = worker.job
+                    job.id, job.op, job.key, job.known = info["id"], info["op"], info["key"], True
+            elif kind == REPLY and len(frames) == 4 and worker.job is not None:
+                self._replied(worker, frames[2], frames[3])
+
+    def _replied(self, worker: _Worker, body: bytes, meta_frame: bytes) -> None:
+        job, worker.job = worker.job, None
+        self._send(job.envelope, body)
+        try:
+            meta = json.loads(meta_frame)
+        except ValueError:
+            meta = {}
+        worker.meta = {k: meta[k] for k in ("worker", "cache") if k in meta}
+        if meta.get("exit"):
+            worker.retiring = True  # it exits now; _check_workers replaces it
+        else:
+            self._idle.append(worker)
+        if not meta.get("ok", True):
+            self.counters.errors += 1
+        rid = job.id if job.known else peek(job.body)[0]
+        self._log(job.envelope, meta.get("op"), rid, meta.get("ok"), meta.get("code"), worker,
+                  time.monotonic() - job.started)
 
     def _check_workers(self) -> None:
         now = time.monotonic()
+        silent = LIVENESS * self.limits.heartbeat_s
         for worker in list(self._workers.values()):
             code = worker.proc.poll()
-            timed_out = (
-                worker.job is not None and now - worker.job.started > self.limits.request_timeout_s
-            )
-            if code is None and not timed_out:
-                continue
-            if timed_out and code is None:
+            job = worker.job
+            if code is None:
+                if job is not None and now - job.started > self.limits.request_timeout_s:
+                    why = f"ran over the service's {self.limits.request_timeout_s:g} s limit"
+                    err = PathcheckError(f"request {why}; its worker was stopped and replaced, "
+                                         "and this request is refused if sent again",
+                                         code="timeout")
+                elif job is None and worker.ready and not worker.retiring \
+                        and now - worker.seen > silent:
+                    why, err = f"hung: no heartbeat for {now - worker.seen:.1f} s", None
+                elif not worker.ready and now - worker.spawned > START_TIMEOUT_S:
+                    why, err = "hung at start", None
+                    self._start_failures += 1
+                else:
+                    continue
                 worker.proc.kill()
-                worker.proc.wait()
-                err = PathcheckError(
-                    f"request took longer than the service's {self.limits.request_timeout_s:g} s "
-                    "limit; its worker was stopped", code="timeout")
+                code = worker.proc.wait()
             else:
+                why = f"died ({_exit(code)})"
                 err = PathcheckError(
-                    f"worker {worker.proc.pid} died (exit code {code}) while answering this "
-                    "request; it has been replaced, retry", code="worker")
+                    f"worker {worker.proc.pid} {why} while answering this request; it has been "
+                    "replaced, and this request is refused if sent again", code="worker")
                 if not worker.ready:
                     self._start_failures += 1
             self._remove(worker)
             shutil.rmtree(Path(self._backend_dir) / worker.identity.decode(), ignore_errors=True)
-            if worker.job is not None:
-                self._reject(worker.job.envelope, err, worker=worker,
-                             elapsed=now - worker.job.started)
-            log.warning("worker %d gone (%s)", worker.proc.pid, err.code)
+            if job is not None:
+                self._lost(worker, job, err, why)
+            log.log(logging.INFO if worker.retiring else logging.WARNING,
+                    "worker %d gone: %s", worker.proc.pid, "retired" if worker.retiring else why)
             if not (self._draining or self._stop_requested):
                 if self._start_failures >= MAX_START_FAILURES:
                     raise PathcheckError(
@@ -306,10 +445,31 @@ class Broker:
                 self._spawn()
                 self.counters.replaced += 1
 
+    def _lost(self, worker: _Worker, job: _Job, err: PathcheckError, why: str) -> None:
+        """Answer the request a worker took down with it; remember its content hash."""
+        if job.key is not None:
+            stamp = time.strftime("%Y-%m-%d %H:%M:%S")
+            self._refused[job.key] = f"took worker {worker.proc.pid} down at {stamp}: {why}"
+            while len(self._refused) > MAX_REFUSED:
+                self._refused.popitem(last=False)
+        rid, op = (job.id, job.op) if job.known else peek(job.body)
+        self._reject(job.envelope, err, rid, op, worker=worker,
+                     elapsed=time.monotonic() - job.started)
+
+    def _beat(self) -> None:
+        now = time.monotonic()
+        if now < self._next_beat:
+            return
+        self._next_beat = now + self.limits.heartbeat_s
+        for worker in list(self._idle):
+            with contextlib.suppress(zmq.ZMQError):
+                self.backend.send_multipart([worker.identity, HEARTBEAT])
+
     def _spawn(self) -> None:
         identity = f"w{next(self._ids)}-{secrets.token_hex(8)}".encode()
         cmd = [sys.executable, "-m", "checker.service.worker", self.backend_addr,
-               identity.decode(), "--config-json", self.config.model_dump_json()]
+               identity.decode(), "--config-json", self.config.model_dump_json(),
+               *self.roots.args()]
         if self.store:
             cmd += ["--store", str(self.store)]
         scratch = Path(self._backend_dir) / identity.decode()  # its TMPDIR, removed with it
@@ -325,13 +485,17 @@ class Broker:
         if worker in self._idle:
             self._idle.remove(worker)
 
+    def _refuse_unavailable(self, envelope: list[bytes], body: bytes) -> None:
+        self._reject(envelope, PathcheckError(
+            "service is shutting down; retry another instance", code="unavailable"), *peek(body))
+
     def _reject(self, envelope: list[bytes], err: PathcheckError, rid: object = None,
                 op: str | None = None, worker: _Worker | None = None, elapsed: float = 0.0) -> None:
         self.counters.errors += 1
         reply = p.error_reply(err, request_id=rid, op=op)
         self._send(envelope, p.encode(reply))
         self.recorder.record(op or "?", reply, elapsed)
-        self._log(envelope, op, False, err.code, worker, elapsed)
+        self._log(envelope, op, rid, False, err.code, worker, elapsed)
 
     def _send(self, envelope: list[bytes], body: bytes) -> None:
         try:
@@ -339,11 +503,11 @@ class Broker:
         except zmq.ZMQError as err:  # the client has gone: nothing to answer
             log.info("reply dropped, client gone: %s", err)
 
-    def _log(self, envelope: list[bytes], op: str | None, ok: bool | None, code: str | None,
-             worker: _Worker | None, elapsed: float) -> None:
+    def _log(self, envelope: list[bytes], op: str | None, rid: object, ok: bool | None,
+             code: str | None, worker: _Worker | None, elapsed: float) -> None:
         log.info(
-            "request client=%s op=%s ok=%s%s worker=%s ms=%.2f",
-            envelope[0].hex()[:10] if envelope else "-", op or "?",
+            "request client=%s op=%s id=%s ok=%s%s worker=%s ms=%.2f",
+            envelope[0].hex()[:10] if envelope else "-", op or "?", json.dumps(rid)[:60],
             "true" if ok else "false", f" code={code}" if code else "",
             worker.proc.pid if worker else "-", elapsed * 1000,
         )
@@ -362,14 +526,62 @@ class Broker:
                 w.proc.wait()
         self._workers.clear()
         self._idle.clear()
+        if self._auth is not None:
+            self._auth.stop()
         for sock in (getattr(self, "frontend", None), getattr(self, "backend", None),
                      getattr(self, "control", None)):
             if sock is not None:
                 sock.close()
         self.ctx.term()
+        if self.recorder is not None:
+            self.recorder.close()
         if self._backend_dir:
             shutil.rmtree(self._backend_dir, ignore_errors=True)
         log.info("stopped")
+
+
+def check_bind(bind: str, *, curve: bool, insecure: bool) -> None:
+    """Refuse a front end reachable from other machines without CURVE (unless `insecure`):
+    of the network transports only tcp://, ws:// and wss:// on a loopback address are local
+    (ipc://, inproc:// are; an unknown transport fails at bind)."""
+    scheme, _, rest = bind.partition("://")
+    if curve or insecure or scheme not in NETWORK_TRANSPORTS:
+        return
+    host = rest.split("/", 1)[0].rsplit(":", 1)[0].strip("[]")
+    try:
+        local = host == "localhost" or ipaddress.ip_address(host).is_loopback
+    except ValueError:  # `*`, an interface or a host name
+        local = False
+    if scheme not in ("tcp", "ws", "wss") or not local:
+        raise PathcheckError(
+            f"{bind} may be reachable from other machines: give --curve-keys DIR (keys from "
+            "`pathcheck serve --new-keys DIR`) or --insecure, or bind tcp://127.0.0.1:PORT",
+            code="usage")
+
+
+_ID = re.compile(rb'"id"\s*:\s*("(?:[^"\\\n]|\\.){0,200}"|-?\d{1,19})\s*[,}]')
+
+
+def peek(body: bytes) -> tuple[Any, str | None]:
+    """Best effort `(id, op)` of a request the broker answers itself: a JSON parse for small
+    bodies, for large ones a scan for the last `"id": ...` (no op)."""
+    if len(body) <= PEEK_BYTES:
+        return p.peek(body)
+    matches = list(_ID.finditer(body))  # clients write `id` last; a nested one may come first
+    if not matches:
+        return None, None
+    with contextlib.suppress(ValueError):
+        rid = json.loads(matches[-1].group(1))
+        return (rid if isinstance(rid, int | str) else None), None
+    return None, None
+
+
+def _exit(code: int) -> str:
+    if code < 0:
+        with contextlib.suppress(ValueError):
+            return f"signal {signal.Signals(-code).name}"
+        return f"signal {-code}"
+    return f"exit code {code}"
 
 
 def _split(frames: list[bytes]) -> tuple[list[bytes], bytes | None]:

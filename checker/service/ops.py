@@ -20,21 +20,23 @@ from checker.config import Config
 from checker.errors import PathcheckError
 from checker.service import protocol as p
 from checker.service.cache import CachedPart, PartCache, deep_nbytes, file_key, json_key
+from checker.service.roots import Roots, redact
 
 
 @dataclass
 class WorkerState:
-    """What a worker keeps between requests: config, part cache, counters; `broker` holds the
-    broker's counters sent with the current request."""
+    """What a worker keeps between requests: config, part cache, counters, and the roots files
+    are read from (in a worker process those of `pathcheck serve --root`; in-process callers
+    that build a state themselves read anywhere unless they give roots)."""
 
     config: Config
     cache: PartCache
     started: float = field(default_factory=time.time)
     requests: int = 0
     errors: int = 0
-    broker: dict = field(default_factory=dict)
     last_document: Any = None
     last_job_path: str = ""
+    roots: Roots = field(default_factory=lambda: Roots(["/"]))  # a worker process: --root
 
 
 def ping(req: p.PingRequest, state: WorkerState) -> dict:
@@ -44,7 +46,6 @@ def ping(req: p.PingRequest, state: WorkerState) -> dict:
 def stats(req: p.StatsRequest, state: WorkerState) -> dict:
     return {
         "protocol": p.PROTOCOL_VERSION,
-        "broker": state.broker,
         "worker": {
             "pid": os.getpid(),
             "uptime_s": time.time() - state.started,
@@ -66,8 +67,8 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
     rows = np.asarray(req.cc, dtype=np.float64).reshape(-1, 6)
     cc, normals = rows[:, :3], _unit_rows(rows[:, 3:], "cc", "normal")
     axis = np.asarray(req.axis, dtype=np.float64)
-    if isinstance(req.part, p.PartPath):
-        _existing(req.part.path)
+    files = _Files(state.roots)
+    part_path = files.part(req.part)
     parse_cutter = _library("checker.cutter", "parse_cutter", "allowable")
     engine_allowable = _library("checker.engine", "allowable", "allowable")
     document = _library("checker.engine.document", "allowable_document", "allowable")
@@ -75,7 +76,10 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
     if req.b_range is not None:
         check_b_range = _library("checker.four_axis.axes", "check_b_range", "allowable")
         check_b_range(*req.b_range, state.config.four_axis.b_min, state.config.four_axis.b_max)
-    entry, cached, key = cached_part(req.part, state)
+    try:
+        entry, cached, key = cached_part(req.part, state, part_path)
+    except PathcheckError as err:
+        raise files.shown(err) from None
     t0 = time.perf_counter()
     result = engine_allowable(entry.test_points, entry.part, cutter, cc, normals,
                               axis / np.linalg.norm(axis), config=state.config)
@@ -93,37 +97,64 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
 
 
 def check(req: p.CheckRequest, state: WorkerState) -> dict:
-    """Check a job with `checker.job.check_job`; `post` also returns the G-code text. Inline
-    CL text is named `NAME.apt` (`<apt>` without a name) in errors and in the document."""
-    if isinstance(req.part, p.PartPath):
-        _existing(req.part.path)
-    if req.apt_path is not None:
-        _existing(req.apt_path, "apt_path", "a CL file")
+    """Check a job with `checker.job.check_toolpath`; `post` also returns the G-code text.
+    Inline CL text is named `NAME.apt` (`<apt>` without a name) in errors and in the document.
+    Every file is read through the roots: the CL file, the part (given or beside the CL file)
+    and a machine file (`machine`, else the CL file's `PPRINT/MACHINE`)."""
+    files = _Files(state.roots)
+    part_path = files.part(req.part)
+    given_apt = files.get(req.apt_path, "apt_path", "a CL file", "input") if req.apt_path else None
     config = _with_options(state.config, req.options)
-    check_job = _library("checker.job", "check_job", "check")
+    read_cl = _library("checker.apt", "read_cl", "check")
+    check_toolpath = _library("checker.job", "check_toolpath", "check")
     with tempfile.TemporaryDirectory(prefix="pathcheck-service-") as tmp:
         label = f"{req.name}.apt" if req.name else INLINE_APT
-        apt_path = Path(req.apt_path) if req.apt_path else Path(tmp) / f"{req.name or 'job'}.apt"
+        apt_path = given_apt or Path(tmp) / f"{req.name or 'job'}.apt"
         if req.apt is not None:
             apt_path.write_text(req.apt)
-        part_path = _part_file(req.part, Path(tmp)) if req.part is not None else None
+        if part_path is None and req.part is not None:
+            part_path = _part_file(req.part, Path(tmp))
         gcode_path = Path(tmp) / "job.nc" if req.post else None
         try:
-            doc = check_job(apt_path, part_path=part_path, cutter=req.cutter,
-                            machine=req.machine, config=config, output=gcode_path,
-                            b_range=req.b_range, reorient=req.reorient,
-                            part_transform=req.part_transform)
+            t0 = time.perf_counter()
+            toolpath = read_cl(apt_path, require_cutter=req.cutter is None)
+            if part_path is None and given_apt is not None:
+                part_path = files.beside(given_apt)
+            machine = _machine(req.machine, toolpath, files)
+            doc = check_toolpath(toolpath, part_path=part_path, cutter=req.cutter,
+                                 machine=machine, config=config, output=gcode_path,
+                                 b_range=req.b_range, reorient=req.reorient,
+                                 part_transform=req.part_transform, started=t0)
         except PathcheckError as err:
             if req.apt is None or err.path != str(apt_path):
-                raise
+                raise files.shown(err) from None
             raise PathcheckError(err.message, path=label, line=err.line, code=err.code) from None
-        if req.apt is not None:
-            doc.job.path = label
+        doc.job.path = label if req.apt is not None else req.apt_path
         state.last_document, state.last_job_path = doc, doc.job.path
         out: dict[str, Any] = {"results": doc.model_dump(mode="json")}
         if gcode_path is not None:
             out["gcode"] = gcode_path.read_text()
         return out
+
+
+def _machine(name: str | None, toolpath: Any, files: _Files) -> str | None:
+    """The machine for `check_toolpath`: a shipped machine by name (its file in the package),
+    or a TOML file inside the roots; `name`, else the CL file's `PPRINT/MACHINE NAME`; None:
+    the default machine."""
+    field_name = "machine"
+    if name is None:
+        for record in toolpath.records:
+            words = (record.text or "").split() if record.word == "PPRINT" else []
+            if len(words) == 2 and words[0].upper() == "MACHINE":
+                name, field_name = words[1], "PPRINT/MACHINE"
+                break
+    if name is None:
+        return None
+    shipped = _library("postproc.machine", "MACHINES_DIR", "check") / f"{name}.toml"
+    if "/" not in name and shipped.is_file():
+        return str(shipped)
+    return str(files.get(name, field_name, "a shipped machine name or a machine TOML file",
+                         "machine"))
 
 
 INLINE_APT = "<apt>"
@@ -163,12 +194,14 @@ OPS: dict[type, Callable[[Any, WorkerState], dict]] = {
 # --- parts -----------------------------------------------------------------------------------
 
 
-def cached_part(spec: p.PartSpec, state: WorkerState) -> tuple[CachedPart, bool, str]:
+def cached_part(spec: p.PartSpec, state: WorkerState,
+                path: Path | None = None) -> tuple[CachedPart, bool, str]:
     """The loaded and sampled part from the cache (keyed by the sha256 of the part's bytes or
-    inline JSON, and the sampling settings): `(entry, was_cached, key)`."""
+    inline JSON, and the sampling settings): `(entry, was_cached, key)`. `path` is the part
+    file already checked against the roots (for a `{"path"}` part)."""
     salt = state.config.geometry.model_dump_json()
     if isinstance(spec, p.PartPath):
-        path = _existing(spec.path)
+        path = path or _Files(state.roots).get(spec.path, "part.path", "a part file", "part")
         key = file_key(path, salt)
         load = _library("checker.geometry", "load_part", "allowable")
         entry, cached = state.cache.get(key, lambda: _sampled(lambda: load(path), state.config))
@@ -202,10 +235,8 @@ def _sampled(load: Callable[[], Any], config: Config) -> CachedPart:
     return CachedPart(part, test_points, nbytes, load_s=t1 - t0, sample_s=t2 - t1)
 
 
-def _part_file(spec: p.PartSpec, folder: Path) -> Path:
-    """A path to the part: the given file, or the inline geomdl JSON written into `folder`."""
-    if isinstance(spec, p.PartPath):
-        return _existing(spec.path)
+def _part_file(spec: p.PartInline, folder: Path) -> Path:
+    """The inline geomdl JSON written into `folder`."""
     import json
 
     path = folder / "part.json"
@@ -213,13 +244,36 @@ def _part_file(spec: p.PartSpec, folder: Path) -> Path:
     return path
 
 
-def _existing(path: str, field_name: str = "part.path", what: str = "a part file") -> Path:
-    out = Path(path).expanduser()
-    if not out.is_file():
-        found = "a directory" if out.is_dir() else "nothing"
-        raise PathcheckError(f"field '{field_name}': expected {what}, found {found}",
-                             path=out, code="part" if field_name.startswith("part") else "input")
-    return out
+class _Files:
+    """The files one request names, each checked against the roots; `shown` turns an error
+    about one of them back to the name the client gave, with the file's contents hidden."""
+
+    def __init__(self, roots: Roots) -> None:
+        self.roots = roots
+        self.given: dict[str, str] = {}  # resolved path -> the client's name for it
+
+    def get(self, name: str, field_name: str, what: str, code: str) -> Path:
+        path = self.roots.file(name, field_name, what, code)
+        self.given[str(path)] = name
+        return path
+
+    def part(self, spec: p.PartSpec | None) -> Path | None:
+        if not isinstance(spec, p.PartPath):
+            return None
+        return self.get(spec.path, "part.path", "a part file", "part")
+
+    def beside(self, apt: Path) -> Path | None:
+        """The part beside the CL file (same stem), checked against the roots like a given
+        one; None when there is none (the job then reports it)."""
+        found = _library("checker.geometry", "find_part_beside", "check")(apt)
+        return None if found is None else self.get(str(found), "part", "a part file", "part")
+
+    def shown(self, err: PathcheckError) -> PathcheckError:
+        name = self.given.get(err.path or "")
+        if name is None:
+            return err
+        err = redact(err, name)
+        return PathcheckError(err.message, path=name, line=err.line, code=err.code)
 
 
 def _library(module: str, name: str, op: str) -> Any:

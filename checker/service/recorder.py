@@ -5,6 +5,8 @@ never fails a request: store errors are logged and swallowed."""
 from __future__ import annotations
 
 import logging
+import queue
+import threading
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -64,3 +66,28 @@ def open_recorder(store_path: str | Path | None) -> Recorder:
     except Exception as err:
         log.warning("results store %s unavailable, requests are not recorded: %s", store_path, err)
         return NullRecorder()
+
+
+class BackgroundRecorder:
+    """Records on a thread of its own, so the broker's loop never waits for the store (the
+    store is opened on that thread). `close()` records what is queued, then stops."""
+
+    def __init__(self, store_path: str | Path | None) -> None:
+        self._queue: queue.SimpleQueue = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._run, args=(store_path,), daemon=True,
+                                        name="pathcheck-recorder")
+        self._thread.start()
+
+    def record(
+        self, op: str, reply: dict, elapsed_s: float, document: Any = None, job_path: str = ""
+    ) -> None:
+        self._queue.put((op, reply, elapsed_s, document, job_path))
+
+    def close(self, timeout_s: float = 10.0) -> None:
+        self._queue.put(None)
+        self._thread.join(timeout_s)
+
+    def _run(self, store_path: str | Path | None) -> None:
+        recorder = open_recorder(store_path)
+        while (item := self._queue.get()) is not None:
+            recorder.record(*item)
