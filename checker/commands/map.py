@@ -59,8 +59,9 @@ def map_command(part_path, cutter_text, grid_text, tools_path, out_dir) -> None:
     write_file(out_dir / "map.json", json.dumps(doc, indent=1), what="map JSON")
     sizes = np.concatenate([m.size[m.kept] for m in maps])
     fin = sizes[np.isfinite(sizes)]
+    smallest = f"{fin.min():.4f} mm" if fin.size else "unbounded (no point limits the cutter)"
     click.echo(f"{len(sizes)} CC points on {len(maps)} surfaces; allowable "
-               f"{'r' if r is None else 'R'} min {fin.min() if fin.size else float('nan'):.4f} mm; "
-               f"{len(tools)} standard {cutter.kind} cutters")
+               f"{'r' if r is None else 'R'} min {smallest}; {len(tools)} standard "
+               f"{cutter.kind} cutters")
     for f in [*files, out_dir / "map.json"]:
         click.echo(f"wrote {f}")

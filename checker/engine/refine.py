@@ -227,7 +227,11 @@ def _line_step(g, hh, radius):
 
 @nb.njit(cache=True, inline="always")
 def _fraction_inside(p, lo, hi):
-    """The largest fraction (<= 1) of a step p that stays within [lo, hi] (lo <= 0 <= hi)."""
+    """The largest fraction (<= 1) of a step p that stays within [lo, hi] (lo <= 0 <= hi; a
+    centre up to _DELTA outside its box takes no step across the bound, and a zero step is
+    whole)."""
+    if p == 0.0:
+        return 1.0
     if p < lo:
         return max(lo, 0.0) / p
     if p > hi:

@@ -3,11 +3,12 @@ per CC row, with sound pruning (family.py), then up to m seed points per row in 
 for the local refinement. Tool frame of each row, mm.
 
 The result is that of a plain growing scan: trial sizes s_goal, 4 s_goal, ... (capped at s_cap;
-s_goal = min(s_start, s_cap)) until the smallest size B over the candidates C(s) of a trial
-(the test points of the region where a size <= s can lie, grown by the slack; candidates.py) is
-<= s, at the trial size G(B). The seeds are the sampled local minima (basins.py) up to the limit
-L(B) = (1 + rel) B + slack among C(G); the contour crossings (contour.py) come from C(G). As
-C(s) holds every point of size <= s, when G >= L the seeds are those among all points up to L.
+s_goal = s_start kept within [_MIN_TRIAL_MM, s_cap]) until the smallest size B over the
+candidates C(s) of a trial (the test points of the region where a size <= s can lie, grown by
+the slack; candidates.py) is <= s, at the trial size G(B). The seeds are the sampled local
+minima (basins.py) up to the limit L(B) = (1 + rel) B + slack among C(G); the contour crossings
+(contour.py) come from C(G). As C(s) holds every point of size <= s, when G >= L the seeds are
+those among all points up to L.
 
 This scan gets there from fewer evaluations. Each row first gets an upper bound u >= B: every
 `_ANCHOR_STEP`-th row from a coarse sample of its region, the rows between from the minima of
@@ -36,6 +37,8 @@ _GROW = 4.0
 _REL_MARGIN = 0.05
 _ANCHOR_STEP = 8  # every this many rows one is scanned first; the others start from its minima
 _EVAL_MARGIN_MM = 1e-6  # growth of the evaluated region against rounding
+_MIN_TRIAL_MM = 1e-3  # the smallest first trial size: a start at 0 (a neighbour of size 0)
+# would never grow
 
 
 @dataclass
@@ -118,7 +121,7 @@ class _State:
         self.out = Scan(np.full(n, np.inf), np.full(n, -1, dtype=np.int64),
                         np.full((n, m), -1, dtype=np.int64), np.full((n, m), np.inf),
                         np.zeros(n, dtype=np.int64))
-        self.s_goal = np.minimum(s_start, s_cap)
+        self.s_goal = np.clip(np.nan_to_num(s_start, nan=s_cap), _MIN_TRIAL_MM, s_cap)
         self.rung = self.s_goal.copy()  # next trial of the plain scan
         self.u = np.full(n, np.inf)
         self.low = np.full(n, np.nan)  # B, once found
