@@ -26,6 +26,9 @@ class GeometryConfig(_Section):
     max_samples_per_surface: PositiveInt = 200_000
     min_samples_per_direction: PositiveInt = 8
     max_spacing: PositiveFloat = 1.0
+    reader_time_s: PositiveFloat = 20.0
+    reader_time_s_per_mb: PositiveFloat = 20.0
+    reader_memory_mb: PositiveInt = 2048
 
 
 class CheckConfig(_Section):

@@ -6,8 +6,11 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+from checker.config import GeometryConfig, default_config
 from checker.errors import PathcheckError
+from checker.geometry.limits import check_mesh, check_surface
 from checker.part import Part
+from checker.sandbox import Limits
 
 BESIDE_SUFFIXES = (".step", ".stp", ".igs", ".iges", ".json", ".stl")
 _READERS = {
@@ -23,7 +26,7 @@ _READERS = {
 _CACHE: dict[tuple[str, str], Part] = {}
 _CACHE_MAX = 8  # parts kept in memory (oldest dropped first)
 
-__all__ = ["BESIDE_SUFFIXES", "find_part_beside", "load_part"]
+__all__ = ["BESIDE_SUFFIXES", "find_part_beside", "load_part", "reader_limits"]
 
 
 def find_part_beside(job_path: str | Path) -> Path | None:
@@ -41,11 +44,14 @@ def find_part_beside(job_path: str | Path) -> Path | None:
     return None
 
 
-def load_part(path: str | Path) -> Part:
+def load_part(path: str | Path, geometry: GeometryConfig | None = None) -> Part:
     """Read a part file (kind from its suffix); cached in memory by (path, content sha256).
+    STEP and IGES are read in a contained child process under the time and memory limits of
+    `geometry` (default: the shipped config), see `reader_limits`.
 
     Raises PathcheckError(code="part") naming the file when it is missing, unreadable, of an
-    unsupported kind or holds no usable surface.
+    unsupported kind, holds no usable surface or a number out of its sane range
+    (`checker.geometry.limits`), or when its reader crashes or passes a limit.
     """
     path = Path(path)
     kind = _READERS.get(path.suffix.lower())
@@ -66,18 +72,29 @@ def load_part(path: str | Path) -> Part:
     key = (str(path.resolve()), digest)
     if key in _CACHE:
         return _CACHE[key]
-    part = _read(kind, path, raw, digest)
+    cfg = geometry or default_config().geometry
+    part = _read(kind, path, raw, digest, reader_limits(cfg, len(raw)))
     if len(_CACHE) >= _CACHE_MAX:
         _CACHE.pop(next(iter(_CACHE)))
     _CACHE[key] = part
     return part
 
 
-def _read(kind: str, path: Path, raw: bytes, digest: str) -> Part:
+def reader_limits(cfg: GeometryConfig, size_bytes: int) -> Limits:
+    """Limits of the contained STEP/IGES reader for a file of `size_bytes`: `reader_time_s`
+    plus `reader_time_s_per_mb` per MB (2**20 bytes) of wall-clock time, `reader_memory_mb`
+    of address space."""
+    seconds = cfg.reader_time_s + cfg.reader_time_s_per_mb * size_bytes / 2**20
+    return Limits(seconds=seconds, memory_mb=cfg.reader_memory_mb)
+
+
+def _read(kind: str, path: Path, raw: bytes, digest: str, limits: Limits) -> Part:
     if kind == "stl":
         from checker.geometry.stl_io import read_stl
 
-        return Part(surfaces=[], source=str(path), content_hash=digest, mesh=read_stl(path, raw))
+        mesh = read_stl(path, raw)
+        check_mesh(mesh, path)
+        return Part(surfaces=[], source=str(path), content_hash=digest, mesh=mesh)
     if kind == "geomdl":
         from checker.geometry.geomdl_io import read_geomdl
 
@@ -92,7 +109,9 @@ def _read(kind: str, path: Path, raw: bytes, digest: str) -> Part:
     else:
         from checker.geometry.occ_io import read_occ
 
-        surfaces, faces = read_occ(path, kind)
+        surfaces, faces = read_occ(path, kind, limits)
     if not surfaces:
         raise PathcheckError("no surface found in the part file", path=path, code="part")
+    for s in surfaces:
+        check_surface(s, path)
     return Part(surfaces=surfaces, source=str(path), content_hash=digest, faces=faces)

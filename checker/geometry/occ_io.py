@@ -7,6 +7,9 @@ extrusion, Bezier) are converted exactly to rational B-splines by GeomConvert ov
 B-spline parameters differ from the analytic ones, the loop points are mapped onto the new
 parameters by inversion (to 1e-9 mm). Faces reversed in the shell get `flip` so that normals
 follow the face orientation (out of the solid). OCC works in mm (its unit conversion applies).
+
+OpenCASCADE runs only in a child process (`checker.sandbox`, `read_occ_arrays`): a damaged
+file that crashes or hangs it is one error naming the file; the faces come back as arrays.
 """
 
 from __future__ import annotations
@@ -18,8 +21,10 @@ import numpy as np
 from checker.errors import PathcheckError
 from checker.extras import require
 from checker.geometry.inverse import invert_points
+from checker.geometry.packing import pack_surfaces, unpack_surfaces
 from checker.geometry.trims import UVTrim
 from checker.part import Surface
+from checker.sandbox import Limits, run_contained
 
 _KINDS = {
     "GeomAbs_Plane": "plane",
@@ -40,14 +45,23 @@ _TRIM_ANGLE = 0.2  # rad: angular deflection of the trim polylines
 _MAP_TOL = 1e-9  # mm: trim loop points of converted faces must land this close
 
 
-def read_occ(path: Path, kind: str) -> tuple[list[Surface], int]:
-    """(surfaces, number of faces) of a STEP (`kind` "step") or IGES ("iges") file."""
+def read_occ(path: Path, kind: str, limits: Limits) -> tuple[list[Surface], int]:
+    """(surfaces, number of faces) of a STEP (`kind` "step") or IGES ("iges") file, read by
+    OpenCASCADE in a contained child process (`checker.sandbox`) under `limits`."""
     require("OCP", "cad", f"reading {kind.upper()} parts")
+    arrays = run_contained("checker.geometry.occ_io:read_occ_arrays", [str(path), kind],
+                           limits, path, f"the {kind.upper()} reader (OpenCASCADE)")
+    surfaces = unpack_surfaces(arrays)
+    return surfaces, len(surfaces)
+
+
+def read_occ_arrays(path: str, kind: str) -> dict[str, np.ndarray]:
+    """The child's side of `read_occ`: the file's faces as `pack_surfaces` arrays."""
     from OCP.TopAbs import TopAbs_FACE
     from OCP.TopExp import TopExp_Explorer
     from OCP.TopoDS import TopoDS
 
-    shape = _read_shape(path, kind)
+    shape = _read_shape(Path(path), kind)
     surfaces: list[Surface] = []
     ex = TopExp_Explorer(shape, TopAbs_FACE)
     while ex.More():
@@ -61,7 +75,7 @@ def read_occ(path: Path, kind: str) -> tuple[list[Surface], int]:
                 path=path,
                 code="part",
             ) from err
-    return surfaces, len(surfaces)
+    return pack_surfaces(surfaces)
 
 
 def _quiet_occ() -> None:

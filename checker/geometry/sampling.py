@@ -14,6 +14,7 @@ from checker.geometry.evaluate import evaluate
 from checker.part import MeshPart, Part, Surface
 
 _PROBES_PER_SPAN = 4
+_PROBE_BLOCK = 100_000  # surface points evaluated at once while probing derivatives
 _CACHE: dict[tuple, TestPoints] = {}
 _CACHE_MAX = 8
 
@@ -75,16 +76,35 @@ def _probe(breaks: np.ndarray) -> np.ndarray:
     return (breaks[:-1, None] + s * np.diff(breaks)[:, None]).ravel()
 
 
-def _counts(breaks, probe_span, d1, d2, sag, max_spacing) -> np.ndarray:
-    """Samples per span for one direction: sag h^2 |S''| / 8 <= sag and h |S'| <= max_spacing."""
-    nspan = len(breaks) - 1
-    d1max = np.zeros(nspan)
-    d2max = np.zeros(nspan)
-    np.maximum.at(d1max, probe_span, d1)
-    np.maximum.at(d2max, probe_span, d2)
+def _counts(breaks, d1max, d2max, sag, max_spacing, cap) -> np.ndarray:
+    """Samples per span for one direction: sag h^2 |S''| / 8 <= sag and h |S'| <= max_spacing,
+    from the largest derivatives probed in each span; each in [1, cap] (derivatives that
+    overflow ask for `cap`)."""
     length = np.diff(breaks)
-    need = np.maximum(length * np.sqrt(d2max / (8.0 * sag)), length * d1max / max_spacing)
-    return np.maximum(need, 1.0)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        need = np.maximum(length * np.sqrt(d2max / (8.0 * sag)), length * d1max / max_spacing)
+    return np.clip(np.nan_to_num(need, nan=cap, posinf=cap), 1.0, cap)
+
+
+def _probe_maxima(s: Surface, pu: np.ndarray, pv: np.ndarray):
+    """Largest |S_u|, |S_uu| over v at each u-probe and |S_v|, |S_vv| over u at each v-probe,
+    evaluated in blocks of at most _PROBE_BLOCK points (memory bounded, not the probe grid)."""
+    d1u, d2u = np.zeros(len(pu)), np.zeros(len(pu))
+    d1v, d2v = np.zeros(len(pv)), np.zeros(len(pv))
+    rows = max(1, _PROBE_BLOCK // len(pv))
+    for i in range(0, len(pu), rows):
+        U, V = np.meshgrid(pu[i : i + rows], pv, indexing="ij")
+        ev = evaluate(s, U.ravel(), V.ravel(), order=2)
+        n = {k: np.linalg.norm(getattr(ev, k), axis=1).reshape(U.shape)
+             for k in ("du", "duu", "dv", "dvv")}
+        d1u[i : i + rows], d2u[i : i + rows] = n["du"].max(axis=1), n["duu"].max(axis=1)
+        d1v, d2v = np.maximum(d1v, n["dv"].max(axis=0)), np.maximum(d2v, n["dvv"].max(axis=0))
+    return d1u, d2u, d1v, d2v
+
+
+def _span_max(values: np.ndarray, nspan: int) -> np.ndarray:
+    """Per span, the largest of its _PROBES_PER_SPAN + 1 probe values."""
+    return values.reshape(nspan, _PROBES_PER_SPAN + 1).max(axis=1)
 
 
 def _grid(breaks: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -99,24 +119,21 @@ def surface_grid(s: Surface, sag: float, cfg: GeometryConfig) -> tuple[np.ndarra
     """Parameter grids (gu, gv) of surface s, uniform within each knot span and fine enough
     that the grid lines stay within `sag` mm of the surface (h^2 |S''| / 8 <= sag, from probes
     of the second derivatives) and `cfg.max_spacing` apart, at most
-    `cfg.max_samples_per_surface` points."""
+    `cfg.max_samples_per_surface` points (or one interval per knot span when the spans are
+    more: the grid never outgrows the part's own poles)."""
     bu = _span_breaks(s.knots_u, s.degree_u)
     bv = _span_breaks(s.knots_v, s.degree_v)
-    pu, pv = _probe(bu), _probe(bv)
-    U, V = np.meshgrid(pu, pv, indexing="ij")
-    ev = evaluate(s, U.ravel(), V.ravel(), order=2)
-    shape = U.shape
-    norm = lambda a: np.linalg.norm(a, axis=1).reshape(shape)  # noqa: E731
-    su = np.repeat(np.arange(len(bu) - 1), _PROBES_PER_SPAN + 1)
-    sv = np.repeat(np.arange(len(bv) - 1), _PROBES_PER_SPAN + 1)
-    cu = _counts(bu, su, norm(ev.du).max(axis=1), norm(ev.duu).max(axis=1), sag, cfg.max_spacing)
-    cv = _counts(bv, sv, norm(ev.dv).max(axis=0), norm(ev.dvv).max(axis=0), sag, cfg.max_spacing)
+    d1u, d2u, d1v, d2v = _probe_maxima(s, _probe(bu), _probe(bv))
+    cap = float(cfg.max_samples_per_surface)
+    nu, nv = len(bu) - 1, len(bv) - 1
+    cu = _counts(bu, _span_max(d1u, nu), _span_max(d2u, nu), sag, cfg.max_spacing, cap)
+    cv = _counts(bv, _span_max(d1v, nv), _span_max(d2v, nv), sag, cfg.max_spacing, cap)
     nmin = cfg.min_samples_per_direction
     cu *= max(1.0, nmin / cu.sum())
     cv *= max(1.0, nmin / cv.sum())
     total = (cu.sum() + 1) * (cv.sum() + 1)
-    if total > cfg.max_samples_per_surface:
-        f = np.sqrt(cfg.max_samples_per_surface / total)
+    if total > cap:
+        f = np.sqrt(cap / total)
         cu, cv = np.maximum(cu * f, 1.0), np.maximum(cv * f, 1.0)
     return _grid(bu, np.ceil(cu)), _grid(bv, np.ceil(cv))
 
@@ -135,7 +152,7 @@ def _sample_surface(s: Surface, sag: float, cfg: GeometryConfig):
     pts, nrm, uv, spc = ev.points, ev.normals, np.column_stack([u, v]), spacing
     if s.trim is not None:
         step = float(np.median(spacing)) if spacing.size else cfg.max_spacing
-        bpts, bnrm, buv = _boundary(s, step)
+        bpts, bnrm, buv = _boundary(s, step, cfg.max_samples_per_surface)
         pts, nrm, uv = (
             np.concatenate([pts, bpts]),
             np.concatenate([nrm, bnrm]),
@@ -151,16 +168,19 @@ def _local_step(g: np.ndarray) -> np.ndarray:
     return np.maximum(np.append(d, d[-1]), np.insert(d, 0, d[0]))
 
 
-def _boundary(s: Surface, step: float):
-    """Samples along the trim loops, about `step` mm apart (the loop vertices are kept too)."""
+def _boundary(s: Surface, step: float, max_points: int):
+    """Samples along the trim loops, about `step` mm apart (the loop vertices are kept too;
+    farther apart when that would be more than `max_points` beside the vertices)."""
     (u0, u1), (v0, v1) = s.domain
     loops = [np.vstack([lp, lp[:1]]) for lp in s.trim.loops if len(lp) >= 2]
     if not loops:
         return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 2))
+    segs = [np.linalg.norm(np.diff(evaluate(s, lp[:, 0], lp[:, 1]).points, axis=0), axis=1)
+            for lp in loops]
+    length = float(sum(seg.sum() for seg in segs))
+    step = max(step, length / max_points, 1e-9)  # at most about max_points samples
     uv = []
-    for lp in loops:  # one pass per loop; each loop is resampled as a whole
-        p3 = evaluate(s, lp[:, 0], lp[:, 1]).points
-        seg = np.linalg.norm(np.diff(p3, axis=0), axis=1)
+    for lp, seg in zip(loops, segs, strict=True):  # each loop is resampled as a whole
         k = np.maximum(np.ceil(seg / step), 1).astype(np.int64)
         idx = np.repeat(np.arange(len(seg)), k)
         t = (np.arange(k.sum()) - np.repeat(np.cumsum(k) - k, k)) / k[idx]

@@ -39,6 +39,7 @@ class PartTriangles:
 
 
 _REFINES = 3  # grid refinements at most to reach the deviation asked for
+_EVAL_BLOCK = 200_000  # surface points evaluated at once when measuring the deviation
 
 
 def part_triangles(part: Part, deviation: float, cfg: GeometryConfig) -> PartTriangles:
@@ -121,4 +122,9 @@ def _deviation(s: Surface, pts: np.ndarray, uv: np.ndarray, tri: np.ndarray) -> 
     flat = [0.5 * (pts[i] + pts[j]) for i, j in probes] + [pts[tri].mean(axis=1)]
     at = [0.5 * (uv[i] + uv[j]) for i, j in probes] + [uv[tri].mean(axis=1)]
     p, q = np.concatenate(flat), np.concatenate(at)
-    return float(np.linalg.norm(evaluate(s, q[:, 0], q[:, 1]).points - p, axis=1).max())
+    worst = 0.0
+    for i in range(0, len(q), _EVAL_BLOCK):  # evaluated in blocks: memory bounded
+        ev = evaluate(s, q[i : i + _EVAL_BLOCK, 0], q[i : i + _EVAL_BLOCK, 1])
+        gap = np.linalg.norm(ev.points - p[i : i + _EVAL_BLOCK], axis=1).max()
+        worst = max(worst, float(gap)) if np.isfinite(gap) else np.inf
+    return worst

@@ -32,8 +32,12 @@ def _crossings(u, v, x0, y0, x1, y1, vmin, dv, nb_, bstart, bedges, out):
         out[i] = _crossing_count(u[i], v[i], x0, y0, x1, y1, vmin, dv, nb_, bstart, bedges)
 
 
+_BUCKETED_PER_EDGE = 8  # bucket entries per edge at most (memory in O(edges))
+
+
 class LoopSet:
-    """Closed polylines (each (K, 2) in (u, v)) with an even-odd inside test."""
+    """Closed polylines (each (K, 2) in (u, v)) with an even-odd inside test; edges bucketed by
+    v in at most 4096 buckets and at most 8 entries per edge."""
 
     def __init__(self, loops: list[np.ndarray]) -> None:
         self.loops = [np.asarray(lp, dtype=np.float64).reshape(-1, 2) for lp in loops]
@@ -45,15 +49,19 @@ class LoopSet:
         self._x0, self._y0 = seg[:, 0, 0].copy(), seg[:, 0, 1].copy()
         self._x1, self._y1 = seg[:, 1, 0].copy(), seg[:, 1, 1].copy()
         n = len(seg)
-        self._nb = max(1, min(4096, n // 2))
         lo = np.minimum(self._y0, self._y1)
         hi = np.maximum(self._y0, self._y1)
         self._vmin = float(lo.min()) if n else 0.0
         span = (float(hi.max()) - self._vmin) if n else 1.0
-        self._dv = span / self._nb if span > 0 else 1.0
-        b0 = np.clip(((lo - self._vmin) / self._dv).astype(np.int64), 0, self._nb - 1)
-        b1 = np.clip(((hi - self._vmin) / self._dv).astype(np.int64), 0, self._nb - 1)
-        counts = b1 - b0 + 1
+        self._nb = max(1, min(4096, n // 2))
+        while True:  # fewer buckets until the bucketed edges are O(n): long edges span many
+            self._dv = span / self._nb if span > 0 else 1.0
+            b0 = np.clip(((lo - self._vmin) / self._dv).astype(np.int64), 0, self._nb - 1)
+            b1 = np.clip(((hi - self._vmin) / self._dv).astype(np.int64), 0, self._nb - 1)
+            counts = b1 - b0 + 1
+            if self._nb == 1 or counts.sum() <= _BUCKETED_PER_EDGE * n:
+                break
+            self._nb //= 2
         edge_of = np.repeat(np.arange(n), counts)
         offs = np.arange(edge_of.size) - np.repeat(np.cumsum(counts) - counts, counts)
         bucket = b0[edge_of] + offs
@@ -94,6 +102,16 @@ class UVTrim:
         self._outer = LoopSet(outer)
         self._holes = LoopSet(holes or [])
         self.loops = self._outer.loops + self._holes.loops
+
+    @property
+    def outer(self) -> list[np.ndarray]:
+        """The loops whose inside is kept."""
+        return self._outer.loops
+
+    @property
+    def holes(self) -> list[np.ndarray]:
+        """The loops whose inside is cut away."""
+        return self._holes.loops
 
     def contains(self, u, v) -> np.ndarray:
         """Bool mask (N,): True where (u, v) is kept."""
