@@ -132,7 +132,7 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
         raise PathcheckError("no cutting moves: expected GOTO records after FEDRAT, found only "
                              "rapid moves or none", path=apt_path, code="parse")
     ppath = _part_path(apt_path, part_path)
-    part = load_part(ppath)
+    part = load_part(ppath, geometry=cfg.geometry)
     transform = None
     if part_transform is not None:
         from checker.geometry.transform import parse_transform, transform_part
