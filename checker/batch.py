@@ -1,16 +1,20 @@
 """Batch runs: check many jobs, on this machine with a process pool or on an existing Dask
 distributed cluster, and record every result (or failure, with its reason) in the store. A job
-that fails is recorded as failed and the batch goes on."""
+that fails is recorded as failed and the batch goes on; a job whose worker process dies (killed,
+out of memory) runs once more on its own and, if it dies again, fails alone; a store that
+cannot record an outcome (a full disk) is said per job, and the batch goes on."""
 
 from __future__ import annotations
 
 import glob
 import importlib
+import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, replace
 from multiprocessing import get_context
 from pathlib import Path
 
@@ -32,6 +36,7 @@ class JobOutcome:
     document: str | None
     error: str | None
     elapsed_s: float
+    unrecorded: str | None = None  # why the store could not record it (a full disk)
 
     def results(self) -> ResultsDocument | None:
         return None if self.document is None else ResultsDocument.model_validate_json(
@@ -87,16 +92,96 @@ def _outcome(future: object, path: str, where: str) -> JobOutcome:
                           0.0)
 
 
+# the queue a pool worker announces each job it starts on (set by `_announce_to`)
+_STARTED: object | None = None
+
+
+def _announce_to(queue: object) -> None:
+    global _STARTED
+    _STARTED = queue
+
+
+def _run_announced(path: str, job_function: str) -> JobOutcome:
+    """`run_one` in a pool worker, after telling the parent the job started: when the pool
+    breaks, the parent knows which jobs lost their worker and which never ran."""
+    _STARTED.put(path)
+    return run_one(path, job_function)
+
+
+def _drain(queue: object, into: set[str], stop: threading.Event) -> None:
+    """Collect the started jobs' paths until `stop`, then what is left."""
+    while True:
+        while not queue.empty():
+            into.add(queue.get())
+        if stop.is_set():
+            return
+        stop.wait(0.05)
+
+
+def _pool_round(paths: list[str], workers: int, job_function: str,
+                lost: dict[str, int]) -> Iterator[JobOutcome | str]:
+    """Run `paths` in one spawned pool; yield outcomes, then the paths to run again when the
+    pool broke (a worker was killed or died): those that never started, and those that lost
+    their worker for the first time. A job that loses its worker twice fails alone."""
+    # spawned, not forked: a fork of a process whose compiled kernels already started their
+    # thread pool leaves the child's pool broken (its first parallel kernel fails)
+    ctx = get_context("spawn")
+    started = ctx.SimpleQueue()
+    ran: set[str] = set()
+    stop = threading.Event()
+    reader = threading.Thread(target=_drain, args=(started, ran, stop), daemon=True)
+    reader.start()  # drained as it goes: workers would block on a full pipe
+    unfinished: list[str] = []
+    try:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_announce_to,
+                                 initargs=(started,)) as pool:
+            futures = {pool.submit(_run_announced, p, job_function): p for p in paths}
+            for future in as_completed(futures):
+                try:
+                    yield future.result()
+                except BrokenProcessPool:
+                    unfinished.append(futures[future])
+                except Exception:
+                    yield _outcome(future, futures[future], "worker process")
+    finally:
+        stop.set()
+        reader.join(timeout=2.0)
+    if unfinished and not ran.intersection(unfinished):
+        ran.update(unfinished)  # died before it could say which job: all count as lost
+    for path in sorted(unfinished, key=paths.index):
+        if path not in ran:
+            yield path
+            continue
+        lost[path] = lost.get(path, 0) + 1
+        if lost[path] >= 2:
+            yield JobOutcome(path, None, f"{path}: the worker process running it died twice "
+                             "(killed, or out of memory); the other jobs went on", 0.0)
+        else:
+            yield path
+
+
 def _local(paths: list[str], workers: int, job_function: str) -> Iterator[JobOutcome]:
+    """Jobs in a process pool; after a pool breaks, the jobs that lost their worker run again
+    one at a time (so that a job that kills its worker again fails alone), then the rest in a
+    new pool."""
     if workers <= 1:
         yield from (run_one(p, job_function) for p in paths)
         return
-    # spawned, not forked: a fork of a process whose compiled kernels already started their
-    # thread pool leaves the child's pool broken (its first parallel kernel fails)
-    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
-        futures = {pool.submit(run_one, p, job_function): p for p in paths}
-        for future in as_completed(futures):
-            yield _outcome(future, futures[future], "worker process")
+    lost: dict[str, int] = {}
+    todo = list(paths)
+    while todo:
+        retry = [p for p in todo if lost.get(p)]
+        rounds = [[p] for p in retry] + [[p for p in todo if not lost.get(p)]]
+        todo = []
+        for batch in rounds:
+            if not batch:
+                continue
+            for item in _pool_round(batch, 1 if len(batch) == 1 else workers, job_function,
+                                    lost):
+                if isinstance(item, str):
+                    todo.append(item)
+                else:
+                    yield item
 
 
 def _dask(
@@ -145,10 +230,13 @@ def run_batch(
     outcomes: dict[str, JobOutcome] = {}
     for outcome in stream:
         if store is not None:
-            store.record_job(
-                outcome.results(), error=outcome.error, job_path=outcome.path,
-                elapsed_s=outcome.elapsed_s, source="batch",
-            )
+            try:
+                store.record_job(
+                    outcome.results(), error=outcome.error, job_path=outcome.path,
+                    elapsed_s=outcome.elapsed_s, source="batch",
+                )
+            except PathcheckError as err:  # a full disk: say so, the other jobs go on
+                outcome = replace(outcome, unrecorded=str(err))
         outcomes[outcome.path] = outcome
         if on_result is not None:
             on_result(outcome)

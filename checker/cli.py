@@ -24,6 +24,7 @@ SUBCOMMANDS: dict[str, str] = {
     "batch": "checker.commands.batch:batch",
     "report": "checker.commands.report:report",
     "warm": "checker.commands.warm:warm",
+    "store": "checker.commands.store:store",
 }
 
 
@@ -56,6 +57,12 @@ def cli() -> None:
     \b
     pathcheck JOB.apt [--part PART] [--json OUT] [-o JOB.nc]   check a job
     pathcheck info FILE [--json]                               what is in a CL or part file
+
+    \b
+    Exit codes: 0 clean, 1 findings, 2 bad input, usage, a file that cannot be read or
+    written, or out of memory (one line naming the file), 3 internal error (a bug: one line,
+    the traceback in a log file, $PATHCHECK_LOG_DIR or ~/.local/state/pathcheck/log),
+    130 interrupted, 128 + N ended by signal N.
     """
 
 
@@ -65,14 +72,44 @@ def _terminated(signum: int, frame: object) -> None:
     raise SystemExit(128 + signum)
 
 
+EXIT_OK, EXIT_FINDINGS, EXIT_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+
+
+def _os_error(err: OSError) -> str:
+    """One line for a file the system refused (full disk, permission, missing folder)."""
+    what = err.strerror or type(err).__name__
+    return f"{err.filename}: {what}" if err.filename else f"{what} ({err})"
+
+
+def _internal(err: Exception, argv: list[str]) -> None:
+    """A bug: one line saying so and where the traceback was written; exit EXIT_INTERNAL."""
+    from checker.crash_log import write_crash_log
+
+    log = write_crash_log(err, argv)
+    where = f"the traceback is in {log}" if log else "no log could be written"
+    text = " ".join(f"{type(err).__name__}: {err}".split())[:300]
+    click.echo(f"pathcheck: internal error (a bug in pathcheck, please report it with the log): "
+               f"{text}; {where}", err=True)
+    sys.exit(EXIT_INTERNAL)
+
+
 def main(argv: list[str] | None = None) -> None:
-    """Console entry point: bad input is one line on stderr and exit code 2, never a traceback."""
+    """Console entry point: bad input is one line on stderr and exit code 2, never a traceback;
+    a bug is one line and exit code 3 with its traceback in a log file (`checker.crash_log`)."""
     signal.signal(signal.SIGTERM, _terminated)
+    args = list(sys.argv[1:] if argv is None else argv)
     try:
-        cli.main(args=argv, prog_name="pathcheck", standalone_mode=False)
+        cli.main(args=args, prog_name="pathcheck", standalone_mode=False)
     except PathcheckError as err:
         click.echo(f"pathcheck: {err}", err=True)
-        sys.exit(2)
+        sys.exit(EXIT_INPUT)
+    except MemoryError as err:
+        click.echo(f"pathcheck: out of memory: {' '.join(str(err).split()) or 'no detail'}; "
+                   "expected input this machine can hold", err=True)
+        sys.exit(EXIT_INPUT)
+    except OSError as err:
+        click.echo(f"pathcheck: {_os_error(err)}", err=True)
+        sys.exit(EXIT_INPUT)
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
     except click.ClickException as exc:
@@ -83,7 +120,9 @@ def main(argv: list[str] | None = None) -> None:
         sys.exit(2)
     except KeyboardInterrupt:
         sys.exit(130)
-    sys.exit(0)
+    except Exception as err:
+        _internal(err, args)
+    sys.exit(EXIT_OK)
 
 
 if __name__ == "__main__":

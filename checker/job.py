@@ -167,6 +167,10 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
     program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach)
     doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
     if output is not None:
-        doc.gcode = str(written.post(job, program, output, mach))
+        try:
+            doc.gcode = str(written.post(job, program, output, mach))
+        except PathcheckError as err:
+            err.document = doc  # the check ran: the caller may still record it (#18)
+            raise
     doc.summary.time_s = time.perf_counter() - t0
     return doc

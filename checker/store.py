@@ -16,7 +16,7 @@ import threading
 import time
 import zlib
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -120,6 +120,15 @@ class JobRow:
 _ROW_COLUMNS = ", ".join(JobRow.__dataclass_fields__)
 
 
+@dataclass(frozen=True)
+class Pruned:
+    """What `prune` deleted: jobs and service requests, and the jobs left."""
+
+    jobs: int
+    requests: int
+    remaining: int
+
+
 def point_arrays(doc: ResultsDocument) -> dict[str, np.ndarray]:
     """Per-point arrays of a document: cc (N,3) mm (the contact, else the deepest point, else the
     tip), allowable/depth/b_best/b_chosen (the B written) (N,) with nan for null, verdict (N,)
@@ -153,8 +162,16 @@ def _pack_arrays(arrays: dict[str, np.ndarray]) -> bytes:
 
 
 def _unpack_arrays(blob: bytes) -> dict[str, np.ndarray]:
-    with np.load(io.BytesIO(zlib.decompress(blob))) as data:
-        return {k: data[k] for k in ARRAY_FIELDS}
+    """The arrays of `_pack_arrays`; ValueError when the blob is not that (damaged)."""
+    try:
+        with np.load(io.BytesIO(zlib.decompress(blob)), allow_pickle=False) as data:
+            out = {k: data[k] for k in ARRAY_FIELDS}
+    except (zlib.error, OSError, EOFError, KeyError, ValueError, TypeError) as err:
+        raise ValueError(f"{type(err).__name__}: {err}") from err
+    n = len(out["verdict"])
+    if out["cc"].shape != (n, 3) or any(len(v) != n for v in out.values()):
+        raise ValueError("per-point arrays of different lengths")
+    return out
 
 
 def job_status(doc: ResultsDocument) -> JobStatus:
@@ -271,10 +288,17 @@ class ResultsStore:
                 yield self._con
                 self._con.execute("COMMIT")
             except BaseException as err:
-                self._con.execute("ROLLBACK")
+                self._rollback()
                 if isinstance(err, sqlite3.Error):
                     raise self._fail(err, doing) from err
                 raise
+
+    def _rollback(self) -> None:
+        """End a failed transaction. SQLite has already rolled back after some errors (a full
+        disk, an I/O error): then there is nothing to end, and that is not a second error."""
+        if self._con.in_transaction:
+            with suppress(sqlite3.Error):  # the first error is the one worth reporting
+                self._con.execute("ROLLBACK")
 
     def _migrate(self) -> None:
         """Apply the migrations above the file's version, in one transaction."""
@@ -366,6 +390,51 @@ class ResultsStore:
             )
             return int(cur.lastrowid)
 
+    def prune(
+        self, *, keep_days: float | None = None, keep: int | None = None,
+        now: float | None = None, vacuum: bool = False,
+    ) -> Pruned:
+        """Delete jobs recorded more than `keep_days` days before `now` (UTC epoch s, default
+        the present) and, per job path, all but the newest `keep`; service requests older than
+        `keep_days` go too, and the others forget the jobs deleted. `vacuum` then gives the
+        freed pages back to the file system (rewrites the file; takes the write lock)."""
+        if keep_days is None and keep is None:
+            raise PathcheckError("store prune: expected --keep-days N or --keep N (or both)",
+                                 code="usage")
+        if keep_days is not None and not keep_days >= 0:
+            raise PathcheckError(f"store prune: expected keep_days >= 0, found {keep_days}",
+                                 code="usage")
+        if keep is not None and not keep >= 0:
+            raise PathcheckError(f"store prune: expected keep >= 0, found {keep}", code="usage")
+        cutoff = (time.time() if now is None else now) - (keep_days or 0.0) * 86400.0
+        with self._write("pruning") as con:
+            doomed = "SELECT id FROM jobs WHERE 0"
+            args: list[object] = []
+            if keep_days is not None:
+                doomed += " OR recorded_at < ?"
+                args.append(cutoff)
+            if keep is not None:
+                doomed += (" OR id IN (SELECT id FROM (SELECT id, ROW_NUMBER() OVER (PARTITION BY"
+                           " job_path ORDER BY recorded_at DESC, id DESC) AS k FROM jobs) "
+                           "WHERE k > ?)")
+                args.append(keep)
+            con.execute(f"CREATE TEMP TABLE doomed AS {doomed}", args)
+            con.execute("UPDATE requests SET job_id = NULL WHERE job_id IN doomed")
+            requests = 0
+            if keep_days is not None:
+                requests = con.execute("DELETE FROM requests WHERE recorded_at < ?",
+                                       (cutoff,)).rowcount
+            jobs = con.execute("DELETE FROM jobs WHERE id IN doomed").rowcount
+            con.execute("DROP TABLE doomed")
+        if vacuum:
+            with self._lock:
+                try:
+                    self._con.execute("VACUUM")
+                except sqlite3.Error as err:
+                    raise self._fail(err, "vacuuming") from err
+        remaining = self._read("SELECT count(*) FROM jobs")[0][0]
+        return Pruned(jobs=jobs, requests=requests, remaining=remaining)
+
     # ------------------------------------------------------------------ reading
     def _read(self, sql: str, args: tuple = ()) -> list[tuple]:
         with self._lock:
@@ -400,9 +469,16 @@ class ResultsStore:
         return ResultsDocument.model_validate_json(zlib.decompress(rows[0][0]))
 
     def arrays(self, job_id: int) -> dict[str, np.ndarray] | None:
-        """The per-point arrays of a job (see `point_arrays`), None for a failed job."""
+        """The per-point arrays of a job (see `point_arrays`), None for a failed job;
+        PathcheckError (code 'corrupt') when the row's arrays cannot be read."""
         rows = self._read("SELECT arrays FROM jobs WHERE id = ?", (job_id,))
-        return _unpack_arrays(rows[0][0]) if rows and rows[0][0] is not None else None
+        if not rows or rows[0][0] is None:
+            return None
+        try:
+            return _unpack_arrays(rows[0][0])
+        except ValueError as err:
+            raise PathcheckError(f"job {job_id}: its per-point arrays cannot be read ({err})",
+                                 path=self.path, code="corrupt") from err
 
     def requests(self, since: float | None = None) -> list[tuple]:
         """(recorded_at, op, ok, elapsed_s, error, job_id) of service requests since `since`."""
@@ -411,3 +487,13 @@ class ResultsStore:
             "WHERE recorded_at >= ? ORDER BY recorded_at, id",
             (-np.inf if since is None else since,),
         )
+
+
+def prune(
+    path: str | Path | None = None, *, keep_days: float | None = None, keep: int | None = None,
+    now: float | None = None, vacuum: bool = False,
+) -> Pruned:
+    """Retention: open the store at `path` (default: the configured one) and
+    `ResultsStore.prune` it; PathcheckError for a store that cannot be opened or written."""
+    with ResultsStore(path) as store:
+        return store.prune(keep_days=keep_days, keep=keep, now=now, vacuum=vacuum)

@@ -16,6 +16,9 @@ _NUMBER = re.compile(r"[0-9]*\.?[0-9]*")
 #: plain blocks (letters and numbers only): one regular expression instead of the cursor
 _PLAIN = re.compile(r"(?:[A-Z][-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))*")
 _PLAIN_WORD = re.compile(r"([A-Z])([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))")
+#: a word whose number runs straight into E and digits: I1e11 is I1 and E11 to a control
+_EXPONENT = re.compile(r"[A-Za-z][-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+")
+_NAMED = re.compile(r"<[^>]*>")  # rs274ngc #<name>: letters and digits that are no words
 _FUNCTIONS = {
     "ABS": abs,
     "SQRT": math.sqrt,
@@ -181,6 +184,12 @@ def lex_block(raw: str, dialect: Dialect, params: dict[str, float], *, path=None
     code, comments = split_comments(
         raw, path=path, line=line, parens=not dialect.keywords, nested=dialect.nested_comments
     )
+    exponent = _EXPONENT.search(_NAMED.sub("", code) if "<" in code else code)
+    if exponent:
+        raise PathcheckError(
+            f"'{exponent.group(0)}': exponent notation, which G-code does not have (a control "
+            "reads the number, then an E word): expected a plain decimal number",
+            path=path, line=line, code="gcode")
     keywords: list[tuple[str, list[float]]] = []
     if dialect.keywords:
         code = _KEYWORD.sub(lambda m: _keyword(m, keywords, params, dialect, path, line),

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from checker.errors import PathcheckError
+from checker.input_limits import MAX_COORDINATE_MM, MAX_ROTARY_DEG
 from postproc.dialects import CANNED_CYCLES, Dialect, get_dialect
 from postproc.gcode_lex import Block, lex_block
 
@@ -299,7 +300,7 @@ class _Program:
             if group in g:
                 self.other[f"G{g[group]}"] += 1
 
-    def _target(self, words: dict[str, float]) -> tuple[list[float], bool]:
+    def _target(self, words: dict[str, float], line: int) -> tuple[list[float], bool]:
         """End position of the block's axis words (absolute or incremental) and whether any."""
         st = self.st
         pos = list(st.pos)
@@ -309,7 +310,18 @@ class _Program:
                 given = True
                 value = words[letter] * (st.scale if k < 3 else 1.0)
                 pos[k] = value if st.absolute else pos[k] + value
+                self.bounded(pos[k], letter, line, rotary=k >= 3)
         return pos, given
+
+    def bounded(self, value: float, word: str, line: int, *, rotary: bool = False) -> float:
+        """`value` (mm, or degrees for a rotary axis) when within any machine's reach (NaN,
+        unknown, passes); else an error naming the line and the word."""
+        limit, unit = (MAX_ROTARY_DEG, "deg") if rotary else (MAX_COORDINATE_MM, "mm")
+        if abs(value) > limit:
+            raise self.error(
+                f"{word} reaches {value:.6g} {unit}, beyond any machine's reach: expected "
+                f"within +-{limit:g} {unit}", line)
+        return value
 
     def set_units(self, units: str) -> None:
         st = self.st
@@ -323,7 +335,8 @@ class _Program:
         st = self.st
         if "datum" in g:  # MillPlus G93 absolute / G92 incremental datum shift
             base = [0.0, 0.0, 0.0] if g["datum"] == "93" else list(st.datum)
-            shift = [base[k] + words.get(a, 0.0) * st.scale for k, a in enumerate("XYZ")]
+            shift = [self.bounded(base[k] + words.get(a, 0.0) * st.scale, a, line)
+                     for k, a in enumerate("XYZ")]
             self.reframe(shift, st.tilt)
             self.other[f"G{g['datum']}"] += 1
             return True
@@ -342,7 +355,7 @@ class _Program:
             self.other[f"G{g['cycle_def']}"] += 1
             return True
         if self.dialect.cycle_call and g.get("non_modal") == self.dialect.cycle_call:
-            target, _ = self._target(words)
+            target, _ = self._target(words, line)
             self._millplus_hole(target, line)
             return True
         for name, args in keywords:
@@ -368,7 +381,7 @@ class _Program:
         hole = list(target)
         self.emit(hole, 0, line, CYCLE)
         for z, motion in (((rfp + sdis) * s, 0), (depth * s, 1), (rtp * s, 0)):
-            hole[2] = z
+            hole[2] = self.bounded(z, "cycle plane", line)
             self.emit(hole, motion, line, CYCLE)
 
     def _millplus_hole(self, target: list[float], line: int) -> None:
@@ -382,7 +395,7 @@ class _Program:
         self.emit(hole, 0, line, CYCLE)
         for z, motion in ((top + d.get("Y", 0.0), 0), (top + d.get("Z", 0.0), 1),
                           (top + d.get("B", d.get("Y", 0.0)), 0)):
-            hole[2] = z
+            hole[2] = self.bounded(z, "cycle plane", line)
             self.emit(hole, motion, line, CYCLE)
 
     def _motion(self, g: dict[str, str], words: dict[str, float], line: int,
@@ -400,7 +413,7 @@ class _Program:
                 st.cycle = None
             elif code is not None:
                 st.cycle, st.motion = None, int(code)
-        target, given = self._target(words)
+        target, given = self._target(words, line)
         if non_modal in ("10", "92"):
             self.other[f"G{non_modal}"] += 1
             if non_modal == "92" or words.get("L") == 20:
@@ -444,8 +457,9 @@ class _Program:
         u, v, w = _PLANES[st.plane]
         start, end = np.array(st.pos[:3]), np.array(target[:3])
         center = start.copy()
+        self._known_arc_words(words, line)
         if "R" in words:
-            radius = words["R"] * st.scale
+            radius = self.bounded(words["R"] * st.scale, "R", line)
             d = end[[u, v]] - start[[u, v]]
             chord = float(np.hypot(*d))
             if chord == 0.0 or chord > 2 * abs(radius) + 1e-9:
@@ -468,6 +482,8 @@ class _Program:
             center[[u, v]] = offsets
         else:
             center[[u, v]] = start[[u, v]] + np.array(offsets)
+        for k in (u, v):
+            self.bounded(center[k], f"arc centre {_ARC_OFFSETS[k]}", line)
         if not any(_ARC_OFFSETS[k] in words for k in (u, v)):
             if np.allclose(end, start, atol=1e-12, equal_nan=True):
                 return np.full(3, np.nan)  # no displacement, no centre: the block does not move
@@ -479,15 +495,24 @@ class _Program:
         center[w] = start[w]
         return center
 
+    def _known_arc_words(self, words: dict[str, float], line: int) -> None:
+        """An arc needs its R or I/J/K: one that has no known value (an unset parameter such
+        as `R#7`, a HAL pin) is an error here, where the move needs it."""
+        for letter in ("R", *_ARC_OFFSETS):
+            if letter in words and not math.isfinite(words[letter]):
+                raise self.error(
+                    f"arc word {letter} has no known value (an unset parameter?): expected a "
+                    "number", line)
+
     def _cycle(self, target: list[float], words: dict[str, float], line: int) -> None:
         """One hole: rapid to X/Y, rapid to R, feed to Z, rapid back (G98 initial, G99 R)."""
         st = self.st
         if "R" in words:
             r = words["R"] * st.scale
-            st.cycle_r = r if st.absolute else st.cycle_initial + r
+            st.cycle_r = self.bounded(r if st.absolute else st.cycle_initial + r, "R", line)
         if "Z" in words:
             z = words["Z"] * st.scale
-            st.cycle_z = z if st.absolute else st.cycle_r + z
+            st.cycle_z = self.bounded(z if st.absolute else st.cycle_r + z, "Z", line)
         hole = list(target)
         hole[2] = st.pos[2]
         self.emit(hole, 0, line, CYCLE)

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from checker.errors import PathcheckError
+from checker.input_limits import MAX_PROGRAM_POINTS
 from checker.toolpath import MotionArrays, Operation, ToolPath
 from postproc.dialects import get_dialect
 from postproc.kinematics import Chain
@@ -145,6 +146,13 @@ def _chords(moves: GcodeMoves, turn: np.ndarray, tolerance: float, rotary_step: 
     placed = np.isfinite(start).all(axis=1) & np.isfinite(moves.xyz).all(axis=1)
     count = np.where(placed, np.maximum(count, np.ceil(rot / rotary_step - 1e-9)), count)
     count = np.clip(count, 1, 100000).astype(int)
+    if count.sum() > MAX_PROGRAM_POINTS:  # bounded in total, not only per block
+        worst = int(np.argmax(count))
+        raise PathcheckError(
+            f"the program's arcs and rotary turns expand into {int(count.sum()):,} positions "
+            f"(this block alone {int(count[worst]):,}), more than {MAX_PROGRAM_POINTS:,}: "
+            "expected arcs and turns a machine makes", path=moves.path,
+            line=int(moves.line[worst]), code="gcode")
     src = np.repeat(rows, count)
     j = np.arange(src.size) - np.repeat(np.cumsum(count) - count, count) + 1
     t = j / count[src]

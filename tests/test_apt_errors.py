@@ -76,9 +76,9 @@ def test_missing_file_and_binary_file(tmp_path):
 
 
 def test_arc_sampling_refuses_absurd_point_counts_and_bad_tolerances():
-    tp = read_cl_text("CUTTER/6\nGOTO/1e9,0,0\nCIRCLE/0,0,0,0,0,1\nGOTO/0,1e9,0\n")
+    tp = read_cl_text("CUTTER/6\nGOTO/9e4,0,0\nCIRCLE/0,0,0,0,0,1\nGOTO/0,9e4,0\n")
     with pytest.raises(PathcheckError, match=r"line 3: CIRCLE/: sampling this arc .* needs"):
-        tp.motion_arrays(arc_chord_tol=1e-6)
+        tp.motion_arrays(arc_chord_tol=1e-9)
     with pytest.raises(PathcheckError, match="chord tolerance must be > 0"):
         tp.motion_arrays(arc_chord_tol=0.0)
 

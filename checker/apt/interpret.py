@@ -11,6 +11,7 @@ import numpy as np
 from checker.apt import frames as fr
 from checker.apt.lexer import MAX_ABS
 from checker.errors import PathcheckError
+from checker.input_limits import MAX_COORDINATE_MM
 from checker.toolpath import (
     Arc,
     Frame,
@@ -509,6 +510,8 @@ class _Reader:
         st = np.asarray(self.states, dtype=float).reshape(-1, 10)[self.sid]
         frame = st[:, 3].astype(np.intp)
         fr.apply_frames(tip, axis, frame, self.matrices)
+        self.within_reach(tip, self.line, "tool position")
+        self.within_reach(st[:, 7:10] * self.scale, self.line, "canned-cycle distance")
         rapid = np.asarray(self.rapid, dtype=bool)
         feed = np.where(np.isnan(st[:, 1]), st[:, 0], st[:, 1] * st[:, 2])
         feed[rapid | ~(feed >= 0)] = np.nan  # rapid moves, and per-rev feeds without rpm
@@ -526,6 +529,19 @@ class _Reader:
             coolant=st[:, 6].astype(np.int64),
             cycle_geometry=st[:, 7:10] * self.scale,
         )
+
+    def within_reach(self, values: np.ndarray, lines, what: str) -> None:
+        """Every finite value at most MAX_COORDINATE_MM (part frame, mm), else an error naming
+        the first line beyond."""
+        far = np.flatnonzero((np.abs(values) > MAX_COORDINATE_MM).any(axis=1))
+        if len(far):
+            k = far[0]
+            shown = ", ".join(f"{v:.6g}" for v in values[k])
+            raise PathcheckError(
+                f"{what} ({shown}) mm in the part frame is beyond any machine's reach: "
+                f"expected coordinates within +-{MAX_COORDINATE_MM:g} mm",
+                path=self.path, line=int(lines[k]), code="parse",
+            )
 
     def build_arcs(self, m: MotionArrays) -> list[Arc]:
         """Arcs in mm / part frame, checked: start and end at the CIRCLE's radius."""
@@ -545,6 +561,8 @@ class _Reader:
         axis = sense * v[:, 3:6] / np.linalg.norm(v[:, 3:6], axis=1)[:, None]
         fr.apply_frames(center, axis, frame, self.matrices)
         axis /= np.linalg.norm(axis, axis=1)[:, None]
+        self.within_reach(np.column_stack([center, v[:, 6] * self.scale]),
+                          [spec[0].line for spec in self.arc_specs], "CIRCLE/ centre and radius")
         start, end = m.tip[row - 1], m.tip[row]
         dist = []
         for p in (start, end):

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import re
 import time
 from pathlib import Path
 
@@ -14,10 +15,14 @@ from checker.atomic import write_file
 from checker.errors import PathcheckError
 
 CC_COLUMNS = ("x", "y", "z", "nx", "ny", "nz")
+# a decimal number as a CSV writes it (Python's float() also takes 1_0, nan, infinity: not these)
+_NUMBER = re.compile(r"\s*[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?\s*")
 
 
-def read_cc_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """CC points (N, 3) and unit normals (N, 3) from a CSV with the header x,y,z,nx,ny,nz."""
+def read_cc_csv(path: Path, *, lines_out: list[int] | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """CC points (N, 3) and unit normals (N, 3) from a CSV with the header x,y,z,nx,ny,nz;
+    `lines_out` receives each row's 1-based file line."""
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except (OSError, UnicodeDecodeError) as err:
@@ -35,21 +40,39 @@ def read_cc_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
         cells = text.split(",")
         if len(cells) != 6:
             raise PathcheckError(f"expected 6 values, found {len(cells)}", path=path, line=no)
-        try:
-            vals = [float(c) for c in cells]
-        except ValueError:
-            raise PathcheckError(f"expected 6 numbers, found {text.strip()[:60]!r}", path=path,
-                                 line=no) from None
+        bad = [c.strip() for c in cells if not _NUMBER.fullmatch(c)]
+        if bad:
+            raise PathcheckError(f"expected 6 decimal numbers, found {bad[0][:30]!r} in "
+                                 f"{text.strip()[:60]!r}", path=path, line=no)
+        vals = [float(c) for c in cells]
         if not np.isfinite(vals).all():
-            raise PathcheckError("expected finite numbers, found nan or inf", path=path, line=no)
+            raise PathcheckError(f"expected finite numbers, found {text.strip()[:60]!r}",
+                                 path=path, line=no)
         if np.linalg.norm(vals[3:]) < 1e-9:
             raise PathcheckError("expected a non-zero normal (nx, ny, nz), found 0,0,0",
                                  path=path, line=no)
         rows.append(vals)
+        if lines_out is not None:
+            lines_out.append(no)
     if not rows:
         raise PathcheckError("expected at least one CC point after the header", path=path, line=2)
     a = np.array(rows)
     return a[:, :3], a[:, 3:] / np.linalg.norm(a[:, 3:], axis=1)[:, None]
+
+
+def check_reach(cc: np.ndarray, lines: list[int], bbox: np.ndarray, path: Path) -> None:
+    """CC points lie on the part: one farther from the part's box than the box's diagonal is
+    an error naming its line (the search near it would mean nothing)."""
+    lo, hi = np.asarray(bbox[0], float), np.asarray(bbox[1], float)
+    reach = max(float(np.linalg.norm(hi - lo)), 1.0)
+    outside = (np.maximum(lo - cc, 0.0) + np.maximum(cc - hi, 0.0)).max(axis=1)
+    far = np.flatnonzero(~(outside <= reach))
+    if len(far):
+        k = far[0]
+        raise PathcheckError(
+            f"CC point ({', '.join(f'{v:.6g}' for v in cc[k])}) lies {outside[k]:.6g} mm "
+            f"outside the part's box: expected points on the part (within {reach:.6g} mm)",
+            path=path, line=lines[k], code="input")
 
 
 def parse_axis(text: str) -> np.ndarray:
@@ -99,9 +122,11 @@ def allowable(part_path, cc_path, cutter_text, axis_text, method, seed, json_out
 
     cutter = parse_cutter(cutter_text)
     axis = parse_axis(axis_text)
-    cc, normals = read_cc_csv(cc_path)
+    lines: list[int] = []
+    cc, normals = read_cc_csv(cc_path, lines_out=lines)
     t0 = time.perf_counter()
     part = load_part(part_path)
+    check_reach(cc, lines, part.bbox, cc_path)
     t1 = time.perf_counter()
     tp = sample_part(part)
     t2 = time.perf_counter()

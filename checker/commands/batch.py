@@ -42,6 +42,7 @@ def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str
         require("distributed", "dask", "running jobs on a Dask cluster")
     console = Console(stderr=True)
     counts = {"ok": 0, "findings": 0, "failed": 0}
+    unrecorded: list[str] = []
     with ResultsStore(store_path) as store, Progress(
         TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
         TextColumn("{task.fields[last]}"), console=console, transient=False,
@@ -56,12 +57,17 @@ def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str
             if outcome.error:
                 progress.console.print(f"[red]failed[/red] {outcome.error}", markup=True,
                                        highlight=False)
+            if outcome.unrecorded:
+                unrecorded.append(outcome.path)
+                progress.console.print(f"[yellow]not recorded[/yellow] {outcome.unrecorded}",
+                                       markup=True, highlight=False)
 
         run_batch(paths, store=store, workers=workers or os.cpu_count() or 1,
                   scheduler=scheduler, job_function=job_function, on_result=advance)
         where = store.path
+    missing = f" ({len(unrecorded)} could not be recorded)" if unrecorded else ""
     click.echo(
         f"{len(paths)} jobs: {counts['ok']} clean, {counts['findings']} with findings, "
-        f"{counts['failed']} failed; recorded in {where}"
+        f"{counts['failed']} failed; recorded in {where}{missing}"
     )
     sys.exit(0 if counts["ok"] == len(paths) else 1)

@@ -130,11 +130,16 @@ def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine
     pathcheck samples/mould/mould.apt
     pathcheck samples/mould/mould.apt --json out/mould.json
     """
+    from checker.atomic import check_writable, make_parent
     from checker.errors import PathcheckError
     from checker.job import check_job
 
     if not job.is_file():
         raise PathcheckError("job file not found: expected an existing CL file", path=job)
+    for target, what in ((gcode_out, "G-code"), (json_out, "results JSON")):
+        if target is not None:
+            check_writable(target, what)
+            make_parent(target, what)
     cutter = cutter_text
     if tool_name is not None:
         if cutter_text is not None:
@@ -142,25 +147,34 @@ def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine
         from checker.tool_library import load_tool_library
 
         cutter = load_tool_library()[tool_name]
-    doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
-                    output=gcode_out, machine=machine, b_range=parse_b_range(b_range),
-                    reorient=reorient, part_transform=part_transform)
+    try:
+        doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
+                        output=gcode_out, machine=machine, b_range=parse_b_range(b_range),
+                        reorient=reorient, part_transform=part_transform)
+    except PathcheckError as err:
+        checked = getattr(err, "document", None)  # the check ran, its program was not written
+        if checked is not None and not no_store:
+            from rich.console import Console
+
+            record(checked, Console(stderr=True))
+        raise
     finish(doc, json_out, store=not no_store)
 
 
 def finish(doc, json_out: Path | None, *, store: bool) -> None:
-    """Print the summary, write the JSON, record the check; exit 1 when there are findings."""
+    """Print the summary, record the check, write the JSON (a file that cannot be written is
+    exit 2, the check recorded all the same); exit 1 when there are findings."""
     from rich.console import Console
 
-    from checker.atomic import write_file
+    from checker.atomic import make_parent, write_file
 
     console = Console()
     for item in summary_view(doc):
         console.print(item)
-    if json_out is not None:
-        json_out.parent.mkdir(parents=True, exist_ok=True)
-        write_file(json_out, doc.model_dump_json(indent=1), what="results JSON")
     if store:
         record(doc, console)
+    if json_out is not None:
+        make_parent(json_out, "results JSON")
+        write_file(json_out, doc.model_dump_json(indent=1), what="results JSON")
     if doc.summary.status == "findings":
         sys.exit(1)

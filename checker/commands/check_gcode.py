@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import click
+import numpy as np
 
 
 @click.command()
@@ -50,7 +51,7 @@ def check_gcode(
     from checker.errors import PathcheckError
     from postproc.describe import describe_program, format_program_summary
     from postproc.machine import load_machine
-    from postproc.reader import read_gcode
+    from postproc.reader import CYCLE, PROGRAMMED, read_gcode
     from postproc.replay import part_motions
 
     machine = load_machine(machine_name)
@@ -64,6 +65,9 @@ def check_gcode(
             "part file not found: expected an existing file", path=part, code="part"
         )
     moves = read_gcode(program, dialect or machine.dialect, units=units or machine.units)
+    if not np.isin(moves.kind, (PROGRAMMED, CYCLE)).any():
+        raise PathcheckError(f"no motion: expected G0/G1/G2/G3 moves or drilling cycles, found "
+                             f"none in {moves.blocks} blocks", path=program, code="gcode")
     motions = part_motions(moves, machine)
     doc = describe_program(moves, motions, machine)
     click.echo(format_program_summary(doc))

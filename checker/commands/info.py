@@ -29,6 +29,11 @@ def info(file: Path, as_json: bool) -> None:
         return
     from checker.apt import read_cl
     from checker.apt.info import describe_toolpath, format_toolpath_info
+    from checker.errors import PathcheckError
 
-    doc = describe_toolpath(read_cl(file))
+    toolpath = read_cl(file)
+    if not len(toolpath.motions):
+        raise PathcheckError("no motion: expected GOTO/, FROM/ or GODLTA/ records, found none",
+                             path=file, code="parse")
+    doc = describe_toolpath(toolpath)
     click.echo(json.dumps(doc, indent=2) if as_json else format_toolpath_info(doc))

@@ -27,5 +27,7 @@ def report(since: str, out: Path, store_path: str | None) -> None:
     with ResultsStore(store_path) as store:
         files = build_report(store, out, since_s=since_s)
     what = {0: "no jobs", 1: "1 job"}.get(files.jobs, f"{files.jobs} jobs")
+    skipped = (f"; {files.skipped} unreadable row{'s' if files.skipped > 1 else ''} skipped"
+               if files.skipped else "")
     click.echo(f"{what}, {files.pictures} pictures: {files.html} ({files.json.name}, "
-               f"{files.csv.name} beside it)")
+               f"{files.csv.name} beside it){skipped}")

@@ -41,6 +41,7 @@ class ReportFiles:
     csv: Path
     jobs: int
     pictures: int
+    skipped: int = 0  # rows of the store that could not be read (left out)
 
 
 # per process: the open store, the painter and the standard diameters (see _painter_setup)
@@ -58,7 +59,10 @@ def _draw(task: tuple) -> tuple[int, list[str], dict, list]:
     or in this process)."""
     job_id, kind, cutter, cutter_size = task
     store, painter, diameters = _STATE
-    arrays = store.arrays(job_id)
+    try:
+        arrays = store.arrays(job_id)
+    except PathcheckError:  # a damaged row: skipped and counted, the report goes on
+        return job_id, None, None, None
     if arrays is None:  # recorded before the store kept per-point arrays
         return job_id, [], None, []
     standard = standard_cutters(kind, cutter, cutter_size, diameters)
@@ -130,8 +134,10 @@ def build_report(
     out = Path(out)
     history = store.jobs(since=until - cfg.report.trend_nights * DAY_S, until=until)
     rows = store.jobs(since=since, until=until)
-    jobs = [job_summary(r, store.previous(r.job_path, r.recorded_at)) for r in rows]
     drawn = _draw_all(store, rows, cfg)
+    unreadable = {job_id for job_id, (pictures, *_) in drawn.items() if pictures is None}
+    rows = [r for r in rows if r.id not in unreadable]
+    jobs = [job_summary(r, store.previous(r.job_path, r.recorded_at)) for r in rows]
     for j in jobs:
         j["pictures"], j["facts"], j["regions"] = drawn.get(j["id"], ([], None, []))
     per_night = nights(history, until, cfg.report.trend_nights)
@@ -140,22 +146,25 @@ def build_report(
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
         write_file(out, html, what="report page")
-        _write_json(out.with_suffix(".json"), jobs, since, until, per_night)
+        _write_json(out.with_suffix(".json"), jobs, since, until, per_night, len(unreadable))
         _write_csv(out.with_suffix(".csv"), jobs)
     except OSError as err:
         raise PathcheckError(f"cannot write the report: {err.strerror}", path=out,
                              code="report") from err
     pictures = sum(len(j["pictures"]) for j in jobs) + (trend_png is not None)
-    return ReportFiles(out, out.with_suffix(".json"), out.with_suffix(".csv"), len(jobs), pictures)
+    return ReportFiles(out, out.with_suffix(".json"), out.with_suffix(".csv"), len(jobs), pictures,
+                       len(unreadable))
 
 
 def _plain(job: dict) -> dict:
     return {k: v for k, v in job.items() if k not in ("pictures", "facts")}
 
 
-def _write_json(path: Path, jobs: list[dict], since: float, until: float, per_night: list) -> None:
+def _write_json(path: Path, jobs: list[dict], since: float, until: float, per_night: list,
+                skipped: int) -> None:
     doc = {
         "tool": "pathcheck", "kind": "report", "since": since, "until": until,
+        "skipped_unreadable": skipped,
         "totals": {s: sum(j["status"] == s for j in jobs) for s in ("ok", "findings", "failed")},
         "jobs": [_plain(j) for j in jobs], "nights": per_night,
     }
