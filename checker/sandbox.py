@@ -3,7 +3,10 @@ runs here: in a child Python process under a time limit (wall clock, killed by t
 time as a backstop) and a memory limit (address space, `resource.setrlimit` in the child), with
 no core file. The child returns numpy arrays through an `.npz` in a private temporary folder
 (no pickle). A crash, a hang or a memory blow-up of the child is one `PathcheckError` naming
-the file (code "part"); the parent process never runs the native code itself.
+the file (code "part"); the parent process never runs the native code itself. The modules a
+target names in its `preload` attribute are imported before the limits are set (the limit
+counts the whole address space, libraries included, but a library that cannot be mapped is
+not the file's fault).
 
     arrays = run_contained("checker.geometry.occ_io:read_occ_arrays", [str(path), "step"],
                            Limits(seconds=40.0, memory_mb=2048), path, "STEP reader")
@@ -62,7 +65,7 @@ def run_contained(target: str, args: list[str], limits: Limits, path: str | Path
                                       check=False)
             except subprocess.TimeoutExpired as exc:
                 raise PathcheckError(
-                    f"{what} stopped after {limits.seconds:.0f} s (the time limit for this "
+                    f"{what} stopped after {limits.seconds:.3g} s (the time limit for this "
                     "file; geometry.reader_time_s and reader_time_s_per_mb in the config)",
                     path=path, code="part") from exc
         if proc.returncode == 0:
@@ -93,7 +96,7 @@ def _failure(rc: int, err_file: Path, stderr: str, limits: Limits, path: str | P
             "geometry.reader_memory_mb in the config)", path=path, code="part")
     if rc < 0 and -rc in (signal.SIGXCPU, signal.SIGKILL):
         return PathcheckError(
-            f"{what} stopped after {limits.seconds:.0f} s of CPU time (the time limit for this "
+            f"{what} stopped after {limits.seconds:.3g} s of CPU time (the time limit for this "
             "file)", path=path, code="part")
     if rc < 0:
         name = signal.Signals(-rc).name if -rc in signal.valid_signals() else str(-rc)
@@ -106,14 +109,17 @@ def _failure(rc: int, err_file: Path, stderr: str, limits: Limits, path: str | P
 def _child(argv: list[str]) -> int:
     """The child: set the limits, call the target, write its arrays or its error."""
     target, out, err_file, seconds, memory_mb, *args = argv
+    module, name = target.split(":")
+    function = getattr(import_module(module), name)
+    for lib in getattr(function, "preload", ()):  # libraries loaded before the limits
+        import_module(lib)
     mem = int(memory_mb) * 2**20
     resource.setrlimit(resource.RLIMIT_AS, (mem, mem))
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
     cpu = math.ceil(float(seconds)) + 1
     resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 1))
-    module, name = target.split(":")
     try:
-        arrays = getattr(import_module(module), name)(*args)
+        arrays = function(*args)
     except PathcheckError as err:
         Path(err_file).write_text(json.dumps(
             {"message": err.message, "line": err.line, "code": err.code}))
@@ -121,6 +127,8 @@ def _child(argv: list[str]) -> int:
     except MemoryError:
         return _MEMORY_EXIT
     except Exception as err:  # a native library's own exception types
+        if "OutOfMemory" in type(err).__name__:  # OpenCASCADE's Standard_OutOfMemory
+            return _MEMORY_EXIT
         Path(err_file).write_text(json.dumps(
             {"message": f"{type(err).__name__}: {str(err)[:200]}", "code": "part"}))
         return _FAILED_EXIT

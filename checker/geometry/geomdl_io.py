@@ -89,8 +89,10 @@ def _parse(path: Path, text: str):
             finally:
                 loader.dispose()
         return json.loads(text)
-    except RecursionError as err:
-        raise _DocumentError(f"nested deeper than {MAX_DEPTH} levels") from err
+    except RecursionError as err:  # json: deeper than the interpreter's recursion limit
+        raise _DocumentError("nested too deeply") from err
+    except _DocumentError:
+        raise
     except (json.JSONDecodeError, yaml.YAMLError) as err:
         raise _DocumentError(f"not valid geomdl exchange data: {err}") from err
     except ValueError as err:  # e.g. an integer of more than 4300 digits

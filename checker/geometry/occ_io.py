@@ -78,6 +78,9 @@ def read_occ_arrays(path: str, kind: str) -> dict[str, np.ndarray]:
     return pack_surfaces(surfaces)
 
 
+read_occ_arrays.preload = ("OCP.STEPControl", "OCP.IGESControl", "OCP.GeomConvert")
+
+
 def _quiet_occ() -> None:
     """Keep OpenCASCADE's reader chatter off stdout (the library never prints)."""
     from OCP.Message import Message, Message_Gravity
