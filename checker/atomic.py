@@ -100,6 +100,9 @@ def check_writable(path: str | Path, what: str) -> None:
         folder = folder.parent
     if path.exists() and not path.is_file():
         return  # a device or a pipe: written straight into
-    if not folder.is_dir() or not os.access(folder, os.W_OK | os.X_OK):
+    if not folder.is_dir():
+        raise PathcheckError(f"cannot write {what}: {folder} is a file, expected a folder",
+                             path=path, code="output")
+    if not os.access(folder, os.W_OK | os.X_OK):
         raise PathcheckError(f"cannot write {what}: the folder {folder} is not writable",
                              path=path, code="output")

@@ -1,0 +1,83 @@
+"""Running `pathcheck` as a real process on hostile input and judging how it ended: exit code,
+stderr, wall time and the peak memory of the child (RSS via resource.getrusage)."""
+
+from __future__ import annotations
+
+import os
+import resource
+import signal
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+PATHCHECK = [sys.executable, "-m", "checker.cli"]
+LIMIT_S = 60.0  # no run may take longer
+LIMIT_RSS_MB = 2048.0  # nor hold more memory
+
+
+@dataclass(frozen=True)
+class Run:
+    """How one `pathcheck` process ended: `code` (negative: killed by that signal), its
+    output, wall seconds and peak resident memory in MB."""
+
+    args: tuple[str, ...]
+    code: int
+    stdout: str
+    stderr: str
+    seconds: float
+    rss_mb: float
+
+    def why(self) -> str:
+        return (f"pathcheck {' '.join(self.args)} -> exit {self.code} in {self.seconds:.1f} s, "
+                f"{self.rss_mb:.0f} MB\nstderr: {self.stderr[-2000:]}")
+
+
+def _limit_memory() -> None:
+    """In the child: an address-space cap well above the RSS limit (numba and its thread pool
+    reserve much more than they touch), so that a runaway allocation fails instead of
+    swapping the shared machine."""
+    cap = 6 * 1024**3
+    resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+
+
+def run_pathcheck(args: list[str], *, cwd: Path, env: dict[str, str] | None = None,
+                  timeout: float = LIMIT_S + 30, preexec=_limit_memory) -> Run:
+    """`pathcheck ARGS` in a child process (the store and the logs in `cwd`), waited for with
+    wait4 so that its own peak RSS (and that of its children) is known; killed after
+    `timeout` s."""
+    full_env = dict(os.environ, PATHCHECK_STORE=str(cwd / "results.sqlite"),
+                    PATHCHECK_LOG_DIR=str(cwd / "logs"), PYTHONPATH=str(REPO))
+    full_env.update(env or {})
+    out, err = cwd / ".stdout", cwd / ".stderr"
+    start = time.perf_counter()
+    with open(out, "w") as fo, open(err, "w") as fe:
+        proc = subprocess.Popen([*PATHCHECK, *args], cwd=cwd, env=full_env, stdout=fo,
+                                stderr=fe, stdin=subprocess.DEVNULL, preexec_fn=preexec)
+    timer = threading.Timer(timeout, proc.kill)
+    timer.start()
+    try:
+        _, status, usage = os.wait4(proc.pid, 0)
+    finally:
+        timer.cancel()
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    seconds = time.perf_counter() - start
+    return Run(tuple(args), proc.returncode, out.read_text(errors="replace"),
+               err.read_text(errors="replace"), seconds, usage.ru_maxrss / 1024.0)
+
+
+def assert_sane(run: Run, named: str) -> None:
+    """No traceback, no signal, an exit code of 0, 1 or 2, within the time and memory limits,
+    and an exit 2 says why in one line naming the file `named`."""
+    assert "Traceback" not in run.stderr and "Traceback" not in run.stdout, run.why()
+    assert run.code >= 0, f"killed by {signal.Signals(-run.code).name}: " + run.why()
+    assert run.code in (0, 1, 2), run.why()
+    assert run.seconds < LIMIT_S, run.why()
+    assert run.rss_mb < LIMIT_RSS_MB, run.why()
+    if run.code == 2:
+        lines = [line for line in run.stderr.splitlines() if line.strip()]
+        assert len(lines) == 1, run.why()
+        assert lines[0].startswith(f"pathcheck: {named}"), run.why()
