@@ -13,6 +13,8 @@ import resource
 import shutil
 import signal
 import sqlite3
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -296,3 +298,25 @@ def test_out_of_memory_is_one_line_and_exit_2(job, monkeypatch, capsys):
     assert capsys.readouterr().err.strip() == (
         "pathcheck: out of memory: Unable to allocate 28.4 PiB for an array; expected input "
         "this machine can hold")
+
+
+def test_a_check_on_a_full_disk_is_one_note_not_a_failure(tmp_path):
+    """`pathcheck JOB` records its check through `record`: on a full disk (SQLITE_FULL or an
+    I/O error at commit, after which SQLite has already rolled back) one line, no traceback."""
+    _store_with(tmp_path, 1)
+    script = ("import resource, sys\n"
+              "from checker.commands.check import record\n"
+              "from checker.report.synthetic import synthetic_document\n"
+              "doc = synthetic_document(1, n=60, four_axis=False, path='a.apt')\n"
+              "resource.setrlimit(resource.RLIMIT_FSIZE, (40_000, 40_000))\n"
+              "record(doc)\n")
+    proc = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120,
+                          env=dict(os.environ, PATHCHECK_STORE=str(tmp_path / "results.sqlite"),
+                                   PYTHONPATH=str(REPO)))
+    assert proc.returncode == 0, proc.stderr
+    assert re.fullmatch(r"pathcheck: note: not recorded in the results store: .*results\.sqlite:"
+                        r" store error while recording a job: [^\n]*", proc.stderr.strip()), \
+        proc.stderr
+    with ResultsStore(tmp_path / "results.sqlite") as store:
+        assert len(store.jobs()) == 1

@@ -84,8 +84,9 @@ def parse_b_range(text: str | None) -> tuple[float, float] | None:
     return lo, hi
 
 
-def record(doc, console) -> None:
-    """Record the check in the results store; a store problem is a note, not a failure."""
+def record(doc) -> None:
+    """Record the check in the results store; a store problem (locked, a full disk) is a
+    one-line note on stderr, not a failure."""
     from checker.errors import PathcheckError
     from checker.store import ResultsStore
 
@@ -93,7 +94,7 @@ def record(doc, console) -> None:
         with ResultsStore() as store:
             store.record_job(doc, elapsed_s=doc.summary.time_s, source="cli")
     except PathcheckError as err:
-        console.print(f"note: not recorded in the results store: {err}", style="yellow")
+        click.echo(f"pathcheck: note: not recorded in the results store: {err}", err=True)
 
 
 @click.command()
@@ -154,9 +155,7 @@ def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine
     except PathcheckError as err:
         checked = getattr(err, "document", None)  # the check ran, its program was not written
         if checked is not None and not no_store:
-            from rich.console import Console
-
-            record(checked, Console(stderr=True))
+            record(checked)
         raise
     finish(doc, json_out, store=not no_store)
 
@@ -172,7 +171,7 @@ def finish(doc, json_out: Path | None, *, store: bool) -> None:
     for item in summary_view(doc):
         console.print(item)
     if store:
-        record(doc, console)
+        record(doc)
     if json_out is not None:
         make_parent(json_out, "results JSON")
         write_file(json_out, doc.model_dump_json(indent=1), what="results JSON")
