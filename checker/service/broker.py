@@ -29,7 +29,6 @@ import itertools
 import json
 import logging
 import os
-import re
 import secrets
 import shutil
 import signal
@@ -59,7 +58,6 @@ MAX_START_FAILURES = 5
 START_TIMEOUT_S = 120.0  # a worker not READY by then is hung at start
 EXIT_WAIT_S = 5.0
 BROKER_PARSE_BYTES = 4096  # requests up to this size are validated by the broker itself
-PEEK_BYTES = 64 * 1024  # larger requests: their id is found by a scan, not a JSON parse
 MAX_QUEUED = 10_000
 MAX_REFUSED = 256  # content hashes of requests that took a worker down
 REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -280,7 +278,7 @@ class Broker:
             elif len(body) > self.limits.max_message_bytes:
                 self._reject(envelope, PathcheckError(
                     f"request is {len(body)} bytes, the limit is "
-                    f"{self.limits.max_message_bytes} bytes", code="limit"), *peek(body))
+                    f"{self.limits.max_message_bytes} bytes", code="limit"), *p.peek(body))
             elif self._draining:
                 self._refuse_unavailable(envelope, body)
             elif len(body) > BROKER_PARSE_BYTES or not self._answer_small(envelope, body):
@@ -345,7 +343,7 @@ class Broker:
         if len(self._queue) >= MAX_QUEUED or len(body) > room:
             self._reject(envelope, PathcheckError(
                 f"the service is busy: {len(self._queue)} requests ({self._queued_bytes} bytes) "
-                "are waiting for a worker; retry later", code="busy"), *peek(body))
+                "are waiting for a worker; retry later", code="busy"), *p.peek(body))
             return
         self._queue.append((envelope, body))
         self._queued_bytes += len(body)
@@ -398,7 +396,7 @@ class Broker:
             self._idle.append(worker)
         if not meta.get("ok", True):
             self.counters.errors += 1
-        rid = job.id if job.known else peek(job.body)[0]
+        rid = job.id if job.known else p.peek(job.body)[0]
         self._log(job.envelope, meta.get("op"), rid, meta.get("ok"), meta.get("code"), worker,
                   time.monotonic() - job.started)
 
@@ -452,7 +450,7 @@ class Broker:
             self._refused[job.key] = f"took worker {worker.proc.pid} down at {stamp}: {why}"
             while len(self._refused) > MAX_REFUSED:
                 self._refused.popitem(last=False)
-        rid, op = (job.id, job.op) if job.known else peek(job.body)
+        rid, op = (job.id, job.op) if job.known else p.peek(job.body)
         self._reject(job.envelope, err, rid, op, worker=worker,
                      elapsed=time.monotonic() - job.started)
 
@@ -487,7 +485,7 @@ class Broker:
 
     def _refuse_unavailable(self, envelope: list[bytes], body: bytes) -> None:
         self._reject(envelope, PathcheckError(
-            "service is shutting down; retry another instance", code="unavailable"), *peek(body))
+            "service is shutting down; retry another instance", code="unavailable"), *p.peek(body))
 
     def _reject(self, envelope: list[bytes], err: PathcheckError, rid: object = None,
                 op: str | None = None, worker: _Worker | None = None, elapsed: float = 0.0) -> None:
@@ -557,23 +555,6 @@ def check_bind(bind: str, *, curve: bool, insecure: bool) -> None:
             f"{bind} may be reachable from other machines: give --curve-keys DIR (keys from "
             "`pathcheck serve --new-keys DIR`) or --insecure, or bind tcp://127.0.0.1:PORT",
             code="usage")
-
-
-_ID = re.compile(rb'"id"\s*:\s*("(?:[^"\\\n]|\\.){0,200}"|-?\d{1,19})\s*[,}]')
-
-
-def peek(body: bytes) -> tuple[Any, str | None]:
-    """Best effort `(id, op)` of a request the broker answers itself: a JSON parse for small
-    bodies, for large ones a scan for the last `"id": ...` (no op)."""
-    if len(body) <= PEEK_BYTES:
-        return p.peek(body)
-    matches = list(_ID.finditer(body))  # clients write `id` last; a nested one may come first
-    if not matches:
-        return None, None
-    with contextlib.suppress(ValueError):
-        rid = json.loads(matches[-1].group(1))
-        return (rid if isinstance(rid, int | str) else None), None
-    return None, None
 
 
 def _exit(code: int) -> str:

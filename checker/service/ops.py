@@ -36,7 +36,7 @@ class WorkerState:
     errors: int = 0
     last_document: Any = None
     last_job_path: str = ""
-    roots: Roots = field(default_factory=lambda: Roots(["/"]))  # a worker process: --root
+    roots: Roots = field(default_factory=lambda: Roots([Path.cwd(), Path("/")]))
 
 
 def ping(req: p.PingRequest, state: WorkerState) -> dict:

@@ -196,18 +196,37 @@ def _finite(obj: Any) -> Any:
     return obj
 
 
+PEEK_BYTES = 64 * 1024  # larger requests: their id is found by a scan, not a JSON parse
+_ID = re.compile(rb'"id"\s*:\s*("(?:[^"\\\n]|\\.){0,200}"|-?\d{1,19})\s*[,}]')
+
+
 def peek(raw: bytes) -> tuple[Any, str | None]:
-    """Best effort `(id, op)` of a request that may be invalid, for the error reply."""
+    """Best effort `(id, op)` of a request that may be invalid, for the error reply: a JSON
+    parse of a small request; for a large one, or one that does not parse (too deep, cut
+    short), a scan for the last `"id": ...` (clients write `id` last) and no op."""
+    if len(raw) <= PEEK_BYTES:
+        try:
+            data = json.loads(raw)
+        except (ValueError, UnicodeDecodeError, RecursionError):
+            return _scan_id(raw), None
+        if not isinstance(data, dict):
+            return None, None
+        return _valid_id(data.get("id")), data["op"] if isinstance(data.get("op"), str) else None
+    return _scan_id(raw), None
+
+
+def _scan_id(raw: bytes) -> Any:
+    matches = list(_ID.finditer(raw))
+    if not matches:
+        return None
     try:
-        data = json.loads(raw)
-    except (ValueError, UnicodeDecodeError, RecursionError):
-        return None, None
-    if not isinstance(data, dict):
-        return None, None
-    rid = data.get("id")
-    op = data.get("op")
-    rid = rid if isinstance(rid, int | str) and not isinstance(rid, bool) else None
-    return rid, op if isinstance(op, str) else None
+        return _valid_id(json.loads(matches[-1].group(1)))
+    except ValueError:
+        return None
+
+
+def _valid_id(rid: Any) -> Any:
+    return rid if isinstance(rid, int | str) and not isinstance(rid, bool) else None
 
 
 def parse_request(

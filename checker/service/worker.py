@@ -98,10 +98,10 @@ def handle(raw: bytes, state: WorkerState, recorder: Recorder,
         reply = _error(err, raw, rid, op)
     except MemoryError:
         log.warning("op %s ran out of memory; the worker exits to be replaced", op)
+        cap = resource.getrlimit(resource.RLIMIT_AS)[0]
         limit = PathcheckError(
-            f"the request needed more memory than a worker may use "
-            f"({service.worker_memory_bytes / 2**20:.0f} MiB, service.worker_memory_bytes)",
-            code="limit")
+            f"the request needed more memory than a worker may use ({cap / 2**20:.0f} MiB of "
+            "address space, service.worker_memory_bytes); its worker is replaced", code="limit")
         reply, exit_after = _error(limit, raw, rid, op), True
     except Exception as err:  # a bug must not kill the worker: reply, log the traceback
         log.error("internal error in op %s (id %r):\n%s", op, rid, traceback.format_exc())
