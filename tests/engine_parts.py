@@ -140,3 +140,18 @@ def ball_radius_oracle(p: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         rs = np.where(z > 0, (h2 + z * z) / (2 * z), np.inf)
     return np.where(z <= np.sqrt(h2), rs, np.sqrt(h2))
+
+
+def free_form(seed: int, n: int = 7, size: float = 100.0, relief: float = 8.0) -> Part:
+    """A random bicubic B-spline patch over a `size` mm square: an n x n net of poles jittered by
+    3 mm in x and y, heights normal with `relief` mm deviation; normals up. Free-form parts the
+    engine was not tuned on."""
+    rng = np.random.default_rng(seed)
+    x = np.linspace(0.0, size, n)
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    P = np.stack([X + rng.uniform(-3, 3, X.shape), Y + rng.uniform(-3, 3, X.shape),
+                  rng.normal(0.0, relief, X.shape)], axis=2)
+    inner = np.linspace(0.0, 1.0, n - 2)[1:-1]
+    kv = [0.0] * 4 + list(inner) + [1.0] * 4
+    g = geomdl_surface(P, np.ones((n, n)), (3, 3), kv, kv)
+    return Part([facing_up(to_surface(g, 0, name=f"free-form-{seed}"))])

@@ -59,9 +59,14 @@ def map_command(part_path, cutter_text, grid_text, tools_path, out_dir) -> None:
     write_file(out_dir / "map.json", json.dumps(doc, indent=1), what="map JSON")
     sizes = np.concatenate([m.size[m.kept] for m in maps])
     fin = sizes[np.isfinite(sizes)]
-    smallest = f"{fin.min():.4f} mm" if fin.size else "unbounded (no point limits the cutter)"
-    click.echo(f"{len(sizes)} CC points on {len(maps)} surfaces; allowable "
-               f"{'r' if r is None else 'R'} min {smallest}; {len(tools)} standard "
-               f"{cutter.kind} cutters")
+    name = "r" if r is None else "R"
+    if not sizes.size:
+        smallest = "none: no grid point lies inside the trimmed faces (try a finer --grid)"
+    elif fin.size:
+        smallest = f"{name} min {fin.min():.4f} mm"
+    else:
+        smallest = f"{name} unbounded everywhere (no point limits the cutter)"
+    click.echo(f"{len(sizes)} CC points on {len(maps)} surfaces; allowable {smallest}; "
+               f"{len(tools)} standard {cutter.kind} cutters")
     for f in [*files, out_dir / "map.json"]:
         click.echo(f"wrote {f}")

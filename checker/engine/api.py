@@ -27,7 +27,8 @@ _SNAP = 1e-3  # mm: CC points this close to a surface are moved onto it
 _SNAP_ANGLE = 1e-6  # rad: given normals this close to the surface normal are replaced by it
 _GRAPH_K = 8
 _FIRST_TRIAL = 4.0  # first trial size of the scan at most this many times s0
-_RING = np.array([(np.cos(a), np.sin(a)) for a in np.arange(8) * np.pi / 4])
+_FIRST_RING = 16  # directions on the first ring around a CC point
+_RING_RATIO = 3.0  # the wider rings' radii grow by at most this
 
 
 @dataclass
@@ -252,11 +253,11 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     pairs = None
     if uv_own is not None:
         pairs = _contact_pairs(tp, part, knn, own, uv_own, cc_part)
-        ring = _ring_starts(part, cutter, frame, Q, *pairs,
-                            [eng.ring, 0.5 * spacing, 1.5 * spacing])
+        radii = _ring_radii(eng.ring, spacing)
+        ring = _ring_starts(part, cutter, frame, Q, *pairs, radii)
         srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
                                   zip((srow, ssid, suv, sstep), ring, strict=True))
-        np.add.at(evals, pairs[0], 24)
+        np.add.at(evals, pairs[0], _FIRST_RING + 10 * (len(radii) - 1))
     seam = _seam_starts(tp, part, knn, own, spacing)
     srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
                               zip((srow, ssid, suv, sstep), seam, strict=True))
@@ -360,26 +361,84 @@ def _seam_starts(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray, s
                                                        0.25 * tp.spacing[idx])
 
 
+def _ring_radii(ring: float, spacing: float) -> list[float]:
+    """The rings probed around a CC point (mm): `ring` (its own curvature), then radii growing by
+    at most _RING_RATIO up to half the test-point spacing, and 1.5 spacings. Near the CC point
+    the size is the curvature limit plus a term linear in the distance (third-order contact),
+    so a minimum can lie at any distance below the samples' resolution, where no Newton walk
+    from the first ring reaches it (a cone's tip); a ring within a factor of it does."""
+    top = max(0.5 * spacing, ring)
+    count = int(np.ceil(np.log(top / ring) / np.log(_RING_RATIO))) + 1
+    return [*np.geomspace(ring, top, max(count, 2)).tolist(), 1.5 * spacing]
+
+
 def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
                  sid: np.ndarray, uv: np.ndarray, radii: list[float]):
     """Around each CC point, on each surface it lies on (pairs rows (K,), sid (K,), uv (K, 2)),
-    8 points on each ring of `radii` (mm): the first ring probes the curvature limit at the CC
-    point, the wider ones the narrow valleys near it that the samples do not resolve. The best
-    point of each ring is a refinement start (stencil half-width: half the ring radius)."""
-    per_mm = _per_parameter(part, sid, uv, np.ones(len(sid)))
+    points on rings of `radii` (mm) in directions even in the tangent plane (not in (u, v)):
+    _FIRST_RING of them on the first ring, which probes the curvature limit at the CC point; its
+    best direction (interpolated between the samples) and the opposite one, with 8 even ones, on
+    every wider ring: the narrow valleys near the CC point that the samples do not resolve leave
+    it along that direction. The best point of each ring is a refinement start (stencil
+    half-width: the first ring's radius, then half the ring's)."""
+    ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
     dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
+    per_mm = 1.0 / np.maximum(np.column_stack([np.linalg.norm(ev.du, axis=1),
+                                               np.linalg.norm(ev.dv, axis=1)]), 1e-12)
+    to_uv = _tangent_to_uv(ev.du, ev.dv)
+    even = np.arange(8) * np.pi / 4
+    angles = np.broadcast_to(np.arange(_FIRST_RING) * 2 * np.pi / _FIRST_RING,
+                             (len(rows), _FIRST_RING))
     out = []
-    ar = np.arange(rows.size)
-    for radius in radii:
-        step = radius * per_mm
-        ring = np.clip(uv[:, None, :] + _RING[None] * step[:, None, :], lo[:, None], hi[:, None])
-        pts = evaluate_mixed(part, np.repeat(sid, 8), ring[..., 0].ravel(),
+    for j, radius in enumerate(radii):
+        m = angles.shape[1]
+        step = radius * to_uv(angles)  # (K, m, 2)
+        ring = np.clip(uv[:, None, :] + step, lo[:, None], hi[:, None])
+        pts = evaluate_mixed(part, np.repeat(sid, m), ring[..., 0].ravel(),
                              ring[..., 1].ravel()).points
-        f = pair_sizes(cutter, frame, np.repeat(rows, 8),
-                       rotate_rows(Q, pts, np.repeat(rows, 8))).reshape(-1, 8)
+        f = pair_sizes(cutter, frame, np.repeat(rows, m),
+                       rotate_rows(Q, pts, np.repeat(rows, m))).reshape(-1, m)
         k = np.argmin(f, axis=1)
+        ar = np.arange(len(rows))
         ok = np.isfinite(f[ar, k])
-        half = step if radius == radii[0] else 0.5 * step
+        half = radius * per_mm * (1.0 if j == 0 else 0.5)
         out.append((rows[ok], sid[ok], ring[ar, k][ok], half[ok]))
+        if j == 0:
+            best = _best_angle(f, angles[0])
+            angles = np.column_stack([best, best + np.pi, np.broadcast_to(even, (len(rows), 8))])
     return tuple(np.concatenate([o[t] for o in out]) for t in range(4))
+
+
+def _tangent_to_uv(du: np.ndarray, dv: np.ndarray):
+    """`f(angles (K, m)) -> (K, m, 2)`: the (u, v) steps of unit length in the tangent plane at
+    K surface points (derivatives du, dv (K, 3)), at `angles` (rad) from du's direction."""
+    t1 = du / np.maximum(np.linalg.norm(du, axis=1, keepdims=True), 1e-300)
+    nrm = np.cross(du, dv)
+    t2 = np.cross(nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300), t1)
+    J = np.stack([du, dv], axis=2)  # (K, 3, 2)
+    G = np.einsum("kia,kib->kab", J, J)
+    det = G[:, 0, 0] * G[:, 1, 1] - G[:, 0, 1] ** 2
+    Ginv = np.stack([np.stack([G[:, 1, 1], -G[:, 0, 1]], 1),
+                     np.stack([-G[:, 0, 1], G[:, 0, 0]], 1)], 1) / \
+        np.where(det > 0, det, np.inf)[:, None, None]
+
+    def f(angles: np.ndarray) -> np.ndarray:
+        w = np.cos(angles)[..., None] * t1[:, None] + np.sin(angles)[..., None] * t2[:, None]
+        return np.einsum("kab,kmb->kma", Ginv, np.einsum("kia,kmi->kma", J, w))
+
+    return f
+
+
+def _best_angle(f: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """(K,) the angle of the smallest of K rows of values `f (K, m)` at even `angles (m,)`,
+    between the samples by a parabola through the best and its two neighbours (the sample
+    where they are not finite)."""
+    m = len(angles)
+    k = np.argmin(f, axis=1)
+    ar = np.arange(len(f))
+    a, b, c = f[ar, (k - 1) % m], f[ar, k], f[ar, (k + 1) % m]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        shift = 0.5 * (a - c) / (a - 2.0 * b + c)
+    shift = np.where(np.isfinite(shift), np.clip(shift, -0.5, 0.5), 0.0)
+    return angles[k] + shift * (2.0 * np.pi / m)

@@ -1,0 +1,48 @@
+"""The engine on free-form parts it was never tuned on: a fresh random bicubic patch every run
+(`tests/engine_parts.free_form`; the seed is printed on failure, PATHCHECK_SEED repeats it),
+ball, bull-nose and flat cutters at random CC points, against the brute-force oracle
+(tests/engine_oracle.py) and the PSO baseline (thesis chapter 4). The engine's size is the
+minimum over the whole part, so it may be below either (they sample) but never above by more than
+1e-3 mm: that would call a cutter safe that is not."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+from engine_oracle import oracle_sizes
+from engine_parts import free_form
+
+from checker.cutter import parse_cutter
+from checker.engine import allowable
+from checker.geometry.sampling import sample_part
+
+CUTTERS = ("CUTTER/10,5", "CUTTER/10,2", "CUTTER/10")
+PER_CUTTER = 25
+SEED = int(os.environ.get("PATHCHECK_SEED", np.random.SeedSequence().entropy % 2**31))
+
+
+@pytest.fixture(scope="module")
+def part():
+    p = free_form(SEED)
+    return p, sample_part(p)
+
+
+@pytest.mark.parametrize("k,cutter_text", list(enumerate(CUTTERS)))
+def test_never_above_the_oracle_or_pso(part, k, cutter_text):
+    p, tp = part
+    rng = np.random.default_rng(SEED + k)
+    pick = rng.choice(np.flatnonzero(tp.normals[:, 2] > 0.3), PER_CUTTER, replace=False)
+    cc, n = tp.points[pick], tp.normals[pick]
+    own = {"cc_surface": tp.surface[pick], "cc_uv": tp.uv[pick]}
+    c = parse_cutter(cutter_text)
+    eng = allowable(tp, p, c, cc, n, **own).size
+    ref = oracle_sizes(p, c, cc, n, dense=80, **own)
+    pso = allowable(tp, p, c, cc, n, method="pso", seed=SEED, **own).size
+    where = f"PATHCHECK_SEED={SEED} {cutter_text}"
+    assert (np.isfinite(eng) == np.isfinite(ref)).all(), where
+    for name, other in (("oracle", ref), ("PSO", pso)):
+        both = np.isfinite(eng) & np.isfinite(other)
+        above = eng[both] - other[both]
+        assert (above <= 1e-3).all(), f"{where}: above the {name} by {above.max():.4g} mm"
