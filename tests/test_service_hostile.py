@@ -58,7 +58,7 @@ def _surfaces(n: int, size: float) -> dict:
 @pytest.fixture(scope="module")
 def root(tmp_path_factory) -> Path:
     """The service's one root: a plane part, a non-CL file holding a secret, a folder, a FIFO,
-    symlinks out of the root (to /etc/passwd and /dev/zero) and one inside it."""
+    symlinks out of the root (to /etc/passwd and /dev/zero), one inside it and a loop."""
     folder = tmp_path_factory.mktemp("root")
     (folder / "plane.json").write_text(json.dumps(_surfaces(1, 50.0)))
     (folder / "secret.txt").write_text(f"password = {SECRET}\nroot:x:0:0\n")
@@ -67,6 +67,7 @@ def root(tmp_path_factory) -> Path:
     (folder / "passwd.apt").symlink_to("/etc/passwd")
     (folder / "zero.json").symlink_to("/dev/zero")
     (folder / "alias.json").symlink_to(folder / "plane.json")
+    (folder / "loop.json").symlink_to(folder / "loop.json")
     return folder
 
 
@@ -143,6 +144,9 @@ def _kinds() -> list[tuple[object, set[str]]]:
         (_allowable({"path": "pipe.json"}), {"part"}),
         (_allowable({"path": "no-such.json"}), {"part"}),
         (_allowable({"path": "secret.txt"}), {"part"}),
+        (_allowable({"path": "loop.json"}), {"input"}),
+        (_allowable({"path": "plane\x00.json"}), {"request"}),
+        (_allowable({"path": "x" * 300}), {"part"}),
         ({"op": "check", "apt_path": "/etc/passwd"}, {"forbidden"}),
         ({"op": "check", "apt_path": "passwd.apt"}, {"forbidden"}),
         ({"op": "check", "apt_path": "secret.txt"}, {"parse", "input", "dialect"}),

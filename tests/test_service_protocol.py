@@ -99,7 +99,13 @@ def test_replies_and_peek():
     assert json.loads(p.encode(p.ok_reply({"x": float("nan"), "y": [float("inf"), 1.5]},
                                           op="ping"))) == {
         "ok": True, "v": 1, "id": None, "op": "ping", "x": None, "y": [None, 1.5]}
-    assert p.peek(b'{"id": 5, "op": "check", "junk": ') == (None, None)
+    assert p.peek(b'{"id": 5, "op": "check", "junk": ') == (5, None)  # scanned: cut short
+    assert p.peek(b'{"op": "check", "junk": ') == (None, None)
+    deep = b'{"op": "ping", "id": "d", "x": ' + b"[" * 5000 + b"]" * 5000 + b"}"
+    assert p.peek(deep) == ("d", None)  # too deep to parse: scanned
+    big = b'{"op": "check", "apt": "' + b"x" * (p.PEEK_BYTES + 1) + b'", "id": 12}'
+    assert p.peek(big) == (12, None)  # too large to parse in the broker: scanned
+    assert p.peek(b'{"op": "check", "apt": "' + b"x" * p.PEEK_BYTES + b'"}') == (None, None)
     assert p.peek(b'{"id": 5, "op": "check"}') == (5, "check")
     assert p.peek(b'{"id": true, "op": 3}') == (None, None)
 
@@ -198,3 +204,24 @@ def test_random_requests_parse_or_raise_a_pathcheck_error(op, fields):
         assert str(err) and err.code in {"json", "request", "op", "version", "limit"}
     else:
         assert request.op == op
+
+
+def test_background_recorder_prunes_to_keep_days_then_records(tmp_path):
+    """The broker's recorder applies the retention on its own thread before recording: with
+    keep_days 0 what was stored before it started goes, what it records after stays."""
+    from checker.service.recorder import BackgroundRecorder
+
+    path = tmp_path / "store.sqlite"
+    with ResultsStore(path) as store:
+        store.record_request("ping", True, 0.01)
+        store.record_request("check", False, 0.02, error="old")
+    recorder = BackgroundRecorder(path, keep_days=0.0)
+    recorder.record("stats", {"ok": True}, 0.03)
+    recorder.close()
+    with ResultsStore(path) as store:
+        assert [(r[1], r[2]) for r in store.requests()] == [("stats", 1)]
+    kept = BackgroundRecorder(path)  # no keep_days: nothing pruned
+    kept.record("ping", {"ok": True}, 0.01)
+    kept.close()
+    with ResultsStore(path) as store:
+        assert [r[1] for r in store.requests()] == ["stats", "ping"]

@@ -32,9 +32,13 @@ from checker.config import load_config
 @click.option("--store", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="results store to record every request in [config: store.path]")
 @click.option("--no-store", is_flag=True, help="do not record requests")
+@click.option("--keep-days", type=click.FloatRange(min=0), default=None,
+              help="retention: delete stored checks and requests older than this, at start "
+              "and hourly (as `pathcheck store prune --keep-days`)")
 def serve(bind: str | None, workers: int | None, roots: tuple[Path, ...],
           curve_keys: Path | None, insecure: bool, new_keys: Path | None,
-          config_file: Path | None, store: Path | None, no_store: bool) -> None:
+          config_file: Path | None, store: Path | None, no_store: bool,
+          keep_days: float | None) -> None:
     """Serve checks to CAM post-processors over ZeroMQ (protocol: docs/protocol.md).
     Logs one line per request on stderr.
 
@@ -57,7 +61,7 @@ def serve(bind: str | None, workers: int | None, roots: tuple[Path, ...],
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     store_path = None if no_store else str(store or config.store.resolved_path())
     broker = Broker(config, bind=bind, workers=workers, store=store_path, roots=Roots(roots),
-                    curve_keys=curve_keys, insecure=insecure)
+                    curve_keys=curve_keys, insecure=insecure, keep_days=keep_days)
     for sig in (signal.SIGTERM, signal.SIGINT):
         signal.signal(sig, lambda *_: broker.request_stop())
     broker.run()

@@ -97,8 +97,8 @@ class _Counters:
 
 class Broker:
     """Front end at `bind` (e.g. `tcp://127.0.0.1:5555`; port `*` picks a free one, see
-    `address`), `workers` worker processes behind it reading files only inside `roots`.
-    `run()` blocks until stopped."""
+    `address`), `workers` worker processes behind it reading files only inside `roots`;
+    requests recorded in `store`, pruned to `keep_days` days. `run()` blocks until stopped."""
 
     def __init__(
         self,
@@ -110,6 +110,7 @@ class Broker:
         roots: Roots | None = None,
         curve_keys: str | Path | None = None,
         insecure: bool = False,
+        keep_days: float | None = None,
     ) -> None:
         self.config = config
         self.limits = config.service
@@ -119,6 +120,7 @@ class Broker:
         self.roots = roots or Roots(())
         self.curve_keys = curve_keys
         self.insecure = insecure
+        self.keep_days = keep_days
         self.address: str | None = None
         self.started = threading.Event()
         self.ctx = zmq.Context()
@@ -201,7 +203,7 @@ class Broker:
             self.address = self.frontend.getsockopt_string(zmq.LAST_ENDPOINT)
             self.backend_addr = self._bind_backend()
             self.control.bind(self._control_addr)
-            self.recorder = BackgroundRecorder(self.store)
+            self.recorder = BackgroundRecorder(self.store, self.keep_days)
             for _ in range(self.n_workers):
                 self._spawn()
             log.info("listening on %s with %d workers%s", self.address, self.n_workers,

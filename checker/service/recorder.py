@@ -1,12 +1,14 @@
-"""Where every service request is recorded: a `Recorder` protocol, a no-op `NullRecorder`, and
-`StoreRecorder`, the adapter to the results store (`checker.store.ResultsStore`). A recorder
-never fails a request: store errors are logged and swallowed."""
+"""Where every service request is recorded: a `Recorder` protocol, a no-op `NullRecorder`,
+`StoreRecorder`, the adapter to the results store (`checker.store.ResultsStore`), and
+`BackgroundRecorder`, the broker's (a thread of its own, which also applies the retention). A
+recorder never fails a request: store errors are logged and swallowed."""
 
 from __future__ import annotations
 
 import logging
 import queue
 import threading
+import time
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -70,10 +72,15 @@ def open_recorder(store_path: str | Path | None) -> Recorder:
 
 class BackgroundRecorder:
     """Records on a thread of its own, so the broker's loop never waits for the store (the
-    store is opened on that thread). `close()` records what is queued, then stops."""
+    store is opened on that thread). With `keep_days` the same thread applies the store's
+    retention (`ResultsStore.prune(keep_days=...)`, as `pathcheck store prune`) at start and
+    every `prune_every_s`. `close()` records what is queued, then stops."""
 
-    def __init__(self, store_path: str | Path | None) -> None:
+    def __init__(self, store_path: str | Path | None, keep_days: float | None = None,
+                 prune_every_s: float = 3600.0) -> None:
         self._queue: queue.SimpleQueue = queue.SimpleQueue()
+        self.keep_days = keep_days
+        self.prune_every_s = prune_every_s
         self._thread = threading.Thread(target=self._run, args=(store_path,), daemon=True,
                                         name="pathcheck-recorder")
         self._thread.start()
@@ -89,5 +96,25 @@ class BackgroundRecorder:
 
     def _run(self, store_path: str | Path | None) -> None:
         recorder = open_recorder(store_path)
-        while (item := self._queue.get()) is not None:
+        store = getattr(recorder, "store", None)
+        next_prune = time.monotonic()
+        while True:
+            if store is not None and self.keep_days is not None \
+                    and time.monotonic() >= next_prune:
+                self._prune(store)
+                next_prune = time.monotonic() + self.prune_every_s
+            try:
+                item = self._queue.get(timeout=max(0.0, next_prune - time.monotonic()))
+            except queue.Empty:
+                continue
+            if item is None:
+                return
             recorder.record(*item)
+
+    def _prune(self, store: Any) -> None:
+        try:
+            pruned = store.prune(keep_days=self.keep_days)
+        except Exception as err:  # retention must never take the service down
+            log.warning("results store: not pruned: %s", err)
+            return
+        log.info("results store pruned: %s", pruned)

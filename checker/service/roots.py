@@ -34,8 +34,14 @@ class Roots:
     def inside(self, path: str | Path) -> Path:
         """`path` resolved (relative to the first root, symlinks followed); PathcheckError
         (code `forbidden`) when it lies outside every root."""
+        if "\x00" in str(path):
+            raise PathcheckError("expected a file path, found a NUL character", code="request")
         raw = Path(path)
-        full = (raw if raw.is_absolute() else self.folders[0] / raw).resolve()
+        try:
+            full = (raw if raw.is_absolute() else self.folders[0] / raw).resolve()
+        except (OSError, RuntimeError):
+            raise PathcheckError("expected a path that resolves, found a symlink loop or a "
+                                 "folder that cannot be read", path=path, code="input") from None
         if not any(full.is_relative_to(root) for root in self.folders):
             raise _forbidden(path)
         return full
