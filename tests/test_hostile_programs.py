@@ -320,3 +320,11 @@ def test_a_check_on_a_full_disk_is_one_note_not_a_failure(tmp_path):
         proc.stderr
     with ResultsStore(tmp_path / "results.sqlite") as store:
         assert len(store.jobs()) == 1
+
+
+def test_a_circle_axis_too_short_to_give_a_direction_is_one_line(tmp_path):
+    """Found by the fuzzer: a CIRCLE axis 1e-320 long gave numpy warnings before the error."""
+    (tmp_path / "c.apt").write_text("CUTTER/6\nGOTO/1,0,0\nCIRCLE/0,0,0,1e-320,0,0\nGOTO/1,0,0\n")
+    _one_line(run_pathcheck(["info", "c.apt"], cwd=tmp_path),
+              r"pathcheck: c\.apt:3: CIRCLE/: expected a circle axis i,j,k of unit length, "
+              r"found 9\.99989e-321,0,0")

@@ -45,6 +45,7 @@ IGNORED = frozenset(
 )
 AXIS_NORM_TOL = 1e-2  # |(i,j,k)| must be 1 to this; CAM systems print 4-7 decimals
 ARC_RADIUS_TOL = 1e-2  # relative mismatch allowed between CIRCLE radius and its end points
+MIN_AXIS_NORM = 1e-6  # a CIRCLE axis shorter than this has no usable direction
 MAX_TURNS = 1000  # full turns of one helical CIRCLE (NX TIMES,n)
 ARC_RADIUS_ABS = 2e-3  # mm, plus this (4-decimal inch files round to 0.0025 mm)
 # indices of angles (not lengths) in the cutter statements, by number of values
@@ -147,6 +148,9 @@ def circle_values(rec: Record, *, path: str) -> tuple[tuple[float, ...], int]:
                  "xc,yc,zc,i,j,k[,r,...]", path=path)
     if v[3] == v[4] == v[5] == 0:
         raise _err(rec, "expected a non-zero circle axis i,j,k, found 0,0,0", path=path)
+    if not math.hypot(*v[3:6]) > MIN_AXIS_NORM:  # (1e-320, 0, 0) has no direction to use
+        raise _err(rec, f"expected a circle axis i,j,k of unit length, found "
+                   f"{','.join(f'{x:g}' for x in v[3:6])}", path=path)
     return v, turns
 
 
