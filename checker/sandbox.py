@@ -14,6 +14,8 @@ not the file's fault).
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import json
 import math
 import os
@@ -106,6 +108,22 @@ def _failure(rc: int, err_file: Path, stderr: str, limits: Limits, path: str | P
                           code="part")
 
 
+def _limit(which: int, soft: int, extra: int) -> None:
+    """Soft limit `soft`, hard limit `soft + extra`, within the hard limit inherited (a worker
+    may run under a lower one already)."""
+    _, hard = resource.getrlimit(which)
+    top = soft + extra if hard == resource.RLIM_INFINITY else min(soft + extra, hard)
+    resource.setrlimit(which, (min(soft, top), top))
+
+
+def _die_with_parent() -> None:
+    """SIGKILL this child when its parent dies (Linux prctl PR_SET_PDEATHSIG)."""
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)
+    if os.getppid() == 1:  # the parent died before the call above
+        os._exit(_FAILED_EXIT)
+
+
 def _child(argv: list[str]) -> int:
     """The child: set the limits, call the target, write its arrays or its error."""
     target, out, err_file, seconds, memory_mb, *args = argv
@@ -113,11 +131,10 @@ def _child(argv: list[str]) -> int:
     function = getattr(import_module(module), name)
     for lib in getattr(function, "preload", ()):  # libraries loaded before the limits
         import_module(lib)
-    mem = int(memory_mb) * 2**20
-    resource.setrlimit(resource.RLIMIT_AS, (mem, mem))
-    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
-    cpu = math.ceil(float(seconds)) + 1
-    resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 1))
+    _die_with_parent()
+    _limit(resource.RLIMIT_AS, int(memory_mb) * 2**20, 0)
+    _limit(resource.RLIMIT_CORE, 0, 0)
+    _limit(resource.RLIMIT_CPU, math.ceil(float(seconds)) + 1, 1)
     try:
         arrays = function(*args)
     except PathcheckError as err:
