@@ -21,6 +21,7 @@ GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
 PLATEAU = 1e-6  # mm: coarse samples this close to the top make a flat top
 COARSE_PLATEAU = 1e-3  # mm: the same for a coarse evaluation (a cheaper upper bound)
 END_TOLERANCE = 0.2  # degrees: the feasible intervals' ends, kept on the feasible side
+_SCAN_BATCH = 40_000  # (point, B) rows per engine call of the coarse scan
 
 
 @dataclass(frozen=True)
@@ -42,18 +43,13 @@ def coarse_grid(b_min: float, b_max: float, step: float) -> np.ndarray:
 
 
 def _scan(fn: AllowableFn, n: int, grid: np.ndarray) -> np.ndarray:
-    """fn over every (point, grid B), in two halves of the grid run side by side (the engine
-    releases the GIL in its compiled and numpy parts)."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    halves = np.array_split(np.arange(grid.size), 2)
-
-    def run(cols: np.ndarray) -> np.ndarray:
+    """fn over every (point, grid B), (n, K): the grid's columns in batches of about
+    _SCAN_BATCH rows, one after the other (the engine's kernels use every core themselves)."""
+    per = max(1, _SCAN_BATCH // max(n, 1))
+    parts = []
+    for cols in np.array_split(np.arange(grid.size), max(1, -(-grid.size // per))):
         rows = np.repeat(np.arange(n), cols.size)
-        return fn(rows, np.tile(grid[cols], n)).reshape(n, cols.size)
-
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        parts = list(pool.map(run, halves))
+        parts.append(fn(rows, np.tile(grid[cols], n)).reshape(n, cols.size))
     return np.concatenate(parts, axis=1)
 
 
