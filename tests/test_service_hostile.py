@@ -38,14 +38,14 @@ TINY_APT = "PARTNO T\n{pprint}CUTTER/10\nFEDRAT/100\nGOTO/0,0,0\nGOTO/1,0,0\nFIN
 def _config(**service):
     base = default_config()
     update = {"debug_ops": True, "max_message_bytes": MAX_BYTES, "request_timeout_s": 30.0,
-              "max_points": 1000, "heartbeat_s": 0.5, "worker_memory_bytes": 1300 * 2**20,
+              "max_points": 1000, "heartbeat_s": 0.5, "worker_memory_bytes": 1000 * 2**20,
               **service}
     return base.model_copy(update={"service": base.service.model_copy(update=update)})
 
 
 def _surfaces(n: int, size: float) -> dict:
     """geomdl exchange JSON: `n` flat bicubic patches of `size` mm (each sampled to the
-    per-surface cap: n = 6 takes a few seconds and ~1 GB, n = 40 needs ~3 GB)."""
+    per-surface cap: n = 3 runs a second or two, n = 40 needs ~3 GB of address space)."""
     xs = [-size + 2 * size * k / 3 for k in range(4)]
     knots = [0, 0, 0, 0, 1, 1, 1, 1]
     data = [{"type": "spline", "rational": False, "degree_u": 3, "degree_v": 3,
@@ -286,7 +286,7 @@ def test_a_part_that_took_a_worker_down_is_refused_by_its_content_hash(broker, r
     native code would end it), sent three times by a client with retries: one `worker` reply,
     then `crashed` twice without reaching a worker; the same path with other bytes runs."""
     part = root / "crashing.json"
-    part.write_text(json.dumps(_surfaces(6, 1000.0)))
+    part.write_text(json.dumps(_surfaces(3, 1000.0)))
     request = _allowable({"path": "crashing.json"})
     fields = {k: v for k, v in request.items() if k != "op"}
     sent_before = broker.counters.requests
@@ -318,7 +318,7 @@ def test_memory_over_the_limit_answers_limit_and_replaces_the_worker(broker):
         reply = c.call("allowable", id="mem-1", part={"geomdl": _surfaces(40, 1000.0)},
                        cc=[[0, 0, 0, 0, 0, 1]], cutter="CUTTER/10")
     assert reply["ok"] is False and reply["error"]["code"] == "limit" and reply["id"] == "mem-1"
-    assert "1300 MiB" in reply["error"]["message"]
+    assert "1000 MiB" in reply["error"]["message"]
     _wait(lambda: len(pids - set(broker.worker_pids())) == 1, what="the worker to be replaced")
     broker.wait_started(30, ready_workers=2)
 
@@ -413,6 +413,11 @@ def test_curve_admits_only_clients_with_a_known_key(tmp_path):
         address = b.wait_started(60).replace("0.0.0.0", "127.0.0.1")
         with Client(address, timeout_s=20, curve_keys=keys) as c:
             assert c.call("ping", id="k")["ok"] is True
+        called = subprocess.run(
+            [sys.executable, "-m", "checker.cli", "call", "ping", "id=7", "--address", address,
+             "--curve-keys", str(keys), "--timeout", "20"],
+            cwd=REPO, capture_output=True, text=True, timeout=60)
+        assert called.returncode == 0 and json.loads(called.stdout)["id"] == 7, called.stderr
         for who in ({"curve_keys": stranger}, {}):
             with Client(address, timeout_s=1.0, retries=0, **who) as c, \
                     pytest.raises(PathcheckError, match="no reply"):
