@@ -204,7 +204,8 @@ def cached_part(spec: p.PartSpec, state: WorkerState,
         path = path or _Files(state.roots).get(spec.path, "part.path", "a part file", "part")
         key = file_key(path, salt)
         load = _library("checker.geometry", "load_part", "allowable")
-        entry, cached = state.cache.get(key, lambda: _sampled(lambda: load(path), state.config))
+        entry, cached = state.cache.get(
+            key, lambda: _sampled(lambda: load(path, geometry=state.config.geometry), state.config))
         return entry, cached, key
     key = json_key(spec.geomdl, salt)
     entry, cached = state.cache.get(key, lambda: _sampled(lambda: _inline(spec), state.config))
