@@ -254,7 +254,7 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     if uv_own is not None:
         pairs = _contact_pairs(tp, part, knn, own, uv_own, cc_part)
         radii = _ring_radii(eng.ring, spacing)
-        ring = _ring_starts(part, cutter, frame, Q, *pairs, radii)
+        ring, at_cc = _ring_starts(part, cutter, frame, Q, *pairs, radii)
         srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
                                   zip((srow, ssid, suv, sstep), ring, strict=True))
         np.add.at(evals, pairs[0], _FIRST_RING + 10 * (len(radii) - 1))
@@ -266,6 +266,9 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
         ref = refine(part, cutter, frame, Q, srow, ssid, suv, sstep, eng.refine_iterations)
         np.add.at(evals, srow, ref.evaluations)
         _keep_smaller(best, srow, ref.size, ref.point, ssid, ref.uv)
+    if pairs is not None:
+        lrow, lsize, lsid, luv = at_cc
+        _keep_smaller(best, lrow, lsize, cc_part[lrow], lsid, luv)
     if pairs is not None and limits.applies(cutter):
         prow, psid, puv = pairs
         lim = limits.flat_contour_limit(part, frame, Q, prow, psid, puv)
@@ -380,7 +383,11 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.nd
     best direction (interpolated between the samples) and the opposite one, with 8 even ones, on
     every wider ring: the narrow valleys near the CC point that the samples do not resolve leave
     it along that direction. The best point of each ring is a refinement start (stencil
-    half-width: the first ring's radius, then half the ring's)."""
+    half-width: the first ring's radius, then half the ring's). Returns the starts (rows, sid,
+    uv, half-widths) and the limits at the CC points themselves (rows, size, sid, uv): along
+    the best direction the size is s0 + b rho + O(rho^2) (third-order contact); where b > 0 the
+    infimum is s0, at the CC point, which no point reaches: extrapolated from rho and rho/2
+    (Richardson), the curvature limit for every cutter family."""
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
     dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
@@ -406,8 +413,29 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.nd
         out.append((rows[ok], sid[ok], ring[ar, k][ok], half[ok]))
         if j == 0:
             best = _best_angle(f, angles[0])
+            at_cc = _limit_at_cc(cutter, frame, Q, part, rows, sid, uv, lo, hi, to_uv, best,
+                                 radius)
             angles = np.column_stack([best, best + np.pi, np.broadcast_to(even, (len(rows), 8))])
-    return tuple(np.concatenate([o[t] for o in out]) for t in range(4))
+    return tuple(np.concatenate([o[t] for o in out]) for t in range(4)), at_cc
+
+
+def _limit_at_cc(cutter, frame: RowFrame, Q: np.ndarray, part: Part, rows, sid, uv, lo, hi,
+                 to_uv, angle: np.ndarray, radius: float):
+    """(rows, size, sid, uv): the size's limit at the CC points (`_ring_starts`) along
+    `angle`, 2 s(rho/2) - s(rho) with rho = `radius`; the opposite direction where that one
+    leaves the surface's domain (a CC point on its boundary; the curvature is the same)."""
+    step = radius * to_uv(angle[:, None])[:, 0]
+    out = (uv + step < lo) | (uv + step > hi)
+    step = np.where(out.any(axis=1)[:, None], -step, step)
+    near = np.clip(uv + 0.5 * step, lo, hi)
+    far = np.clip(uv + step, lo, hi)
+    pts = evaluate_mixed(part, np.tile(sid, 2), np.r_[near[:, 0], far[:, 0]],
+                         np.r_[near[:, 1], far[:, 1]]).points
+    f = pair_sizes(cutter, frame, np.tile(rows, 2), rotate_rows(Q, pts, np.tile(rows, 2)))
+    f_near, f_far = f[:len(rows)], f[len(rows):]
+    ok = np.isfinite(f_near) & np.isfinite(f_far)
+    limit = np.maximum(np.minimum(2.0 * f_near[ok] - f_far[ok], f_near[ok]), 0.0)
+    return rows[ok], limit, sid[ok], uv[ok]
 
 
 def _tangent_to_uv(du: np.ndarray, dv: np.ndarray):
