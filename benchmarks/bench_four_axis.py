@@ -1,7 +1,7 @@
 """The 4-axis job end to end on the compressor sample (2 blade surfaces x 41 x 41 CC points as
 in thesis chapter 5): CL -> CC, the allowable size at the CAM's B, the best-B search over the
 machine's range with feasible intervals, the orientation along the path (shortest path and
-greedy), the check at the chosen B and the intermediate poses, and the corrected G-code.
+greedy), the real tool checked along the written program's moves, and the corrected G-code.
 Run: `python -m benchmarks.bench_four_axis [JOB.apt]`."""
 
 from __future__ import annotations
@@ -23,13 +23,13 @@ def main() -> None:
         doc = check_job(job, output=Path(tmp) / "out.nc")
         wall = time.perf_counter() - t
     s, o = doc.summary, doc.orientation
-    print(f"{job.name}: {s.cc_points} CC points, {s.intermediate_points} intermediate poses, "
-          f"{doc.job.axis_class}")
-    print(f"  wall time (check + best B + orientation + intermediates + G-code): {wall:.1f} s")
-    print(f"  CC points/s over the whole job: {s.cc_points / wall:.0f}")
-    print(f"  verdicts at the CAM's B: {s.counts.model_dump()}")
-    if s.counts_chosen is not None:
-        print(f"  verdicts at the chosen B (with intermediates): {s.counts_chosen.model_dump()}")
+    print(f"{job.name}: {s.cl_points} poses at CL records, {s.poses_checked} poses checked "
+          f"along the moves, {doc.job.axis_class}")
+    print(f"  wall time (check + best B + orientation + moves + G-code): {wall:.1f} s")
+    print(f"  CL poses/s over the whole job: {s.cl_points / wall:.0f}")
+    print(f"  verdicts of the written program: {s.counts.model_dump()}")
+    if s.counts_cam is not None:
+        print(f"  verdicts at the CAM's B: {s.counts_cam.model_dump()}")
     if o is not None:
         print(f"  rotary motion: shortest path {o.dp_total_rotation:.1f} deg, greedy "
               f"{o.greedy_total_rotation:.1f} deg, CAM {o.original_total_rotation:.1f} deg; "

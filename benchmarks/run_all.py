@@ -1,4 +1,5 @@
-"""Run every benchmark in this folder, one after the other (`make bench`)."""
+"""Run every benchmark in this folder, one after the other (`make bench`): first the one-run
+speed summary (`benchmarks.speed`), then each `bench_*` module."""
 
 from __future__ import annotations
 
@@ -10,7 +11,8 @@ from pathlib import Path
 
 def main() -> None:
     here = Path(__file__).resolve().parent
-    names = sorted(m.name for m in pkgutil.iter_modules([str(here)]) if m.name.startswith("bench_"))
+    names = ["speed", *sorted(m.name for m in pkgutil.iter_modules([str(here)])
+                               if m.name.startswith("bench_"))]
     for name in names:
         print(f"\n=== benchmarks.{name} ===", flush=True)
         sys.argv = [f"benchmarks.{name}"]
