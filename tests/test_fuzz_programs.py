@@ -6,7 +6,7 @@ programs. Every run ends with exit 0, 1 or 2, no traceback, no signal, within 60
 and an exit 2 is one line naming the file.
 
 A small sample runs in `make test`; PATHCHECK_FUZZ=nightly runs 500 cases per family (about
-ten minutes on two cores). A failing case is reproduced by its seed, the test's id."""
+10-14 minutes on two shared cores). A failing case is reproduced by its seed, the test's id."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from tests.conftest import REALDATA
 from tests.hostile import REPO, assert_sane, run_pathcheck
 
 NIGHTLY = os.environ.get("PATHCHECK_FUZZ") == "nightly"
-CASES = 500 if NIGHTLY else 36  # per family
+CASES = 500 if NIGHTLY else 24  # per family
 CHECK_EVERY = 10 if NIGHTLY else 6  # every n-th CL case is a full check against a small part
 
 CL_SOURCES = [
