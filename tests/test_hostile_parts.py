@@ -157,6 +157,23 @@ def test_stl_with_one_moved_vertex_is_one_line(realdata, tmp_path, value, expect
     assert _one_line_error(path, str(apt), "--part", str(path)) == f"pathcheck: {path}: {expect}"
 
 
+def test_ascii_stl_number_beyond_float32_is_one_line(realdata, tmp_path):
+    """An ASCII STL vertex of 1e308 overflows numpy-stl's float32 (its RuntimeWarning made a
+    second line on stderr; found by the nightly fuzz)."""
+    from stl import Mode
+    from stl import mesh as stl_mesh
+
+    path = tmp_path / "big.stl"
+    stl_mesh.Mesh.from_file(str(realdata / "amorim-solidworkscam-apt" / "Teste-Metrologia.STL")
+                            ).save(str(path), mode=Mode.ASCII)
+    text = path.read_bytes()
+    at = text.index(b"vertex") + len(b"vertex ")
+    path.write_bytes(text[:at] + b"1e308" + text[text.index(b" ", at):])
+    assert _one_line_error(path) == (
+        f"pathcheck: {path}: STL file holds no triangles or non-finite coordinates (or beyond "
+        "float32's 3.4e38)")
+
+
 def _without_line(raw: bytes, index: int) -> bytes:
     lines = raw.split(b"\n")
     return b"\n".join(lines[:index] + lines[index + 1 :])

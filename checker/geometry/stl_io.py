@@ -4,6 +4,7 @@ triangles and unit triangle normals from the vertex order (right-hand rule), in 
 from __future__ import annotations
 
 import io
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -17,13 +18,16 @@ def read_stl(path: Path, raw: bytes) -> MeshPart:
     from stl import mesh as stl_mesh
 
     try:
-        m = stl_mesh.Mesh.from_file(str(path), fh=io.BytesIO(raw), calculate_normals=False)
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")  # a value beyond float32 overflows: checked below
+            m = stl_mesh.Mesh.from_file(str(path), fh=io.BytesIO(raw), calculate_normals=False)
     except Exception as err:  # numpy-stl raises assorted types for malformed files
         raise PathcheckError(f"not a readable STL file: {err}", path=path, code="part") from err
     tri = np.asarray(m.vectors, dtype=np.float64).reshape(-1, 3, 3)
     if tri.size == 0 or not np.isfinite(tri).all():
         raise PathcheckError(
-            "STL file holds no triangles or non-finite coordinates", path=path, code="part"
+            "STL file holds no triangles or non-finite coordinates (or beyond float32's "
+            "3.4e38)", path=path, code="part"
         )
     normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     length = np.linalg.norm(normals, axis=1)
