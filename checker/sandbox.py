@@ -1,12 +1,12 @@
 """Native code that can crash or hang on a damaged file (OpenCASCADE's STEP and IGES readers)
 runs here: in a child Python process under a time limit (wall clock, killed by the parent; CPU
-time as a backstop) and a memory limit (address space, `resource.setrlimit` in the child), with
-no core file. The child returns numpy arrays through an `.npz` in a private temporary folder
-(no pickle). A crash, a hang or a memory blow-up of the child is one `PathcheckError` naming
-the file (code "part"); the parent process never runs the native code itself. The modules a
-target names in its `preload` attribute are imported before the limits are set (the limit
-counts the whole address space, libraries included, but a library that cannot be mapped is
-not the file's fault).
+time as a backstop) and a memory limit (address space, `resource.setrlimit` in the child; the
+files it writes no larger), with no core file. The child returns numpy arrays through an `.npz`
+in a private temporary folder (no pickle). A crash, a hang or a memory blow-up of the child is
+one `PathcheckError` naming the file (code "part"); the parent process never runs the native
+code itself. The modules a target names in its `preload` attribute are imported before the
+limits are set (the limit counts the whole address space, libraries included, but a library
+that cannot be mapped is not the file's fault).
 
     arrays = run_contained("checker.geometry.occ_io:read_occ_arrays", [str(path), "step"],
                            Limits(seconds=40.0, memory_mb=2048), path, "STEP reader")
@@ -134,6 +134,7 @@ def _child(argv: list[str]) -> int:
     _die_with_parent()
     _limit(resource.RLIMIT_AS, int(memory_mb) * 2**20, 0)
     _limit(resource.RLIMIT_CORE, 0, 0)
+    _limit(resource.RLIMIT_FSIZE, int(memory_mb) * 2**20, 0)  # its stderr and its result
     _limit(resource.RLIMIT_CPU, math.ceil(float(seconds)) + 1, 1)
     try:
         arrays = function(*args)
