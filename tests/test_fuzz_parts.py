@@ -44,6 +44,10 @@ def _cases(family: str) -> int:
     return int(mode) if mode.isdigit() else _QUICK[family]
 
 
+# pytest-timeout's 600 s per test fits the sample; a larger run gets 20 s per case
+_TIMEOUT = pytest.mark.timeout(max(600, 20 * max(_cases(f) for f in _QUICK)))
+
+
 # --- mutations: (rng, bytes) -> (bytes, description) -------------------------------------
 
 def _flip(rng: random.Random, raw: bytes) -> tuple[bytes, str]:
@@ -265,15 +269,18 @@ def _run_family(family: str, bases: list[Base], tmp_path: Path) -> None:
     assert not failures, f"{len(failures)} of {n} {family} cases:\n" + "\n".join(failures)
 
 
+@_TIMEOUT
 @pytest.mark.parametrize("kind", ["json", "yaml"])
 def test_fuzzed_geomdl_files(tmp_path, kind):
     _run_family(kind, _geomdl_bases(kind), tmp_path)
 
 
+@_TIMEOUT
 def test_fuzzed_stl_files(realdata, tmp_path):
     _run_family("stl", _stl_bases(realdata, tmp_path), tmp_path)
 
 
+@_TIMEOUT
 @pytest.mark.parametrize("kind", ["step", "iges"])
 def test_fuzzed_cad_files(realdata, tmp_path, kind):
     pytest.importorskip("OCP")
