@@ -1,5 +1,5 @@
 """Running `pathcheck` as a real process on hostile input and judging how it ended: exit code,
-stderr, wall time and the peak memory of the child (RSS via resource.getrusage)."""
+stderr, wall time and the peak memory of the command (`tests/measured.py`)."""
 
 from __future__ import annotations
 
@@ -12,6 +12,8 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
+
+from tests.measured import launched, peak_mb
 
 REPO = Path(__file__).resolve().parents[1]
 PATHCHECK = [sys.executable, "-m", "checker.cli"]
@@ -52,12 +54,13 @@ def run_pathcheck(args: list[str], *, cwd: Path, env: dict[str, str] | None = No
     full_env = dict(os.environ, PATHCHECK_STORE=str(cwd / "results.sqlite"),
                     PATHCHECK_LOG_DIR=str(cwd / "logs"), PYTHONPATH=str(REPO))
     full_env.update(env or {})
-    out, err = cwd / ".stdout", cwd / ".stderr"
+    out, err, rss = cwd / ".stdout", cwd / ".stderr", cwd / ".rss"
     start = time.perf_counter()
     with open(out, "w") as fo, open(err, "w") as fe:
-        proc = subprocess.Popen([*PATHCHECK, *args], cwd=cwd, env=full_env, stdout=fo,
-                                stderr=fe, stdin=subprocess.DEVNULL, preexec_fn=preexec)
-    timer = threading.Timer(timeout, proc.kill)
+        proc = subprocess.Popen(launched([*PATHCHECK, *args], rss), cwd=cwd, env=full_env,
+                                stdout=fo, stderr=fe, stdin=subprocess.DEVNULL,
+                                preexec_fn=preexec, start_new_session=True)
+    timer = threading.Timer(timeout, lambda: os.killpg(proc.pid, signal.SIGKILL))
     timer.start()
     try:
         _, status, usage = os.wait4(proc.pid, 0)
@@ -66,7 +69,7 @@ def run_pathcheck(args: list[str], *, cwd: Path, env: dict[str, str] | None = No
     proc.returncode = os.waitstatus_to_exitcode(status)
     seconds = time.perf_counter() - start
     return Run(tuple(args), proc.returncode, out.read_text(errors="replace"),
-               err.read_text(errors="replace"), seconds, usage.ru_maxrss / 1024.0)
+               err.read_text(errors="replace"), seconds, peak_mb(rss, usage.ru_maxrss))
 
 
 def assert_sane(run: Run, named: str | tuple[str, ...]) -> None:

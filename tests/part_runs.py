@@ -1,7 +1,7 @@
 """Running `pathcheck` on a hostile part file as a real subprocess, and what every such run must
 hold (issue #18): no traceback, no signal, exit code 0, 1 or 2, an exit-2 message of one line
 naming the file, no run over 60 s, no process over 2 GB (peak RSS of the run and of every process
-it started, from `os.wait4`)."""
+it started, measured by `tests/measured.py`)."""
 
 from __future__ import annotations
 
@@ -15,6 +15,8 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
+
+from measured import launched, peak_mb
 
 PATHCHECK = Path(sys.executable).with_name("pathcheck")
 TIME_LIMIT_S = 60.0
@@ -45,10 +47,12 @@ def run_pathcheck(args: list[str], timeout: float = TIME_LIMIT_S) -> Run:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(pid, signal.SIGKILL)
 
-    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+    with (tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err,
+          tempfile.TemporaryDirectory() as tmp):
         t0 = time.monotonic()
-        proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=out, stderr=err,
-                                start_new_session=True)
+        rss = Path(tmp) / "rss"
+        proc = subprocess.Popen(launched(argv, rss), stdin=subprocess.DEVNULL, stdout=out,
+                                stderr=err, start_new_session=True)
         timer = threading.Timer(timeout, kill, (proc.pid,))
         timer.start()
         try:
@@ -60,8 +64,8 @@ def run_pathcheck(args: list[str], timeout: float = TIME_LIMIT_S) -> Run:
         out.seek(0)
         err.seek(0)
         return Run(argv, proc.returncode, out.read().decode("utf-8", "replace"),
-                   err.read().decode("utf-8", "replace"), seconds, usage.ru_maxrss / 1024.0,
-                   killed.is_set())
+                   err.read().decode("utf-8", "replace"), seconds,
+                   peak_mb(rss, usage.ru_maxrss), killed.is_set())
 
 
 def problems(run: Run, path: Path) -> list[str]:
