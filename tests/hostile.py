@@ -6,14 +6,11 @@ from __future__ import annotations
 import os
 import resource
 import signal
-import subprocess
 import sys
-import threading
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from tests.measured import launched, peak_mb
+from tests.measured import run_measured
 
 REPO = Path(__file__).resolve().parents[1]
 PATHCHECK = [sys.executable, "-m", "checker.cli"]
@@ -54,22 +51,8 @@ def run_pathcheck(args: list[str], *, cwd: Path, env: dict[str, str] | None = No
     full_env = dict(os.environ, PATHCHECK_STORE=str(cwd / "results.sqlite"),
                     PATHCHECK_LOG_DIR=str(cwd / "logs"), PYTHONPATH=str(REPO))
     full_env.update(env or {})
-    out, err, rss = cwd / ".stdout", cwd / ".stderr", cwd / ".rss"
-    start = time.perf_counter()
-    with open(out, "w") as fo, open(err, "w") as fe:
-        proc = subprocess.Popen(launched([*PATHCHECK, *args], rss), cwd=cwd, env=full_env,
-                                stdout=fo, stderr=fe, stdin=subprocess.DEVNULL,
-                                preexec_fn=preexec, start_new_session=True)
-    timer = threading.Timer(timeout, lambda: os.killpg(proc.pid, signal.SIGKILL))
-    timer.start()
-    try:
-        _, status, usage = os.wait4(proc.pid, 0)
-    finally:
-        timer.cancel()
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    seconds = time.perf_counter() - start
-    return Run(tuple(args), proc.returncode, out.read_text(errors="replace"),
-               err.read_text(errors="replace"), seconds, peak_mb(rss, usage.ru_maxrss))
+    e = run_measured([*PATHCHECK, *args], timeout, cwd=cwd, env=full_env, preexec_fn=preexec)
+    return Run(tuple(args), e.code, e.stdout, e.stderr, e.seconds, e.peak_mb)
 
 
 def assert_sane(run: Run, named: str | tuple[str, ...]) -> None:

@@ -5,18 +5,11 @@ it started, measured by `tests/measured.py`)."""
 
 from __future__ import annotations
 
-import contextlib
-import os
-import signal
-import subprocess
 import sys
-import tempfile
-import threading
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from measured import launched, peak_mb
+from measured import run_measured
 
 PATHCHECK = Path(sys.executable).with_name("pathcheck")
 TIME_LIMIT_S = 60.0
@@ -40,32 +33,8 @@ class Run:
 def run_pathcheck(args: list[str], timeout: float = TIME_LIMIT_S) -> Run:
     """`pathcheck ARGS` in its own session, killed (the whole group) after `timeout` s."""
     argv = [str(PATHCHECK), *args]
-    killed = threading.Event()
-
-    def kill(pid: int) -> None:
-        killed.set()
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(pid, signal.SIGKILL)
-
-    with (tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err,
-          tempfile.TemporaryDirectory() as tmp):
-        t0 = time.monotonic()
-        rss = Path(tmp) / "rss"
-        proc = subprocess.Popen(launched(argv, rss), stdin=subprocess.DEVNULL, stdout=out,
-                                stderr=err, start_new_session=True)
-        timer = threading.Timer(timeout, kill, (proc.pid,))
-        timer.start()
-        try:
-            _, status, usage = os.wait4(proc.pid, 0)
-        finally:
-            timer.cancel()
-        proc.returncode = os.waitstatus_to_exitcode(status)
-        seconds = time.monotonic() - t0
-        out.seek(0)
-        err.seek(0)
-        return Run(argv, proc.returncode, out.read().decode("utf-8", "replace"),
-                   err.read().decode("utf-8", "replace"), seconds,
-                   peak_mb(rss, usage.ru_maxrss), killed.is_set())
+    e = run_measured(argv, timeout)
+    return Run(argv, e.code, e.stdout, e.stderr, e.seconds, e.peak_mb, e.timed_out)
 
 
 def problems(run: Run, path: Path) -> list[str]:

@@ -36,6 +36,8 @@ def test_posted_program_checks_like_its_cl_job(repo, tmp_path, machine):
     assert again.summary.counts.gouge == 0 and again.summary.counts.interference == 0
     assert again.summary.largest_safe_cutter == pytest.approx(doc.summary.largest_safe_cutter,
                                                               abs=1e-3)
+    if machine != "fanuc-hmc":
+        return  # the reading differs per machine; the verdict that follows does not
     # a ball larger than the bowl's smallest concave radius gouges it
     big = args.copy()
     big[big.index("CUTTER/10,5")] = "CUTTER/40,20"
