@@ -224,3 +224,17 @@ def test_reader_time_limit_grows_with_the_file():
     cfg = GeometryConfig()
     assert reader_limits(cfg, 0) == Limits(seconds=20.0, memory_mb=2048)
     assert reader_limits(cfg, 3 * 2**20) == Limits(seconds=80.0, memory_mb=2048)
+
+
+def test_cad_trim_point_beyond_range_is_one_line(realdata, tmp_path):
+    """A CARTESIAN_POINT coordinate of ec_turbine-A.stp at byte 1,055,243 made 1e999 (the
+    nightly fuzz's case 358): the trim index printed numpy's cast warning before the error;
+    now the error alone."""
+    raw = (realdata / "occt-cad-nurbs" / "ec_turbine-A.stp").read_bytes()
+    at = 1055243
+    end = raw.index(b",", at)
+    path = tmp_path / "far.stp"
+    path.write_bytes(raw[:at] + b"1e999" + raw[end:])
+    assert _one_line_error(path) == (
+        f"pathcheck: {path}: surface 36 (face_36_cone): trims: trim points must be finite and "
+        "within +-1e+09")
