@@ -242,7 +242,7 @@ class ResultsStore:
             con.execute(f"PRAGMA busy_timeout = {int(self.busy_timeout_s * 1000)}")
             self._check(con)
             con.execute("PRAGMA foreign_keys = ON")
-            mode = con.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+            mode = self._switch_to_wal(con)
             if mode.lower() != "wal":
                 raise PathcheckError(
                     f"expected the store to switch to WAL journal mode, found '{mode}'",
@@ -256,24 +256,37 @@ class ResultsStore:
             raise
         return con
 
+    def _switch_to_wal(self, con: sqlite3.Connection) -> str:
+        """`PRAGMA journal_mode = WAL`, retried until the busy timeout: on a new file, openers
+        that both hold a shared lock and both want the exclusive one get SQLITE_BUSY at once
+        (SQLite's deadlock rule skips the busy handler), so the wait is ours."""
+        deadline = time.monotonic() + self.busy_timeout_s
+        while True:
+            try:
+                return con.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+            except sqlite3.OperationalError as err:
+                if "locked" not in str(err) or time.monotonic() >= deadline:
+                    raise
+                time.sleep(0.02)
+
     def _check(self, con: sqlite3.Connection) -> int:
         """The schema version of the file; PathcheckError for a newer one or a foreign file."""
-        version = con.execute("PRAGMA user_version").fetchone()[0]
+        # one statement, one snapshot: read apart, another opener's migration could commit
+        # between the two and show tables at version 0 (a "foreign" file)
+        version, tables = con.execute(
+            "SELECT (SELECT user_version FROM pragma_user_version), "
+            "(SELECT count(*) FROM sqlite_master WHERE name NOT LIKE 'sqlite_%')").fetchone()
         if version > SCHEMA_VERSION:
             raise PathcheckError(
                 f"store schema version {version} is newer than this pathcheck understands "
                 f"(expected at most {SCHEMA_VERSION}); upgrade pathcheck; the file was left "
                 "untouched", path=self.path, code="store",
             )
-        if version == 0:
-            tables = con.execute(
-                "SELECT count(*) FROM sqlite_master WHERE name NOT LIKE 'sqlite_%'"
-            ).fetchone()[0]
-            if tables:
-                raise PathcheckError(
-                    f"expected a pathcheck results store, found an SQLite file with {tables} "
-                    "other tables; the file was left untouched", path=self.path, code="store",
-                )
+        if version == 0 and tables:
+            raise PathcheckError(
+                f"expected a pathcheck results store, found an SQLite file with {tables} other "
+                "tables; the file was left untouched", path=self.path, code="store",
+            )
         return version
 
     @contextmanager
