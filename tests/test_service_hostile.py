@@ -268,19 +268,6 @@ def _busy(b: Broker) -> int:
     return b.busy_pids()[0]
 
 
-def test_worker_killed_mid_request_answers_worker_with_the_id(broker):
-    with _client(broker, retries=2) as c, ThreadPoolExecutor(1) as pool:
-        pending = pool.submit(c.call, "sleep", seconds=5.0, id="killed-1")
-        victim = _busy(broker)
-        os.kill(victim, signal.SIGKILL)
-        reply = pending.result(15)
-    assert reply["ok"] is False and reply["error"]["code"] == "worker"
-    assert reply["id"] == "killed-1" and reply["op"] == "sleep"
-    assert f"worker {victim} died (signal SIGKILL)" in reply["error"]["message"]
-    broker.wait_started(30, ready_workers=2)
-    assert victim not in broker.worker_pids()
-
-
 def test_a_part_that_took_a_worker_down_is_refused_by_its_content_hash(broker, root):
     """A slow part file whose worker dies mid-request (killed from outside, as a segfault in
     native code would end it), sent three times by a client with retries: one `worker` reply,
