@@ -237,6 +237,17 @@ def write_apt(path: Path, header: list[str], blocks: list[tuple[str, np.ndarray,
 
 
 # ---- compressor path --------------------------------------------------------------------------
+def write_cc_csv(path: Path, passes: list[Pass], count: int) -> None:
+    """About `count` CC points of the passes, evenly spread, with their surface normals: the
+    `pathcheck allowable --cc` input (header x,y,z,nx,ny,nz; part frame, mm)."""
+    cc = np.concatenate([p.cc for p in passes])
+    nn = np.concatenate([p.normals for p in passes])
+    pick = np.linspace(0, len(cc) - 1, min(count, len(cc))).round().astype(int)
+    table = np.round(np.hstack([cc[pick], nn[pick]]), 6) + 0.0  # no "-0.000000"
+    rows = [",".join(f"{x:.6f}" for x in row) for row in table]
+    path.write_text("x,y,z,nx,ny,nz\n" + "\n".join(rows) + "\n")
+
+
 def compressor_axes(cc: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """The CAM's tool axes (K,3) with j = 0: the radial direction at the CC point (in the XZ
     plane) turned by COMP_TILT towards the side the surface faces (the XZ part of its normal)."""
@@ -302,7 +313,8 @@ def blade_passes(part: Part, cutter: Cutter, n_u: int, n_v: int) -> list[Pass]:
 def build_compressor(folder: Path) -> dict:
     """compressor.json/.apt (2 x 41 x 41 CC points, ball D6); compressor_small.json/.apt (the
     same on 2 x 9 x 5 CC points) and compressor_small_d12.json/.apt (those CC points and axes
-    with a ball D12: tips recomputed, the larger cutter to be flagged)."""
+    with a ball D12: tips recomputed, the larger cutter to be flagged); cc.csv (the 90 CC
+    points of compressor_small)."""
     folder.mkdir(parents=True, exist_ok=True)
     part = write_part(compressor_surfaces(), folder / "compressor.json")
     cutter = cutter_from_apt(list(COMP_CUTTER))
@@ -316,6 +328,7 @@ def build_compressor(folder: Path) -> dict:
         gotos.append(write_apt(folder / f"{stem}.apt", compressor_header(title, size),
                                compressor_blocks(blade_passes(part, cutter_from_apt(list(size)),
                                                               9, 5)), multax=True))
+    write_cc_csv(folder / "cc.csv", blade_passes(part, cutter, 9, 5), 90)
     return {"part": part, "passes": passes, "cutter": cutter, "goto": tuple(gotos)}
 
 
@@ -348,7 +361,8 @@ def mould_pass(part: Part, cutter: Cutter) -> Pass:
 
 
 def build_mould(folder: Path) -> dict:
-    """mould.json (8 patches) and mould.apt (3-axis zig-zag, ball D10)."""
+    """mould.json (8 patches), mould.apt (3-axis zig-zag, ball D10) and cc.csv (100 of its CC
+    points)."""
     folder.mkdir(parents=True, exist_ok=True)
     part = write_part(mould_surfaces(), folder / "mould.json")
     cutter = cutter_from_apt(list(MOULD_CUTTER))
@@ -362,6 +376,7 @@ def build_mould(folder: Path) -> dict:
               f"CUTTER/{MOULD_CUTTER[0]:g},{MOULD_CUTTER[1]:g}", "LOADTL/1",
               "SPINDL/10000,RPM,CLW"]
     n = write_apt(folder / "mould.apt", header, blocks, multax=False)
+    write_cc_csv(folder / "cc.csv", [ps], 100)
     return {"part": part, "passes": [ps], "cutter": cutter, "goto": (n,)}
 
 
