@@ -50,7 +50,7 @@ def _descend(i, xyz, rot, sz, knn, best, p):
 def _coarse_row(i, grid, rot, reg, sz, knn, u, evals):
     """Row i: the first point of every k-th cell column and row under its region (k from
     `_COARSE_POINTS`), where in the region, then the descent from the smallest."""
-    xyz_c, order, start, ny = grid[0], grid[1], grid[2], grid[7]
+    xyz_c, order, start, ny = grid.xyz_cells, grid.order, grid.start, grid.ny
     i0, i1, j0, j1 = cell_range(reg, i, grid)
     cells = max(i1 - i0 + 1, 0) * max(j1 - j0 + 1, 0)
     k = max(1, int(math.ceil(math.sqrt(cells / _COARSE_POINTS))))
@@ -71,7 +71,7 @@ def _coarse_row(i, grid, rot, reg, sz, knn, u, evals):
             if v < best:
                 best = v
                 arg = order[t]
-    u[i], more = _descend(i, grid[10], rot, sz, knn, best, arg)
+    u[i], more = _descend(i, grid.xyz, rot, sz, knn, best, arg)
     evals[i] = ne + more
 
 

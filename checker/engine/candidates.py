@@ -8,6 +8,7 @@ disc), `cell_misses` (a cell whose bounding box misses the region is passed over
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -25,6 +26,22 @@ _CULL_EPS_MM = 1e-6  # mm by which a cell's box must miss a region to be skipped
 # that holds the region's grid points (centre, radius; -1: no point).
 CX, CY, RAD, ZLO, ZHI, SX, SY, SZ, SR, ZEQ, PX, PY, PZ, PD, BX, BY, BRAD = range(17)
 REGION_COLS = 17
+
+
+class GridArrays(NamedTuple):
+    """A `CellGrid` as the numba kernels take it (tool frame of the grid, mm)."""
+
+    xyz_cells: np.ndarray  # (M, 3) the points in cell order
+    order: np.ndarray  # (M,) point id of each position in cell order
+    start: np.ndarray  # (C + 1,) first position of each cell
+    x0: float  # corner of cell (0, 0)
+    y0: float
+    cell: float  # cell side
+    nx: int
+    ny: int
+    box_lo: np.ndarray  # (C, 3) lowest corner of each cell's points (inf: empty)
+    box_hi: np.ndarray  # (C, 3) highest corner (-inf: empty)
+    xyz: np.ndarray  # (M, 3) the points by id
 
 
 @dataclass
@@ -48,12 +65,11 @@ class CellGrid:
     bounds: np.ndarray
     memo: dict = field(default_factory=dict)
 
-    def kernel_args(self) -> tuple:
-        """The grid as one tuple for the numba kernels: (xyz_cells, order, start, x0, y0, cell,
-        nx, ny, box_lo, box_hi, xyz)."""
-        return (self.xyz_cells, self.order, self.start, float(self.origin[0]),
-                float(self.origin[1]), self.cell, self.nx, self.ny, self.box_lo, self.box_hi,
-                self.xyz)
+    def kernel_args(self) -> GridArrays:
+        """The grid as the numba kernels take it."""
+        return GridArrays(self.xyz_cells, self.order, self.start, float(self.origin[0]),
+                          float(self.origin[1]), self.cell, self.nx, self.ny, self.box_lo,
+                          self.box_hi, self.xyz)
 
 
 def build_grid(xyz: np.ndarray, per_cell: float = 6.0) -> CellGrid:
@@ -101,7 +117,7 @@ def inside(reg, i, x, y, z):
 def cell_range(reg, i, grid):
     """Cell columns i0..i1 and rows j0..j1 covering row i's grid-frame disc (empty: i1 < i0 or
     j1 < j0)."""
-    x0, y0, cell, nx, ny = grid[3], grid[4], grid[5], grid[6], grid[7]
+    x0, y0, cell, nx, ny = grid.x0, grid.y0, grid.cell, grid.nx, grid.ny
     bx, by, br = reg[i, BX], reg[i, BY], reg[i, BRAD]
     i0 = int(min(max(np.floor((bx - br - x0) / cell), 0.0), nx - 1.0))
     i1 = int(min(max(np.floor((bx + br - x0) / cell), -1.0), nx - 1.0))
@@ -114,7 +130,7 @@ def cell_range(reg, i, grid):
 def column_span(reg, i, grid, a, j0, j1):
     """The rows of cell column a, within j0..j1, that meet row i's grid-frame disc (empty:
     second < first); `_CULL_EPS_MM` wider against rounding."""
-    x0, y0, cell, nx = grid[3], grid[4], grid[5], grid[6]
+    x0, y0, cell, nx = grid.x0, grid.y0, grid.cell, grid.nx
     bx, by, br = reg[i, BX], reg[i, BY], reg[i, BRAD]
     left = x0 + a * cell
     dx = left - bx if bx < left else 0.0
@@ -165,13 +181,13 @@ def cell_misses(reg, i, view, grid, c):
     """Whether no point of cell c can lie in row i's region (`view` from `grid_view`): the
     cell's bounding box is outside the grid-frame disc, or (row frame) above or below the slab,
     below the plane, or below the equator and outside the ball, by more than _CULL_EPS_MM."""
-    mx, my, mz, hx, hy, hz = _box(grid[8], grid[9], c)
+    mx, my, mz, hx, hy, hz = _box(grid.box_lo, grid.box_hi, c)
     dx = max(abs(mx - reg[i, BX]) - hx, 0.0)
     dy = max(abs(my - reg[i, BY]) - hy, 0.0)
     far = reg[i, BRAD] + _CULL_EPS_MM
     if dx * dx + dy * dy > far * far:
         return True
-    z_lo, z_hi = cell_heights(view, grid[8], grid[9], c)
+    z_lo, z_hi = cell_heights(view, grid.box_lo, grid.box_hi, c)
     if z_hi < reg[i, ZLO] or z_lo > reg[i, ZHI]:
         return True
     top = view[3] * mx + view[4] * my + view[5] * mz + abs(view[3]) * hx + abs(view[4]) * hy \
@@ -193,7 +209,7 @@ def _collect_row(i, grid, rot, reg, indptr, out, fill):
     """Candidates of row i: the points of the cells under its grid-frame disc whose boxes can
     meet its region, each tested in the row's own frame (`rot[i]` @ grid point). Counts into
     `out[i]`, or (fill) writes the point ids from `out[indptr[i]]`."""
-    xyz, order, start, ny = grid[0], grid[1], grid[2], grid[7]
+    xyz, order, start, ny = grid.xyz_cells, grid.order, grid.start, grid.ny
     i0, i1, j0, j1 = cell_range(reg, i, grid)
     view = grid_view(reg, i, rot)
     k = indptr[i]

@@ -63,8 +63,8 @@ def straddles(view, grid, nb_lo, nb_hi, c, floor):
     """Whether cell c can hold a point at or above `floor` (row frame, mm) with a neighbour
     below it (`view`: candidates.grid_view of the row; boxes from `edge_data`)."""
     if view[0] == 0.0 and view[1] == 0.0 and view[2] == 1.0:  # the grid's own z axis
-        return grid[9][c, 2] + _EPS_Z >= floor and nb_lo[c, 2] - _EPS_Z < floor
-    top = cell_heights(view, grid[8], grid[9], c)[1]
+        return grid.box_hi[c, 2] + _EPS_Z >= floor and nb_lo[c, 2] - _EPS_Z < floor
+    top = cell_heights(view, grid.box_lo, grid.box_hi, c)[1]
     return top >= floor and cell_heights(view, nb_lo, nb_hi, c)[0] < floor
 
 
@@ -90,7 +90,7 @@ def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, sep, out_p, out_q, o
     sees `rot[i] @ xyz[p]`), into row i of the `out_*` arrays: p, q, fraction, size and (x, y)
     of the crossing. The bottom plane is at the height z0 of the row in `sz`
     (sizes.size_args); `edges` from `edge_data`."""
-    cc, n, e, floor, prm = sz[0], sz[1], sz[2], sz[3], sz[5]
+    cc, n, e, floor, prm = sz.cc, sz.n, sz.e, sz.z0, sz.prm
     m = out_p.shape[1]
     for k in range(count):
         p = cand[k]

@@ -47,6 +47,10 @@ _OFFS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.floa
 _CENTRE = 4  # index of the stencil centre in _OFFS
 _SAME = 1e-3  # mm: starts whose best points are this close have met
 _CHUNK = 256  # starts per parallel task
+# columns of the per-start flags the compiled steps write: a Newton step or the walk won, a
+# contour step won, the stencil centre was best, model values computed, the walk won
+_F_STEP, _F_ALONG, _F_CENTRE, _F_PROBES, _F_WALK = range(5)
+_F_COLS = 5
 _DELTA = 1e-4  # mm: difference step of the walk's derivatives
 _GROW, _SHRINK = 2.0, 0.25  # trust radius and reach factors after a success and a failure
 _RADIUS_CAP, _CAP_MM = 64.0, 1.0  # longest walk and trust radius: initial radii, at least mm
@@ -372,8 +376,9 @@ def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, bes
             if ft < fc:
                 fc, nu, nv, trust = ft, x, y, True
         cand[s, 0], cand[s, 1] = nu, nv
-        flags[s, 0], flags[s, 1], flags[s, 2] = newton or trust, along, jbest == _CENTRE
-        flags[s, 3], flags[s, 4] = probes, trust
+        flags[s, _F_STEP], flags[s, _F_ALONG], flags[s, _F_CENTRE] = (newton or trust, along,
+                                                                       jbest == _CENTRE)
+        flags[s, _F_PROBES], flags[s, _F_WALK] = probes, trust
 
 
 @nb.njit(cache=True)
@@ -429,9 +434,8 @@ def _steps(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, 
     where the stencil stalled, a `_walk`; all on the start's Taylor model (the model arguments
     from `_Objective.model_args`). `radius (S, 3)` per start: the walk's trust radius, its
     reach and their cap, mm (a negative trust radius: the walk has arrived). Writes the best
-    point found, `cand[s]`, the distance walked `walked[s]` mm, and `flags[s]` = (a Newton
-    step or the walk won, a contour step won, the stencil centre was best, model values
-    computed, the walk won)."""
+    point found, `cand[s]`, the distance walked `walked[s]` mm, and `flags[s]` (columns
+    `_F_*`)."""
     n = a.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
         _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h,
@@ -544,7 +548,7 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
     active = np.ones(len(rows), dtype=bool)
     nrow = int(rows.max()) + 1 if rows.size else 0
     cand = np.empty_like(best_uv)
-    flags = np.zeros((len(rows), 5), dtype=np.int64)
+    flags = np.zeros((len(rows), _F_COLS), dtype=np.int64)
     r0 = np.maximum(h[:, 0] * np.linalg.norm(ev.du, axis=1),
                     h[:, 1] * np.linalg.norm(ev.dv, axis=1))  # the stencil's half-width, mm
     radius = np.column_stack([r0, _REACH * r0, np.maximum(_RADIUS_CAP * r0, _CAP_MM)])
@@ -560,9 +564,9 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
             break
         _steps(*obj.model_args(taylor), a, rows, sid, best_uv, best_f, best_p, h, radius, walked,
                cand, flags)
-        newton, along, centre = (flags[a, j].astype(bool) for j in range(3))
-        trust = flags[a, 4].astype(bool)
-        evals[a] += flags[a, 3]
+        newton, along, centre, trust = (flags[a, j].astype(bool)
+                                        for j in (_F_STEP, _F_ALONG, _F_CENTRE, _F_WALK))
+        evals[a] += flags[a, _F_PROBES]
         ra, sa, ha = rows[a], sid[a], h[a]
         c = np.clip(best_uv[a], lo[a] + ha, hi[a] - ha)
         fe, pe, ue, eve = obj.exact(ra, sa, cand[a, 0], cand[a, 1])

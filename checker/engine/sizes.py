@@ -5,6 +5,7 @@ a test point), and a point above the length of the cutter that would touch it is
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -56,11 +57,25 @@ def pair_sizes(cutter, frame: RowFrame, rows: np.ndarray, p: np.ndarray) -> np.n
     return np.where(near | too_high, np.inf, size)
 
 
-def size_args(cutter, frame: RowFrame, rows: np.ndarray) -> tuple:
-    """The rows `rows (N,)` of `frame` and the cutter's constants as one tuple for
-    `point_size`: (cc, n, e, z0, t, kernel params, ball family?, length, exclusion^2)."""
+class SizeArgs(NamedTuple):
+    """Rows of a `RowFrame` and the cutter's constants as the numba kernels take them (tool
+    frame, mm)."""
+
+    cc: np.ndarray  # (N, 3) CC points
+    n: np.ndarray  # (N, 3) unit normals
+    e: np.ndarray  # (N, 3) unit horizontal directions (zero: undefined)
+    z0: np.ndarray  # (N,) height of the CC point's family reference (family.py)
+    t: np.ndarray  # (N,) how the tip sinks per mm of size (family.py)
+    prm: np.ndarray  # the cutter's kernel parameters (kernels.py)
+    ball: bool  # ball family: the ball kernel, else the APT kernel
+    length: float  # cutting length above the tip
+    excl2: float  # exclusion radius squared: points this near the CC point are not tested
+
+
+def size_args(cutter, frame: RowFrame, rows: np.ndarray) -> SizeArgs:
+    """The rows `rows (N,)` of `frame` and the cutter's constants for `point_size`."""
     fam = frame.fam
-    return (np.ascontiguousarray(frame.cc[rows]), np.ascontiguousarray(frame.n[rows]),
+    return SizeArgs(np.ascontiguousarray(frame.cc[rows]), np.ascontiguousarray(frame.n[rows]),
             np.ascontiguousarray(frame.e[rows]), np.ascontiguousarray(fam.z0[rows]),
             np.ascontiguousarray(fam.t[rows]), cutter.kernel_params(),
             cutter.ball_family, float(fam.length), frame.exclusion ** 2)
@@ -68,9 +83,10 @@ def size_args(cutter, frame: RowFrame, rows: np.ndarray) -> tuple:
 
 @nb.njit(cache=True, inline="always")
 def point_size(sz, i, x, y, z):
-    """Size (mm) of row i (of the tuple `sz` from `size_args`) at the point (x, y, z) of its
-    tool frame; the rules of `pair_sizes`."""
-    cc, n, e, z0, t, prm, ball, length, excl2 = sz
+    """Size (mm) of row i (of `sz`, `SizeArgs`) at the point (x, y, z) of its tool frame; the
+    rules of `pair_sizes`."""
+    cc, n, e, z0, t, prm = sz.cc, sz.n, sz.e, sz.z0, sz.t, sz.prm
+    ball, length, excl2 = sz.ball, sz.length, sz.excl2
     qx = x - cc[i, 0]
     qy = y - cc[i, 1]
     qz = z - cc[i, 2]

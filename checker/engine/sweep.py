@@ -47,8 +47,8 @@ def _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, ids, vals, cand):
     lie in `lim[i]`, with their ids `ids`, in grid order; with crossings `on`, the candidates at
     or above the row's bottom plane (z0 in `sz`) in cells that straddle it go to `cand` (boxes
     `nb_lo`, `nb_hi` from contour.edge_data). Returns both counts."""
-    xyz, order, start, ny = grid[0], grid[1], grid[2], grid[7]
-    floor = sz[3][i]
+    xyz, order, start, ny = grid.xyz_cells, grid.order, grid.start, grid.ny
+    floor = sz.z0[i]
     view, view_lim = grid_view(reg, i, rot), grid_view(lim, i, rot)
     i0, i1, j0, j1 = cell_range(reg, i, grid)
     k0, k1, l0, l1 = cell_range(lim, i, grid)
@@ -108,7 +108,7 @@ def _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, fou
             row_seeds(i, ids, vals, ne, knn, best[i] * (1.0 + rel) + slack, stamp, pos, seeds,
                       seed_size)
         if on:
-            row_crossings(i, cand, nc, grid[10], rot, knn, edges, sz, sep, *found)
+            row_crossings(i, cand, nc, grid.xyz, rot, knn, edges, sz, sep, *found)
 
 
 @nb.njit(cache=True, parallel=True)
