@@ -32,6 +32,7 @@ import numpy as np
 from checker.engine.frames import heights, rotate_rows, rotated
 from checker.engine.sizes import RowFrame, pair_sizes, point_size, size_args
 from checker.geometry.evaluate import SurfaceEval, evaluate_mixed
+from checker.geometry.newton_uv import newton_step, newton_steps
 from checker.geometry.trims import kept, pack_trims
 from checker.part import Part
 
@@ -85,11 +86,12 @@ def _taylor_at(d, uv0, s, u, v, out):
 
 
 @nb.njit(cache=True, inline="always")
-def _free(g, x, lo, hi):
-    """Height gradient component g (up the surface) of a parameter x in [lo, hi]: 0 where the
-    step up the height (along +g) would leave the domain, so that points below the floor slide
-    along a domain edge instead of stopping at it (projected gradient)."""
-    return 0.0 if (x >= hi and g > 0.0) or (x <= lo and g < 0.0) else g
+def _onto_level(excess, hu, hv, u, v, lo_u, hi_u, lo_v, hi_v):
+    """The step (du, dv) that brings a height `excess` mm above a level (negative: below) to it,
+    the height's derivatives being (hu, hv): the projected Newton step on excess^2 / 2
+    (newton_uv.py), so that a point slides along a domain edge instead of stopping at it."""
+    return newton_step(excess * hu, excess * hv, hu * hu, hu * hv, hv * hv, u, v, lo_u, hi_u,
+                       lo_v, hi_v, False, False)
 
 
 @nb.njit(cache=True)
@@ -105,14 +107,12 @@ def _model_value(M, s, r, sd, u, v, snap, e):
         z = rotated(Q, r, e, 0)[2]
         if z >= floor[r] and not (snap and z - floor[r] > _ON_FLOOR):
             break
-        gu = _free(rotated(Q, r, e, 1)[2], u, lo_u, hi_u)
-        gv = _free(rotated(Q, r, e, 2)[2], v, lo_v, hi_v)
-        g2 = gu * gu + gv * gv
-        if g2 <= 1e-24:
+        du, dv = _onto_level(z - floor[r], rotated(Q, r, e, 1)[2], rotated(Q, r, e, 2)[2], u, v,
+                             lo_u, hi_u, lo_v, hi_v)
+        if du == 0.0 and dv == 0.0:
             break
-        t = (floor[r] - z) / g2
-        u = min(max(u + t * gu, lo_u), hi_u)
-        v = min(max(v + t * gv, lo_v), hi_v)
+        u = min(max(u + du, lo_u), hi_u)
+        v = min(max(v + dv, lo_v), hi_v)
         _taylor_at(d, uv0, s, u, v, e)
     x, y, z = rotated(Q, r, e, 0)
     f = point_size(sz, r, x, y, z) if kept(T, sd, u, v) else np.inf
@@ -511,22 +511,18 @@ class _Objective:
             if low.size == 0:
                 return
             d = self.dom[sid[low]]
-            gu = _free_rows(heights(self.Q, ev.du[low], rows[low]), u[low], d[:, 0])
-            gv = _free_rows(heights(self.Q, ev.dv[low], rows[low]), v[low], d[:, 1])
-            g2 = gu * gu + gv * gv
-            ok = g2 > 1e-24
-            low, gu, gv, g2, d = low[ok], gu[ok], gv[ok], g2[ok], d[ok]
-            t = (self.floor[rows[low]] - z[low]) / g2
-            u[low] = np.clip(u[low] + t * gu, d[:, 0, 0], d[:, 0, 1])
-            v[low] = np.clip(v[low] + t * gv, d[:, 1, 0], d[:, 1, 1])
+            a = np.column_stack([heights(self.Q, ev.du[low], rows[low]),
+                                 heights(self.Q, ev.dv[low], rows[low])])  # height gradient
+            excess = z[low] - self.floor[rows[low]]
+            step = newton_steps(excess[:, None] * a, a[:, :, None] * a[:, None, :],
+                                np.column_stack([u[low], v[low]]), d[:, :, 0], d[:, :, 1])
+            ok = (step != 0.0).any(axis=1)
+            low, step, d = low[ok], step[ok], d[ok]
+            u[low] = np.clip(u[low] + step[:, 0], d[:, 0, 0], d[:, 0, 1])
+            v[low] = np.clip(v[low] + step[:, 1], d[:, 1, 0], d[:, 1, 1])
             sub = evaluate_mixed(self.part, sid[low], u[low], v[low], order=order)
             for name in ("points", "du", "dv", "duu", "duv", "dvv")[:3 * order]:
                 getattr(ev, name)[low] = getattr(sub, name)
-
-
-def _free_rows(g: np.ndarray, x: np.ndarray, dom: np.ndarray) -> np.ndarray:
-    """`_free` for arrays: g (K,), x (K,), dom (K, 2) the parameter's [lo, hi]."""
-    return np.where(((x >= dom[:, 1]) & (g > 0.0)) | ((x <= dom[:, 0]) & (g < 0.0)), 0.0, g)
 
 
 def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray, sid: np.ndarray,

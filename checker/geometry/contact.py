@@ -21,6 +21,7 @@ import numpy as np
 
 from checker.cutter_core import Core, project_to_core, signed_distance, tool_coordinates
 from checker.geometry.evaluate import evaluate_mixed
+from checker.geometry.newton_uv import newton_steps
 from checker.geometry.sampling import TestPoints
 from checker.part import Part
 
@@ -201,8 +202,9 @@ def _refine(part: Part, core: Core, tips, axes, sid, uv) -> np.ndarray:
 
 
 def _descend(part, core, tips, axes, sid, lo, hi, closed, uv, rows, model) -> np.ndarray:
-    """Minimise model's f(S(u, v)) for `rows`: Newton or Gauss-Newton steps, kept on the
-    domain, halved until f decreases; a row stops when its step no longer moves it or no
+    """Minimise model's f(S(u, v)) for `rows`: projected Newton steps (newton_uv.py; the
+    Gauss-Newton matrix where the Hessian is not positive definite), kept on the domain,
+    halved until f decreases; a row stops when its step no longer moves it or no
     halving decreases f."""
     active = np.zeros(len(tips), dtype=bool)
     active[rows] = True
@@ -222,8 +224,7 @@ def _descend(part, core, tips, axes, sid, lo, hi, closed, uv, rows, model) -> np
             H[:, 0, 1] += np.einsum("ki,ki->k", d, ev.duv)
             H[:, 1, 1] += np.einsum("ki,ki->k", d, ev.dvv)
             H[:, 1, 0] = H[:, 0, 1]
-        step = _newton_or_gradient(H, g, J)
-        step = _on_bounds(step, H, g, J, uv[a], lo[a], hi[a], closed[a])
+        step = newton_steps(g, _positive_definite(H, J), uv[a], lo[a], hi[a], closed[a])
         small = np.linalg.norm(np.einsum("kij,kj->ki", J, step), axis=1) < _TOL
         t = np.ones(a.size)
         pending = ~small
@@ -243,21 +244,6 @@ def _descend(part, core, tips, axes, sid, lo, hi, closed, uv, rows, model) -> np
             t[p[~ok]] *= 0.5
         active[a] = improved
     return uv
-
-
-def _on_bounds(step, H, g, J, uv, lo, hi, closed) -> np.ndarray:
-    """Where a row sits on a domain bound and the step would leave it, hold that parameter and
-    take the 1-D Newton (or gradient) step in the other (an active-set step)."""
-    out = ((uv <= lo) & (step < 0) | (uv >= hi) & (step > 0)) & ~closed
-    G = np.einsum("kia,kia->ka", J, J)
-    step = step.copy()
-    for k in (0, 1):
-        one = out[:, 1 - k] & ~out[:, k]
-        curv = np.where(H[:, k, k] > 1e-12 * G[:, k], H[:, k, k], G[:, k])
-        step[one, k] = -g[one, k] / curv[one]
-        step[one, 1 - k] = 0.0
-    step[out.all(axis=1)] = 0.0
-    return step
 
 
 def _closed(part: Part) -> np.ndarray:
@@ -284,15 +270,14 @@ def _inside(uv: np.ndarray, lo: np.ndarray, hi: np.ndarray, closed: np.ndarray) 
     return np.where(closed, wrapped, np.clip(uv, lo, hi))
 
 
-def _newton_or_gradient(H: np.ndarray, g: np.ndarray, J: np.ndarray) -> np.ndarray:
-    """Newton step -H^-1 g where H is positive definite, else a Gauss-Newton step on the
-    first fundamental form (a descent direction)."""
+def _positive_definite(H: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """H where it is positive definite, else the first fundamental form J^T J (a Gauss-Newton
+    matrix: its Newton step is a descent direction)."""
     det = H[:, 0, 0] * H[:, 1, 1] - H[:, 0, 1] ** 2
     G = np.einsum("kia,kib->kab", J, J)
     scale = np.trace(G, axis1=1, axis2=2)
     pd = (H[:, 0, 0] > 1e-12 * scale) & (det > 1e-12 * scale**2)
-    M = np.where(pd[:, None, None], H, G + 1e-12 * scale[:, None, None] * np.eye(2))
-    return -np.linalg.solve(M, g[..., None])[..., 0]
+    return np.where(pd[:, None, None], H, G + 1e-12 * scale[:, None, None] * np.eye(2))
 
 
 def contact_from_toolpath(toolpath: ToolPath, lines: np.ndarray) -> np.ndarray:
