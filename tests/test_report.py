@@ -64,7 +64,8 @@ def night(tmp_path_factory):
                          job_path="jobs/bad.apt", elapsed_s=0.1, recorded_at=NOW - 60)
         store.record_job(None, error="part missing", job_path=docs[1].job.path, elapsed_s=0.1,
                          recorded_at=NOW - DAY_S - 300)  # last night, job 1 failed
-        files = build_report(store, root / "out" / "report.html", now=NOW)
+        files = build_report(store, root / "out" / "report.html", now=NOW,
+                             points_csv=root / "out" / "points.csv")
     return docs, files
 
 
@@ -298,10 +299,13 @@ def test_report_command(tmp_path, monkeypatch, capsys):
         store.record_job(synthetic_document(1, n=11), elapsed_s=1.0)
     out = tmp_path / "r" / "night.html"
     with pytest.raises(SystemExit) as exit_info:
-        main(["report", "--since", "2h", "--out", str(out)])
+        main(["report", "--since", "2h", "--out", str(out), "--points-csv",
+              str(tmp_path / "p.csv")])
     assert exit_info.value.code == 0
-    assert "1 job, 5 pictures" in capsys.readouterr().out
+    said = capsys.readouterr().out
+    assert "1 job, 5 pictures" in said and f"points: {tmp_path / 'p.csv'}" in said
     assert all(out.with_suffix(s).is_file() for s in (".html", ".json", ".csv"))
+    assert len(list(csv.reader((tmp_path / "p.csv").open()))) == 1 + 11 * 11  # header, points
     with pytest.raises(SystemExit) as exit_info:
         main(["report", "--since", "yesterday", "--out", str(out)])
     assert exit_info.value.code == 2

@@ -1,6 +1,6 @@
 """Build the nightly report from the results store: the HTML page, and beside it (same stem) a
-JSON and a CSV summary and a CSV of every checked point for other systems. Pictures of many jobs
-are drawn in a few processes."""
+JSON and a CSV summary for other systems, and when asked a CSV of every checked point. Pictures
+of many jobs are drawn in a few processes."""
 
 from __future__ import annotations
 
@@ -34,21 +34,20 @@ POINT_COLUMNS = (  # the per-point CSV: part frame, mm, degrees; empty = null
     "job_id", "job_path", "recorded_at", "index", "operation", "line", "kind", "rapid", "x", "y",
     "z", "verdict", "depth", "tolerance", "allowable", "margin", "b", "b_best",
 )
-POINTS_SUFFIX = ".points.csv"
 
 
 @dataclass(frozen=True)
 class ReportFiles:
-    """What `build_report` wrote: the page, the JSON and CSV summaries, the per-point CSV, how
-    many jobs and pictures the page holds."""
+    """What `build_report` wrote: the page, the JSON and CSV summaries, how many jobs and
+    pictures the page holds, and the per-point CSV when asked."""
 
     html: Path
     json: Path
     csv: Path
-    points_csv: Path
     jobs: int
     pictures: int
     skipped: int = 0  # rows of the store that could not be read (left out)
+    points_csv: Path | None = None
 
 
 # per process: the open store, the painter and the standard diameters (see _painter_setup)
@@ -133,11 +132,11 @@ def parse_since(text: str) -> float:
 
 def build_report(
     store: ResultsStore, out: str | Path, *, since_s: float = DAY_S, now: float | None = None,
-    config: Config | None = None,
+    config: Config | None = None, points_csv: str | Path | None = None,
 ) -> ReportFiles:
-    """Write the page `out`, `out` with .json and .csv suffixes and the per-point CSV (suffix
-    `POINTS_SUFFIX`), over the jobs recorded in the last `since_s` seconds before `now` (UTC
-    epoch s, default: the present)."""
+    """Write the page `out` and `out` with .json and .csv suffixes, over the jobs recorded in
+    the last `since_s` seconds before `now` (UTC epoch s, default: the present); and the
+    per-point CSV `points_csv` when given (one row per checked point of those jobs)."""
     cfg = config or default_config()
     until = time.time() if now is None else now
     since = until - since_s
@@ -158,13 +157,14 @@ def build_report(
         write_file(out, html, what="report page")
         _write_json(out.with_suffix(".json"), jobs, since, until, per_night, len(unreadable))
         _write_csv(out.with_suffix(".csv"), jobs)
-        _write_points(out.with_suffix(POINTS_SUFFIX), store, jobs)
+        if points_csv is not None:
+            _write_points(Path(points_csv), store, jobs)
     except OSError as err:
-        raise PathcheckError(f"cannot write the report: {err.strerror}", path=out,
-                             code="report") from err
+        raise PathcheckError(f"cannot write the report: {err.strerror}",
+                             path=err.filename or out, code="report") from err
     pictures = sum(len(j["pictures"]) for j in jobs) + (trend_png is not None)
-    return ReportFiles(out, out.with_suffix(".json"), out.with_suffix(".csv"),
-                       out.with_suffix(POINTS_SUFFIX), len(jobs), pictures, len(unreadable))
+    return ReportFiles(out, out.with_suffix(".json"), out.with_suffix(".csv"), len(jobs), pictures,
+                       len(unreadable), None if points_csv is None else Path(points_csv))
 
 
 def _plain(job: dict) -> dict:
