@@ -31,9 +31,9 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.cm import ScalarMappable  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
-from matplotlib.image import imsave  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
+from PIL import Image  # noqa: E402
 
 from checker.report.standard import StandardCutters  # noqa: E402
 from checker.results import VERDICTS  # noqa: E402
@@ -56,10 +56,12 @@ FINDING_CODES = np.array([VERDICTS.index(v) for v in FINDINGS])
 
 
 def png_base64(rgba: np.ndarray, dpi: float) -> str:
-    """A (H, W, 4) uint8 image as base64 PNG text (RGB, its dpi recorded for printing)."""
+    """A (H, W, 4) uint8 image (a figure's pixels) as base64 PNG text: RGB, encoded by Pillow
+    (matplotlib's own image library) at a fast zlib level, its dpi recorded for printing."""
     buf = io.BytesIO()
-    imsave(buf, np.ascontiguousarray(rgba[:, :, :3]), format="png", dpi=dpi,
-           pil_kwargs={"compress_level": 1})
+    image = Image.frombuffer("RGBA", (rgba.shape[1], rgba.shape[0]), np.ascontiguousarray(rgba),
+                             "raw", "RGBA", 0, 1)
+    image.convert("RGB").save(buf, "PNG", compress_level=1, dpi=(dpi, dpi))
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
