@@ -214,22 +214,27 @@ def test_painter_path_panel_scales():
 
 
 def test_allowable_map_marks_unbounded_points():
-    """Unbounded (nan) allowable sizes at contacts are drawn pink, not as the largest size."""
+    """Unbounded (nan) allowable sizes at contacts are drawn pink, not as the largest size, on
+    the allowable map and on the size-along-the-path panel of a job without B."""
     doc = synthetic_document(2, n=11, four_axis=False)
     painter = JobPainter()
     std = standard_cutters("ball", doc.job.cutter, doc.job.cutter_size, (1.0,))
     pink = np.array(Image.new("RGB", (1, 1), UNBOUNDED))[0, 0].astype(int)
 
-    def pink_pixels(arrays) -> int:
-        img = np.asarray(Image.open(io.BytesIO(base64.b64decode(
-            painter.render(arrays, std, doc.job.cutter_size)[0][0]))))[:, :, :3].astype(int)
-        return int(np.all(np.abs(img - pink) <= 1, axis=2).sum())
+    def pink_pixels(arrays) -> list[int]:
+        pictures = painter.render(arrays, std, doc.job.cutter_size)[0]
+        out = []
+        for k in (0, 3):  # allowable map, path panel
+            img = np.asarray(Image.open(io.BytesIO(base64.b64decode(pictures[k]))))
+            out.append(int(np.all(np.abs(img[:, :, :3].astype(int) - pink) <= 1, axis=2).sum()))
+        return out
 
     arrays = point_arrays(doc)
-    legend_only = pink_pixels(arrays)  # the legend's patch
+    legend_only = pink_pixels(arrays)  # the legends' patch and marker
     arrays["allowable"][:20] = np.nan  # 20 contacts where nothing limits the cutter
     with_unbounded = pink_pixels(arrays)
-    assert legend_only > 0 and with_unbounded > legend_only + 20 * 9
+    assert min(legend_only) > 0
+    assert with_unbounded[0] > legend_only[0] + 20 * 9 and with_unbounded[1] > legend_only[1]
     arrays["contact"][:20] = False  # the same points without a contact: not drawn at all
     assert pink_pixels(arrays) == legend_only
 

@@ -133,7 +133,8 @@ def _captions(job: dict) -> tuple[str, ...]:
         f"fits at each CC point ({size} in mm)",
         f"Findings on {part} ({view}): {findings_caption(job)}",
         "B chosen against best B along the path" if f["has_b"]
-        else f"{size} along the path (log scale, mm) against the real cutter (dashed)",
+        else f"{size} along the path (log scale, mm) against the real cutter (dashed); "
+        "pink at the top: unbounded",
     )
 
 

@@ -211,11 +211,12 @@ class JobPainter:
             a = ax.plot([], [], ".", ms=3, color="#1f77b4", animated=True)[0]
             b = ax.plot([], [], "-", lw=1.4, color="#ff7f0e", animated=True)[0]
             limit = ax.plot([], [], "--", lw=1.2, color="#d62728", animated=True)[0]
+            top = ax.plot([], [], "^", ms=4, color=UNBOUNDED, animated=True, clip_on=False)[0]
             if scale == "size":
                 ax.set_yscale("log")
                 ax.set_ylim(*ALLOWABLE_RANGE)
                 ax.set_ylabel("size, mm", fontsize=FONT_PT + 1)
-                handles, labels = (a, limit), ("allowable", "real size")
+                handles, labels = (a, limit, top), ("allowable", "real size", "unbounded")
             else:
                 ax.set_ylim(-scale, scale)
                 ax.yaxis.set_major_locator(MaxNLocator(5, symmetric=True))
@@ -223,7 +224,7 @@ class JobPainter:
                 handles, labels = (a, b), ("best B", "chosen B")
             fig.legend(handles, labels, fontsize=FONT_PT, loc="outside upper center", ncol=2,
                        frameon=False, handlelength=1.5)
-            self.drawn["path", scale] = _Drawn(fig, ax, (a, b, limit))
+            self.drawn["path", scale] = _Drawn(fig, ax, (a, b, limit, top))
         return self.drawn["path", scale]
 
     def _standard_colours(self, names: tuple[str, ...]) -> np.ndarray:
@@ -293,12 +294,13 @@ class JobPainter:
         b_best, b_chosen = arrays["b_best"][cc_only], arrays["b_chosen"][cc_only]
         if np.isfinite(b_chosen).any() or np.isfinite(b_best).any():
             scale = b_range(np.concatenate([b_best, b_chosen]))
-            data = ((s, b_best), (s, b_chosen), ([], []))
+            data = ((s, b_best), (s, b_chosen), ([], []), ([], []))
         else:
             scale = "size"
             allowable = arrays["allowable"][cc_only]
-            data = ((s, np.where(np.isnan(allowable), ALLOWABLE_RANGE[1], allowable)), ([], []),
-                    ([0.0, 100.0], [cutter_size or np.nan] * 2))
+            unbounded = np.isnan(allowable) & arrays["contact"][cc_only]
+            data = ((s, allowable), ([], []), ([0.0, 100.0], [cutter_size or np.nan] * 2),
+                    (s[unbounded], np.full(int(unbounded.sum()), ALLOWABLE_RANGE[1])))
         drawn = self._path(scale)
         for line, (x, y) in zip(drawn.lines, data, strict=True):
             line.set_data(x, y)
