@@ -77,7 +77,7 @@ class StoreConfig(_Section):
 class ReportConfig(_Section):
     standard_diameters: tuple[PositiveFloat, ...] = (3.175, 6.35, 12.7, 25.4, 50.8)
     trend_nights: PositiveInt = 14
-    picture_dpi: PositiveInt = 72
+    picture_dpi: PositiveInt = 150
     render_workers: PositiveInt = 2
 
 

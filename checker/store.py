@@ -83,6 +83,8 @@ SCHEMA_VERSION = len(MIGRATIONS)
 # per-point columns kept beside the document so the report never has to parse JSON
 VERDICT_CODE = {v: i for i, v in enumerate(VERDICTS)}
 ARRAY_FIELDS = ("cc", "allowable", "verdict", "depth", "b_best", "b_chosen", "surface", "kind")
+# kept since the report tells unbounded from not computed; rows recorded before: = kind
+LATER_ARRAY_FIELDS = ("contact",)
 
 
 @dataclass(frozen=True)
@@ -133,7 +135,8 @@ def point_arrays(doc: ResultsDocument) -> dict[str, np.ndarray]:
     """Per-point arrays of a document: cc (N,3) mm (the contact, else the deepest point, else the
     tip), allowable/depth/b_best/b_chosen (the B written) (N,) with nan for null, verdict (N,)
     int8 code into VERDICTS, surface (N,) int32 (-1 null), kind (N,) bool (True for a pose at a
-    CL record, False for a cycle or move pose)."""
+    CL record, False for a cycle or move pose), contact (N,) bool (a cutting pose with a
+    contact point: there a nan allowable is unbounded)."""
     pts = doc.points
 
     def col(name: str) -> np.ndarray:
@@ -152,6 +155,7 @@ def point_arrays(doc: ResultsDocument) -> dict[str, np.ndarray]:
             dtype=np.int32
         ),
         "kind": np.array([p.kind == "cl" for p in pts], dtype=bool),
+        "contact": np.array([p.kind == "cl" and p.cc is not None for p in pts], dtype=bool),
     }
 
 
@@ -166,6 +170,8 @@ def _unpack_arrays(blob: bytes) -> dict[str, np.ndarray]:
     try:
         with np.load(io.BytesIO(zlib.decompress(blob)), allow_pickle=False) as data:
             out = {k: data[k] for k in ARRAY_FIELDS}
+            for k in LATER_ARRAY_FIELDS:
+                out[k] = data[k] if k in data.files else out["kind"].copy()
     except (zlib.error, OSError, EOFError, KeyError, ValueError, TypeError) as err:
         raise ValueError(f"{type(err).__name__}: {err}") from err
     n = len(out["verdict"])

@@ -8,6 +8,7 @@ import csv
 import io
 import json
 import re
+from datetime import datetime
 
 import numpy as np
 import pytest
@@ -16,19 +17,37 @@ from PIL import Image
 from checker.cli import main
 from checker.errors import PathcheckError
 from checker.report import build_report, parse_since
-from checker.report.build import PARALLEL_FROM
-from checker.report.pictures import PANEL_PX, JobPainter, b_range, paint_map
+from checker.report.build import PARALLEL_FROM, POINT_COLUMNS
+from checker.report.pictures import (
+    CSS_PX_PER_IN,
+    PANEL_IN,
+    UNBOUNDED,
+    JobPainter,
+    b_range,
+    paint_map,
+)
 from checker.report.standard import per_region, standard_cutters
 from checker.report.synthetic import synthetic_document
 from checker.report.trends import DAY_S, compare, nights
 from checker.store import ResultsStore, point_arrays
+from checker.verdict import FINDINGS
 
 NOW = 1_790_000_000.0  # a fixed report time, UTC epoch s
-PNG_SRC = re.compile(r'<img class="pic" alt="[^"]*" src="data:image/png;base64,([^"]+)"')
+PNG_SRC = re.compile(r'<img class="pic" [^>]*src="data:image/png;base64,([^"]+)"')
+DPI = 150  # the default config's report.picture_dpi
+
+
+def _images(html: str) -> list[Image.Image]:
+    return [Image.open(io.BytesIO(base64.b64decode(b))) for b in PNG_SRC.findall(html)]
 
 
 def _pngs(html: str) -> list[np.ndarray]:
-    return [np.asarray(Image.open(io.BytesIO(base64.b64decode(b)))) for b in PNG_SRC.findall(html)]
+    return [np.asarray(img) for img in _images(html)]
+
+
+def _findings(doc) -> int:
+    """Points of the document with a finding verdict, counted from the points themselves."""
+    return sum(p.verdict in FINDINGS for p in doc.points)
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +64,8 @@ def night(tmp_path_factory):
                          job_path="jobs/bad.apt", elapsed_s=0.1, recorded_at=NOW - 60)
         store.record_job(None, error="part missing", job_path=docs[1].job.path, elapsed_s=0.1,
                          recorded_at=NOW - DAY_S - 300)  # last night, job 1 failed
-        files = build_report(store, root / "out" / "report.html", now=NOW)
+        files = build_report(store, root / "out" / "report.html", now=NOW,
+                             points_csv=root / "out" / "points.csv")
     return docs, files
 
 
@@ -59,8 +79,16 @@ def test_page_has_rows_pictures_and_no_network(night):
     images = _pngs(html)
     assert len(images) == 13
     for img in images[1:]:  # job pictures: fixed size, and more than one colour
-        assert img.shape[:2] == (PANEL_PX[1], PANEL_PX[0])
+        assert img.shape[:2] == (round(PANEL_IN[1] * DPI), round(PANEL_IN[0] * DPI))
         assert img.reshape(-1, img.shape[2]).std(axis=0).max() > 10
+    # each picture records its dpi and the page shows it at its size in inches
+    for img in _images(html):
+        assert img.info["dpi"] == pytest.approx((DPI, DPI), abs=0.1)
+    shown = [int(w) for w in re.findall(r'<img class="pic" width="(\d+)"', html)]
+    assert len(shown) == 13
+    assert shown[1:] == [round(PANEL_IN[0] * CSS_PX_PER_IN)] * 12
+    np.testing.assert_allclose([w * DPI / CSS_PX_PER_IN for w in shown],
+                               [i.shape[1] for i in images], atol=1.0)
     assert not re.search(r"(src|href)=\"(https?:)?//", html) and "<script" not in html
     # the gouge count in the table row is the document's
     row = re.search(r'id="row-2".*?</tr>', html, re.S).group(0)
@@ -90,8 +118,40 @@ def test_json_and_csv_summaries(night):
     assert data["nights"][-2]["failed"] == 1 and data["jobs"][1]["previous_status"] == "failed"
     rows = list(csv.DictReader(files.csv.open()))
     assert len(rows) == 4 and rows[0]["job_path"] == docs[0].job.path
+    # dates: ISO 8601 with the local offset, the same instant as the store's epoch seconds
+    recorded = [NOW - 3600 + k for k in range(3)] + [NOW - 60]
+    for t, job, row in zip(recorded, data["jobs"], rows, strict=True):
+        assert job["recorded_at"] == row["recorded_at"]
+        when = datetime.fromisoformat(job["recorded_at"])
+        assert when.utcoffset() is not None and when.timestamp() == t
+        assert when.utcoffset() == datetime.fromtimestamp(t).astimezone().utcoffset()
     assert float(rows[1]["worst_depth"]) == pytest.approx(docs[1].summary.worst_depth)
     assert rows[0]["regions"].startswith("S0:")
+    assert datetime.fromisoformat(data["until"]).timestamp() == NOW
+    assert datetime.fromisoformat(data["since"]).timestamp() == NOW - DAY_S
+    assert datetime.fromisoformat(data["nights"][-1]["start"]).timestamp() == NOW - DAY_S
+    assert data["until"] in files.html.read_text()
+
+
+def test_points_csv_holds_every_point_of_the_documents(night):
+    docs, files = night
+    rows = list(csv.DictReader(files.points_csv.open(newline="")))
+    assert tuple(rows[0]) == POINT_COLUMNS
+    assert len(rows) == sum(len(d.points) for d in docs)  # the failed job has none
+    for job_id, doc in zip((2, 3, 4), docs, strict=True):
+        mine = [r for r in rows if int(r["job_id"]) == job_id]
+        assert len(mine) == len(doc.points)
+        for r, p in zip(mine, doc.points, strict=True):
+            assert (int(r["index"]), int(r["operation"]), int(r["line"]), r["kind"],
+                    r["verdict"], r["job_path"]) == (p.index, p.op, p.line, p.kind, p.verdict,
+                                                     doc.job.path)
+            assert [float(r[k]) for k in "xyz"] == list(p.tip)
+            for key, value in (("depth", p.depth), ("allowable", p.allowable),
+                               ("margin", p.margin), ("b", p.b), ("b_best", p.b_best)):
+                assert (r[key] == "") if value is None else float(r[key]) == value
+        verdicts = [r["verdict"] for r in mine]
+        assert sum(v in FINDINGS for v in verdicts) == (doc.summary.counts.gouge
+                                                         + doc.summary.counts.interference)
 
 
 def test_empty_store_says_no_jobs(tmp_path):
@@ -144,8 +204,60 @@ def test_painter_path_panel_scales():
     std = standard_cutters("ball", doc3.job.cutter, doc3.job.cutter_size, (1.0,))
     pictures, facts = painter.render(point_arrays(doc3), std, doc3.job.cutter_size)
     assert len(pictures) == 4 and facts["has_b"] is False and facts["view"] == "XY"
-    assert facts["findings"] == doc3.summary.points - doc3.summary.counts.ok
-    assert facts["min_allowable"] == pytest.approx(doc3.summary.largest_safe_cutter)
+    assert facts["symbol"] == "r"
+    # the highlighted points are the findings, not every point that is not ok
+    doc = synthetic_document(5, n=11, four_axis=False)
+    facts = painter.render(point_arrays(doc), std, doc.job.cutter_size)[1]
+    c = doc.summary.counts
+    assert facts["highlighted"] == _findings(doc) == c.gouge + c.interference == 13
+    assert c.within_tolerance == 1  # 'not ok' would say 14
+
+
+def test_allowable_map_marks_unbounded_points():
+    """Unbounded (nan) allowable sizes at contacts are drawn pink, not as the largest size, on
+    the allowable map and on the size-along-the-path panel of a job without B."""
+    doc = synthetic_document(2, n=11, four_axis=False)
+    painter = JobPainter()
+    std = standard_cutters("ball", doc.job.cutter, doc.job.cutter_size, (1.0,))
+    pink = np.array(Image.new("RGB", (1, 1), UNBOUNDED))[0, 0].astype(int)
+
+    def pink_pixels(arrays) -> list[int]:
+        pictures = painter.render(arrays, std, doc.job.cutter_size)[0]
+        out = []
+        for k in (0, 3):  # allowable map, path panel
+            img = np.asarray(Image.open(io.BytesIO(base64.b64decode(pictures[k]))))
+            out.append(int(np.all(np.abs(img[:, :, :3].astype(int) - pink) <= 1, axis=2).sum()))
+        return out
+
+    arrays = point_arrays(doc)
+    legend_only = pink_pixels(arrays)  # the legends' patch and marker
+    arrays["allowable"][:20] = np.nan  # 20 contacts where nothing limits the cutter
+    with_unbounded = pink_pixels(arrays)
+    assert min(legend_only) > 0
+    assert with_unbounded[0] > legend_only[0] + 20 * 9 and with_unbounded[1] > legend_only[1]
+    arrays["contact"][:20] = False  # the same points without a contact: not drawn at all
+    assert pink_pixels(arrays) == legend_only
+
+
+def test_captions_count_what_the_table_and_document_count(night):
+    """The findings caption, the table row and the JSON say the document's numbers."""
+    docs, files = night
+    html = files.html.read_text()
+    data = json.loads(files.json.read_text())
+    for job_id, doc, job in zip((2, 3, 4), docs, data["jobs"], strict=False):
+        c = doc.summary.counts
+        row = re.search(rf'id="row-{job_id}".*?</tr>', html, re.S).group(0)
+        cells = [int(x) for x in re.findall(r'<td class="n">(\d+)</td>', row)[1:7]]
+        assert cells == [doc.summary.points, c.gouge, c.interference, c.holder, c.crash,
+                         c.inaccessible]
+        section = re.search(rf'id="job-{job_id}".*?</section>', html, re.S).group(0)
+        m = re.search(r"(\d+) findings highlighted: (\d+) gouge, (\d+) interference, "
+                      r"(\d+) holder hit, (\d+) crash", section)
+        total, *each = map(int, m.groups())
+        assert each == [c.gouge, c.interference, c.holder, c.crash]
+        assert total == sum(each) == _findings(doc)
+        assert [job[k] for k in ("gouge", "interference", "holder", "crash")] == each
+        assert f"smallest {doc.summary.largest_safe_cutter:.3g} mm" in section
 
 
 def test_trends_group_by_night():
@@ -192,10 +304,13 @@ def test_report_command(tmp_path, monkeypatch, capsys):
         store.record_job(synthetic_document(1, n=11), elapsed_s=1.0)
     out = tmp_path / "r" / "night.html"
     with pytest.raises(SystemExit) as exit_info:
-        main(["report", "--since", "2h", "--out", str(out)])
+        main(["report", "--since", "2h", "--out", str(out), "--points-csv",
+              str(tmp_path / "p.csv")])
     assert exit_info.value.code == 0
-    assert "1 job, 5 pictures" in capsys.readouterr().out
+    said = capsys.readouterr().out
+    assert "1 job, 5 pictures" in said and f"points: {tmp_path / 'p.csv'}" in said
     assert all(out.with_suffix(s).is_file() for s in (".html", ".json", ".csv"))
+    assert len(list(csv.reader((tmp_path / "p.csv").open()))) == 1 + 11 * 11  # header, points
     with pytest.raises(SystemExit) as exit_info:
         main(["report", "--since", "yesterday", "--out", str(out)])
     assert exit_info.value.code == 2

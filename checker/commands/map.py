@@ -54,7 +54,7 @@ def map_command(part_path, cutter_text, grid_text, tools_path, out_dir) -> None:
         raise PathcheckError("a map needs a part with surfaces (u, v); this one is a mesh",
                              path=part_path, code="part")
     maps = allowable_maps(part, sample_part(part), cutter, grid, tools)
-    files = draw_maps(maps, cutter, tools, out_dir)
+    files = draw_maps(maps, cutter, tools, out_dir, part_path.name)
     doc = maps_document(maps, cutter, tools)
     write_file(out_dir / "map.json", json.dumps(doc, indent=1), what="map JSON")
     sizes = np.concatenate([m.size[m.kept] for m in maps])

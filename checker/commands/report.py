@@ -1,5 +1,5 @@
-"""`pathcheck report [--since 24h] [--out report.html]`: the nightly page over the results
-store, with a JSON and a CSV summary beside it."""
+"""`pathcheck report [--since 24h] [--out report.html] [--points-csv FILE]`: the nightly page
+over the results store, with a JSON and a CSV summary beside it, and a CSV of every point."""
 
 from __future__ import annotations
 
@@ -16,7 +16,10 @@ import click
               help="the HTML page; .json and .csv summaries are written beside it")
 @click.option("--store", "store_path", default=None, metavar="FILE",
               help="results store [default: PATHCHECK_STORE or config store.path]")
-def report(since: str, out: Path, store_path: str | None) -> None:
+@click.option("--points-csv", "points_csv", default=None, metavar="FILE",
+              type=click.Path(dir_okay=False, path_type=Path),
+              help="also write every checked point of the jobs as CSV (part frame, mm, degrees)")
+def report(since: str, out: Path, store_path: str | None, points_csv: Path | None) -> None:
     """Write one self-contained HTML page (no network needed to view it) of the jobs of the
     night: a table, per job the allowable- and standard-cutter maps, B along the path and where
     the findings are, and trends against previous nights."""
@@ -25,9 +28,11 @@ def report(since: str, out: Path, store_path: str | None) -> None:
 
     since_s = parse_since(since)
     with ResultsStore(store_path) as store:
-        files = build_report(store, out, since_s=since_s)
+        files = build_report(store, out, since_s=since_s, points_csv=points_csv)
     what = {0: "no jobs", 1: "1 job"}.get(files.jobs, f"{files.jobs} jobs")
     skipped = (f"; {files.skipped} unreadable row{'s' if files.skipped > 1 else ''} skipped"
                if files.skipped else "")
     click.echo(f"{what}, {files.pictures} pictures: {files.html} ({files.json.name}, "
                f"{files.csv.name} beside it){skipped}")
+    if files.points_csv is not None:
+        click.echo(f"points: {files.points_csv}")

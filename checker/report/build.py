@@ -1,5 +1,6 @@
-"""Build the nightly report from the results store: the HTML page, and a JSON and a CSV summary
-beside it (same stem) for other systems. Pictures of many jobs are drawn in a few processes."""
+"""Build the nightly report from the results store: the HTML page, and beside it (same stem) a
+JSON and a CSV summary for other systems, and when asked a CSV of every checked point. Pictures
+of many jobs are drawn in a few processes."""
 
 from __future__ import annotations
 
@@ -17,24 +18,28 @@ from checker.config import Config, default_config
 from checker.errors import PathcheckError
 from checker.report.page import render_page
 from checker.report.pictures import JobPainter, trend_picture
-from checker.report.standard import per_region, standard_cutters
-from checker.report.trends import DAY_S, compare, nights
+from checker.report.standard import parsed_cutter, per_region, standard_cutters
+from checker.report.trends import DAY_S, compare, local_iso, nights
 from checker.results import VERDICTS
 from checker.store import JobRow, ResultsStore
 
 PARALLEL_FROM = 8  # jobs; fewer are drawn in this process (starting workers costs more)
 CSV_COLUMNS = (
     "id", "recorded_at", "job_path", "status", "error", "points", "ok", "gouge", "interference",
-    "holder", "inaccessible", "worst_margin", "worst_depth", "largest_safe_cutter",
+    "holder", "crash", "inaccessible", "worst_margin", "worst_depth", "largest_safe_cutter",
     "largest_safe_standard", "regions", "previous_status", "previous_gouges", "elapsed_s",
     "cutter", "cutter_kind", "part", "part_hash", "machine", "axis_class",
+)
+POINT_COLUMNS = (  # the per-point CSV: part frame, mm, degrees; empty = null
+    "job_id", "job_path", "recorded_at", "index", "operation", "line", "kind", "rapid", "x", "y",
+    "z", "verdict", "depth", "tolerance", "allowable", "margin", "b", "b_best",
 )
 
 
 @dataclass(frozen=True)
 class ReportFiles:
     """What `build_report` wrote: the page, the JSON and CSV summaries, how many jobs and
-    pictures the page holds."""
+    pictures the page holds, and the per-point CSV when asked."""
 
     html: Path
     json: Path
@@ -42,6 +47,7 @@ class ReportFiles:
     jobs: int
     pictures: int
     skipped: int = 0  # rows of the store that could not be read (left out)
+    points_csv: Path | None = None
 
 
 # per process: the open store, the painter and the standard diameters (see _painter_setup)
@@ -68,7 +74,9 @@ def _draw(task: tuple) -> tuple[int, list[str], dict, list]:
     standard = standard_cutters(kind, cutter, cutter_size, diameters)
     reach = arrays["kind"] & (arrays["verdict"] != VERDICTS.index("inaccessible"))
     regions = per_region(standard, arrays["allowable"][reach], arrays["surface"][reach])
-    return job_id, *painter.render(arrays, standard, cutter_size), regions
+    real = parsed_cutter(cutter)
+    symbol = "r" if real is None else real.size_symbol
+    return job_id, *painter.render(arrays, standard, cutter_size, symbol), regions
 
 
 def _draw_all(store: ResultsStore, rows: list[JobRow], cfg: Config) -> dict[int, tuple]:
@@ -89,12 +97,12 @@ def _draw_all(store: ResultsStore, rows: list[JobRow], cfg: Config) -> dict[int,
 
 
 def job_summary(row: JobRow, previous: JobRow | None) -> dict:
-    """The row of one job in the table, JSON and CSV (mm, s, UTC epoch s)."""
+    """The row of one job in the table, JSON and CSV (mm, s; recorded_at ISO 8601 local)."""
     return {
-        "id": row.id, "recorded_at": row.recorded_at, "job_path": row.job_path,
+        "id": row.id, "recorded_at": local_iso(row.recorded_at), "job_path": row.job_path,
         "status": row.status, "error": row.error, "points": row.points, "ok": row.n_ok,
         "gouge": row.n_gouge, "interference": row.n_interference, "holder": row.n_holder,
-        "inaccessible": row.n_inaccessible, "worst_margin": row.worst_margin,
+        "crash": row.n_crash, "inaccessible": row.n_inaccessible, "worst_margin": row.worst_margin,
         "worst_depth": row.worst_depth, "largest_safe_cutter": row.largest_safe_cutter,
         "largest_safe_standard": row.largest_safe_standard, "regions": [],
         "previous_status": None if previous is None else previous.status,
@@ -124,10 +132,11 @@ def parse_since(text: str) -> float:
 
 def build_report(
     store: ResultsStore, out: str | Path, *, since_s: float = DAY_S, now: float | None = None,
-    config: Config | None = None,
+    config: Config | None = None, points_csv: str | Path | None = None,
 ) -> ReportFiles:
     """Write the page `out` and `out` with .json and .csv suffixes, over the jobs recorded in
-    the last `since_s` seconds before `now` (UTC epoch s, default: the present)."""
+    the last `since_s` seconds before `now` (UTC epoch s, default: the present); and the
+    per-point CSV `points_csv` when given (one row per checked point of those jobs)."""
     cfg = config or default_config()
     until = time.time() if now is None else now
     since = until - since_s
@@ -148,12 +157,14 @@ def build_report(
         write_file(out, html, what="report page")
         _write_json(out.with_suffix(".json"), jobs, since, until, per_night, len(unreadable))
         _write_csv(out.with_suffix(".csv"), jobs)
+        if points_csv is not None:
+            _write_points(Path(points_csv), store, jobs)
     except OSError as err:
-        raise PathcheckError(f"cannot write the report: {err.strerror}", path=out,
-                             code="report") from err
+        raise PathcheckError(f"cannot write the report: {err.strerror}",
+                             path=err.filename or out, code="report") from err
     pictures = sum(len(j["pictures"]) for j in jobs) + (trend_png is not None)
     return ReportFiles(out, out.with_suffix(".json"), out.with_suffix(".csv"), len(jobs), pictures,
-                       len(unreadable))
+                       len(unreadable), None if points_csv is None else Path(points_csv))
 
 
 def _plain(job: dict) -> dict:
@@ -163,10 +174,11 @@ def _plain(job: dict) -> dict:
 def _write_json(path: Path, jobs: list[dict], since: float, until: float, per_night: list,
                 skipped: int) -> None:
     doc = {
-        "tool": "pathcheck", "kind": "report", "since": since, "until": until,
-        "skipped_unreadable": skipped,
+        "tool": "pathcheck", "kind": "report", "since": local_iso(since),
+        "until": local_iso(until), "skipped_unreadable": skipped,
         "totals": {s: sum(j["status"] == s for j in jobs) for s in ("ok", "findings", "failed")},
-        "jobs": [_plain(j) for j in jobs], "nights": per_night,
+        "jobs": [_plain(j) for j in jobs],
+        "nights": [{**n, "start": local_iso(n["start"])} for n in per_night],
     }
     write_file(path, json.dumps(doc, indent=1), what="report JSON")
 
@@ -180,3 +192,19 @@ def _write_csv(path: Path, jobs: list[dict]) -> None:
         row["regions"] = " ".join(f"S{s}:{n}" for s, n in j["regions"])
         writer.writerow(row)
     write_file(path, text.getvalue(), what="report CSV")
+
+
+def _write_points(path: Path, store: ResultsStore, jobs: list[dict]) -> None:
+    """One row per checked point of every job that did not fail, from its stored document."""
+    text = io.StringIO(newline="")
+    writer = csv.writer(text)
+    writer.writerow(POINT_COLUMNS)
+    for j in jobs:
+        doc = store.document(j["id"]) if j["status"] != "failed" else None
+        for p in doc.points if doc is not None else ():
+            writer.writerow((
+                j["id"], j["job_path"], j["recorded_at"], p.index, p.op, p.line, p.kind,
+                int(p.rapid), *p.tip, p.verdict, *("" if v is None else v for v in (
+                    p.depth, p.tolerance, p.allowable, p.margin, p.b, p.b_best)),
+            ))
+    write_file(path, text.getvalue(), what="report points CSV")

@@ -3,8 +3,11 @@ no network), built from the job summaries, the pictures and the trends."""
 
 from __future__ import annotations
 
-import time
 from html import escape
+from pathlib import PurePath
+
+from checker.report.pictures import CSS_PX_PER_IN, PANEL_IN, TREND_IN
+from checker.report.trends import local_iso
 
 CSS = """
 body{font:14px/1.4 system-ui,sans-serif;margin:1.5em;color:#222;background:#fff}
@@ -13,8 +16,8 @@ table{border-collapse:collapse;margin:.5em 0}th,td{border:1px solid #ccc;padding
 th{background:#f0f0f0;text-align:left}td.n{text-align:right;font-variant-numeric:tabular-nums}
 tr.failed td{background:#fde2e2}tr.findings td.status{background:#ffe9c7;font-weight:bold}
 tr.ok td.status{background:#dff3df}.empty{font-size:1.3em;padding:1em;background:#f6f6f6}
-.job{margin:1em 0 2em}.pics{display:flex;flex-wrap:wrap;gap:6px}
-figure{margin:0;max-width:330px}figcaption{font-size:12px;color:#555}.meta{color:#555;font-size:12px}
+.job{margin:1em 0 2em}.pics{display:flex;flex-wrap:wrap;gap:12px}
+figure{margin:0;width:min-content}figcaption{font-size:13px;color:#444}.meta{color:#555;font-size:13px}
 """
 
 
@@ -39,36 +42,42 @@ def _regions(job: dict) -> str:
     return text or (escape(std) if std else "&ndash;")
 
 
-def _utc(t: float) -> str:
-    return time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime(t))
+def _breakable(path: str) -> str:
+    """A path, escaped, that a narrow table cell may wrap after its slashes."""
+    return escape(path).replace("/", "/<wbr>")
 
 
-def _img(b64: str, alt: str) -> str:
-    return f'<img class="pic" alt="{escape(alt)}" src="data:image/png;base64,{b64}">'
+def _img(b64: str, alt: str, inches: tuple[float, float] = PANEL_IN) -> str:
+    """A picture shown at its size in inches (`CSS_PX_PER_IN`), whatever its dpi."""
+    w, h = (round(x * CSS_PX_PER_IN) for x in inches)
+    return (f'<img class="pic" width="{w}" height="{h}" alt="{escape(alt)}" '
+            f'src="data:image/png;base64,{b64}">')
 
 
 def _job_table(jobs: list[dict]) -> str:
     head = (
         "<tr><th>#</th><th>job</th><th>status</th><th>points</th><th>gouges</th>"
-        "<th>interferences</th><th>holder hits</th><th>inaccessible</th><th>worst depth, mm</th>"
+        "<th>interferences</th><th>holder hits</th><th>crashes</th><th>inaccessible</th>"
+        "<th>worst depth, mm</th>"
         "<th>worst margin, mm</th><th>largest safe standard cutter per region</th>"
         "<th>vs previous run</th><th>time, s</th></tr>"
     )
     rows = []
     for j in jobs:
         if j["status"] == "failed":
-            detail = f'<td colspan="9">failed: {escape(j["error"] or "")}</td>'
+            detail = f'<td colspan="10">failed: {escape(j["error"] or "")}</td>'
         else:
             detail = (
                 f'<td class="n">{j["points"]}</td><td class="n">{j["gouge"]}</td>'
                 f'<td class="n">{j["interference"]}</td><td class="n">{j["holder"]}</td>'
-                f'<td class="n">{j["inaccessible"]}</td><td class="n">{_mm(j["worst_depth"])}</td>'
+                f'<td class="n">{j["crash"]}</td><td class="n">{j["inaccessible"]}</td>'
+                f'<td class="n">{_mm(j["worst_depth"])}</td>'
                 f'<td class="n">{_mm(j["worst_margin"])}</td><td>{_regions(j)}</td>'
                 f'<td class="n">{_delta(j)}</td>'
             )
         rows.append(
             f'<tr class="job {j["status"]}" id="row-{j["id"]}"><td class="n">{j["id"]}</td>'
-            f'<td><a href="#job-{j["id"]}">{escape(j["job_path"])}</a></td>'
+            f'<td><a href="#job-{j["id"]}">{_breakable(j["job_path"])}</a></td>'
             f'<td class="status">{j["status"]}</td>{detail}'
             f'<td class="n">{_num(j["elapsed_s"], "{:.2f}")}</td></tr>'
         )
@@ -100,18 +109,32 @@ def _trend_table(rows: list[tuple]) -> str:
     return f'<table class="trend">{head}{"".join(body)}</table>'
 
 
+def findings_caption(job: dict) -> str:
+    """'68 findings highlighted: 62 gouge, 6 interference, 0 holder hit, 0 crash': from the
+    job's counts, the numbers of its row in the table (poses and moves of the written
+    program)."""
+    n = {k: job[k] or 0 for k in ("gouge", "interference", "holder", "crash")}
+    return (f"{sum(n.values())} findings highlighted: {n['gouge']} gouge, "
+            f"{n['interference']} interference, {n['holder']} holder hit, {n['crash']} crash")
+
+
 def _captions(job: dict) -> tuple[str, ...]:
     f = job["facts"]
+    part = PurePath(job["part"]).name if job["part"] else "the part"
+    what = f"{job['cutter'] or job['cutter_kind'] or 'the cutter'} on {part}"
     view = f"{f['view']} view, {f['extent'][0]:.0f} x {f['extent'][1]:.0f} mm"
-    least = "unbounded" if f["min_allowable"] is None else f"{f['min_allowable']:.3g} mm"
+    least = job["largest_safe_cutter"]
+    least = "unbounded" if least is None else f"{least:.3g} mm"
+    size = f"allowable {f['symbol']}"
     return (
-        f"Allowable cutter ({view}): colour = allowable size at each CC point, log scale; "
-        f"smallest {least}",
-        f"Standard cutter ({view}): the largest standard cutter that fits at each CC point",
-        f"Findings on the part ({view}): {f['findings']} points with gouge, interference or "
-        "holder hit, highlighted",
+        f"Allowable cutter, {what} ({view}): colour = {size} at each CC point, mm, log scale; "
+        f"pink = unbounded; smallest {least}",
+        f"Standard cutter, {what} ({view}): the largest standard cutter of the family that "
+        f"fits at each CC point ({size} in mm)",
+        f"Findings on {part} ({view}): {findings_caption(job)}",
         "B chosen against best B along the path" if f["has_b"]
-        else "Allowable size along the path (log scale, mm) against the real cutter (dashed)",
+        else f"{size} along the path (log scale, mm) against the real cutter (dashed); "
+        "pink at the top: unbounded",
     )
 
 
@@ -122,7 +145,8 @@ def _job_section(job: dict) -> str:
         for b64, cap in zip(job["pictures"], captions, strict=True)
     )
     meta = " &middot; ".join(
-        escape(f"{k}: {job[k]}") for k in ("cutter", "part", "machine", "axis_class") if job[k]
+        escape(f"{k}: {job[k]}") for k in ("recorded_at", "cutter", "part", "machine", "axis_class")
+        if job[k]
     )
     return (
         f'<section class="job" id="job-{job["id"]}"><h3>#{job["id"]} '
@@ -136,18 +160,18 @@ def render_page(
 ) -> str:
     """The whole page. `jobs` are the summaries of `build.job_summary` with `pictures` (base64
     PNG, four per job that did not fail) and `facts` (see `JobPainter.render`); times are UTC
-    epoch seconds."""
+    epoch seconds, shown as ISO 8601 local time."""
     counts = {s: sum(j["status"] == s for j in jobs) for s in ("ok", "findings", "failed")}
     parts = [
         "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">",
-        f"<title>pathcheck report {_utc(until)}</title><style>{CSS}</style></head><body>",
+        f"<title>pathcheck report {local_iso(until)}</title><style>{CSS}</style></head><body>",
         "<h1>pathcheck nightly report</h1>",
-        f'<p class="meta">jobs recorded from {_utc(since)} to {_utc(until)}</p>',
+        f'<p class="meta">jobs recorded from {local_iso(since)} to {local_iso(until)}</p>',
     ]
     if not jobs:
         parts.append(
-            f'<p class="empty" id="no-jobs">No jobs were recorded between {_utc(since)} and '
-            f"{_utc(until)}.</p>"
+            f'<p class="empty" id="no-jobs">No jobs were recorded between {local_iso(since)} and '
+            f"{local_iso(until)}.</p>"
         )
     else:
         parts.append(
@@ -156,7 +180,7 @@ def render_page(
         )
     parts.append("<h2>Trends against previous nights</h2>")
     if trend_png:
-        parts.append(_img(trend_png, "jobs and gouge points per night"))
+        parts.append(_img(trend_png, "jobs and gouge points per night", TREND_IN))
     parts.append(_trend_table(trend_rows))
     if jobs:
         parts += ["<h2>Jobs</h2>", _job_table(jobs), "<h2>Pictures per job</h2>"]

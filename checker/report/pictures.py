@@ -1,23 +1,26 @@
 """The report's pictures, drawn with matplotlib's Agg backend and returned as base64 PNG so the
-page is self-contained. Per job, four panels of one reused figure (drawing text is the cost, so
-the frames, colour bar, legends and axes are drawn once and only the data changes between jobs;
-the titles are the page's captions):
+page is self-contained. Per job four pictures, each its own figure (constrained layout, so no
+label overlaps another). Drawing text is the cost, so every figure's frame, colour bar, legends
+and axes are drawn once per kind of content (family of standard cutters, path-panel scale) and
+only the data is drawn on top per job (blitting); the titles are the page's captions:
 
-1. allowable-cutter colour map over the CC points (thesis fig. 3-2), log scale in mm;
+1. allowable-cutter colour map over the CC points (thesis fig. 3-2), log scale in mm, unbounded
+   points in their own colour;
 2. standard-cutter colour map (thesis figs 4-2, 4-3): the largest standard cutter per CC point;
-3. where the findings are on the part: CC points with gouges, interference and holder hits
-   highlighted;
+3. where the findings are on the part: poses and moves with gouges, interference, holder hits
+   and crashes highlighted;
 4. B chosen against best B along the path (degrees over % of path length, on one of a few fixed
    B scales); for a job without B, the allowable size along the path against the real cutter
    size (log scale, mm).
 
-Maps are projected views of the part frame onto the two coordinates with the largest spread."""
+Pictures are `PANEL_IN` inches at the configured dpi; the page shows them at that size (96 CSS
+px per inch), so text of `FONT_PT` points is FONT_PT * 96 / 72 px on screen. Maps are projected
+views of the part frame onto the two coordinates with the largest spread."""
 
 from __future__ import annotations
 
 import base64
-import struct
-import zlib
+import io
 
 import matplotlib
 
@@ -30,12 +33,18 @@ from matplotlib.colors import LogNorm  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
+from PIL import Image  # noqa: E402
 
 from checker.report.standard import StandardCutters  # noqa: E402
 from checker.results import VERDICTS  # noqa: E402
+from checker.verdict import FINDINGS  # noqa: E402
 
-PANEL_PX = (330, 270)  # width, height of one picture, pixels
+PANEL_IN = (5.6, 3.9)  # width, height of one picture, inches (shown 538 x 374 CSS px)
+TREND_IN = (9.0, 3.0)  # the trend picture, inches
+CSS_PX_PER_IN = 96  # the page shows a picture of w inches w * 96 CSS px wide
+FONT_PT = 9.0  # tick labels and legends (12 CSS px on the page); axis labels 1 pt larger
 ALLOWABLE_RANGE = (0.5, 50.0)  # mm, the fixed colour scale so that jobs compare at a glance
+UNBOUNDED = "#e377c2"  # allowable map: no point of the part limits the cutter
 VERDICT_COLOURS = {
     "ok": "#c8c8c8", "gouge": "#d62728", "interference": "#ff7f0e", "holder": "#9467bd",
     "inaccessible": "#000000", "within_tolerance": "#8fbc8f", "crash": "#8b0000",
@@ -43,24 +52,22 @@ VERDICT_COLOURS = {
 STANDARD_NONE = "#d62728"  # no standard cutter fits
 B_RANGES = (10.0, 30.0, 60.0, 90.0, 180.0)  # degrees: the fixed scales of the B panel
 AXES = "XYZ"
+FINDING_CODES = np.array([VERDICTS.index(v) for v in FINDINGS])
 
 
-def png_base64(rgba: np.ndarray) -> str:
-    """A (H, W, 4) uint8 image as base64 PNG text (RGB, no row filter, fast zlib level)."""
-    h, w = rgba.shape[:2]
-    raw = np.zeros((h, 1 + 3 * w), dtype=np.uint8)  # each row: filter byte 0, then RGB
-    raw[:, 1:].reshape(h, w, 3)[:] = rgba[:, :, :3]
+def png_base64(rgba: np.ndarray, dpi: float) -> str:
+    """A (H, W, 4) uint8 image (a figure's pixels) as base64 PNG text: RGB, encoded by Pillow
+    (matplotlib's own image library) at a fast zlib level, its dpi recorded for printing."""
+    buf = io.BytesIO()
+    image = Image.frombuffer("RGBA", (rgba.shape[1], rgba.shape[0]), np.ascontiguousarray(rgba),
+                             "raw", "RGBA", 0, 1)
+    image.convert("RGB").save(buf, "PNG", compress_level=1, dpi=(dpi, dpi))
+    return base64.b64encode(buf.getvalue()).decode("ascii")
 
-    def chunk(tag: bytes, data: bytes) -> bytes:
-        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
 
-    png = b"".join((
-        b"\x89PNG\r\n\x1a\n",
-        chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)),
-        chunk(b"IDAT", zlib.compress(raw.tobytes(), 1)),
-        chunk(b"IEND", b""),
-    ))
-    return base64.b64encode(png).decode("ascii")
+def is_finding(verdict: np.ndarray) -> np.ndarray:
+    """(N,) bool: the verdict codes (into VERDICTS) that are findings (`checker.verdict`)."""
+    return np.isin(verdict, FINDING_CODES)
 
 
 def _projection(cc: np.ndarray) -> tuple[int, int]:
@@ -78,19 +85,21 @@ def path_length(cc: np.ndarray) -> np.ndarray:
 
 
 def paint_map(
-    target: np.ndarray, xy: np.ndarray, rgba: np.ndarray, size: np.ndarray, order: np.ndarray
+    target: np.ndarray, xy: np.ndarray, rgba: np.ndarray, size: np.ndarray, order: np.ndarray,
+    view: tuple[np.ndarray, float] | None = None,
 ) -> None:
     """Paint points xy (N,2, mm) as filled squares of `size` (N,) pixels and colour rgba (N,4,
     uint8) onto `target` (H, W, 4, uint8, row 0 at the top), white first, fitted square and
-    padded around the points. `order` (N,) int: higher groups are painted later, on top."""
+    padded around the points, or around `view` (centre (2,) mm, half-width mm) when given so
+    that maps of one job share their scale. `order` (N,) int: higher groups are painted
+    later, on top."""
     target[:] = 255
     if len(xy) == 0:
         return
     h, w = target.shape[:2]
     px = min(h, w)
-    lo, hi = xy.min(axis=0), xy.max(axis=0)
-    half = 0.53 * max(float(np.max(hi - lo)), 1e-6)
-    x0, y0 = 0.5 * (lo + hi) - half
+    centre, half = view if view is not None else _view(xy)
+    x0, y0 = centre - half
     col = (w - px) // 2 + ((xy[:, 0] - x0) / (2 * half) * (px - 1)).astype(int)
     row = (h + px) // 2 - 1 - ((xy[:, 1] - y0) / (2 * half) * (px - 1)).astype(int)
     for group in np.unique(order):  # a few groups; each vectorised over its points
@@ -99,6 +108,12 @@ def paint_map(
         rr = np.clip(row[sel, None, None] + d[None, :, None], 0, h - 1)
         cc = np.clip(col[sel, None, None] + d[None, None, :], 0, w - 1)
         target[rr, cc] = rgba[sel, None, None]
+
+
+def _view(xy: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre (2,) and half-width (mm) of the square view around the points xy (N,2)."""
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    return 0.5 * (lo + hi), 0.53 * max(float(np.max(hi - lo)), 1e-6)
 
 
 def _rgba_bytes(colours: list) -> np.ndarray:
@@ -113,53 +128,104 @@ def b_range(values: np.ndarray) -> float:
     return next((r for r in B_RANGES if top <= r), B_RANGES[-1])
 
 
+class _Drawn:
+    """One figure drawn once (its background kept) and where the data goes on it: the map's
+    pixel box (rows r0:r1, columns c0:c1) or the path panel's lines."""
+
+    def __init__(self, fig: Figure, ax, lines: tuple = ()) -> None:
+        fig.canvas.draw()
+        self.fig, self.lines = fig, lines
+        self.background = fig.canvas.copy_from_bbox(fig.bbox)
+        b, height = ax.bbox, fig.bbox.height
+        self.box = (int(height - b.y1) + 2, int(height - b.y0) - 1, int(b.x0) + 2, int(b.x1) - 1)
+
+    def restored(self) -> np.ndarray:
+        """The figure's pixels (H, W, 4, a writable view) with the background restored."""
+        self.fig.canvas.restore_region(self.background)
+        return np.asarray(self.fig.canvas.buffer_rgba())
+
+
 class JobPainter:
-    """Draws the four pictures of a job; one instance per process, reused for every job.
+    """Draws the four pictures of a job; one instance per process, reused for every job. Each
+    picture's figure is drawn once per content key (the allowable variable r or R, the family
+    of standard cutters, the path panel's scale) and kept."""
 
-    Everything but the data is drawn once into a background per family of standard cutters and
-    path-panel scale (frames, colour bar, legends, the path panel's axes for each fixed B range
-    and for the size scale); per job only the map images and the path lines are drawn on top
-    (blitting), so no text is laid out per job."""
-
-    def __init__(self, dpi: int = 72) -> None:
-        w, h = PANEL_PX
-        self.fig = Figure(figsize=(4 * w / dpi, h / dpi), dpi=dpi)
-        FigureCanvasAgg(self.fig)
-        top, bottom = 0.95, 0.07
-        side = (top - bottom) * h / (4 * w)  # square map axes, as a fraction of figure width
-        maps = [self.fig.add_axes((k / 4 + 0.006, bottom, side, top - bottom)) for k in range(3)]
-        for ax in maps:
-            ax.set_xticks([])
-            ax.set_yticks([])
-        height = self.fig.bbox.height
-        self.map_boxes = [  # pixel rows and columns inside each map's frame
-            (int(height - b.y1) + 2, int(height - b.y0) - 1, int(b.x0) + 2, int(b.x1) - 1)
-            for b in (ax.bbox for ax in maps)
-        ]
+    def __init__(self, dpi: int = 150) -> None:
+        self.dpi = dpi
         self.allow_cmap = matplotlib.colormaps["viridis"]
         self.allow_norm = LogNorm(*ALLOWABLE_RANGE)
-        cax = self.fig.add_axes((0.006 + side + 0.004, bottom, 0.008, top - bottom))
-        bar = self.fig.colorbar(ScalarMappable(self.allow_norm, self.allow_cmap), cax=cax)
-        bar.set_label("allowable size, mm", fontsize=8)
-        cax.tick_params(labelsize=7)
-        maps[2].legend(
-            handles=[Patch(color=VERDICT_COLOURS[v], label=v) for v in VERDICTS],
-            loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7, frameon=False,
-        )
         self.verdict_rgba = _rgba_bytes([VERDICT_COLOURS[v] for v in VERDICTS])
-        ax = self.fig.add_axes((0.75 + 0.04, bottom + 0.09, 0.2, top - bottom - 0.17))
-        ax.set_xlim(0.0, 100.0)
-        ax.xaxis.set_major_locator(MaxNLocator(5))
-        ax.tick_params(labelsize=7)
-        ax.set_xlabel("position along the path, % of its length", fontsize=8)
-        (self.line_a,) = ax.plot([], [], ".", ms=2, color="#1f77b4", animated=True)
-        (self.line_b,) = ax.plot([], [], "-", lw=1.2, color="#ff7f0e", animated=True)
-        (self.limit,) = ax.plot([], [], "--", lw=1.0, color="#d62728", animated=True)
-        self.path_ax = ax
-        self.standard_map = maps[1]
-        self.backgrounds: dict[tuple, object] = {}
-        self._path_scale: float | str | None = None
+        self.unbounded_rgba = _rgba_bytes([UNBOUNDED])[0]
+        self.drawn: dict[tuple, _Drawn] = {}
         self.standard_rgba: dict[tuple[str, ...], np.ndarray] = {}
+
+    def _figure(self) -> tuple[Figure, object]:
+        fig = Figure(figsize=PANEL_IN, dpi=self.dpi, layout="constrained")
+        FigureCanvasAgg(fig)
+        return fig, fig.add_subplot()
+
+    def _map_figure(self, handles: list, ncol: int = 1) -> tuple[Figure, object]:
+        """A map panel: a frame without ticks, and a legend of `handles` on its right."""
+        fig, ax = self._figure()
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.set_aspect("equal")
+        fig.legend(handles=handles, loc="outside right upper", fontsize=FONT_PT, ncol=ncol,
+                   frameon=False, handlelength=1.0, labelspacing=0.3, columnspacing=0.8)
+        return fig, ax
+
+    def _allowable(self, symbol: str) -> _Drawn:
+        if ("allowable", symbol) not in self.drawn:
+            fig, ax = self._map_figure([Patch(color=UNBOUNDED, label="unbounded")])
+            bar = fig.colorbar(ScalarMappable(self.allow_norm, self.allow_cmap), ax=ax,
+                               location="left", shrink=0.9)
+            bar.set_label(f"allowable {symbol}, mm (log)", fontsize=FONT_PT + 1)
+            bar.ax.tick_params(labelsize=FONT_PT)
+            self.drawn["allowable", symbol] = _Drawn(fig, ax)
+        return self.drawn["allowable", symbol]
+
+    def _standard(self, names: tuple[str, ...]) -> _Drawn:
+        if ("standard", names) not in self.drawn:
+            colours = self._standard_colours(names) / 255.0
+            handles = [Patch(color=c, label=n) for c, n in
+                       zip(colours[::-1], [*names[::-1], "none"], strict=True)]
+            fig, ax = self._map_figure(handles, ncol=1 + len(handles) // 13)
+            self.drawn["standard", names] = _Drawn(fig, ax)
+        return self.drawn["standard", names]
+
+    def _findings(self) -> _Drawn:
+        if "findings" not in self.drawn:
+            fig, ax = self._map_figure(
+                [Patch(color=VERDICT_COLOURS[v], label=v.replace("_", " ")) for v in VERDICTS])
+            self.drawn["findings"] = _Drawn(fig, ax)
+        return self.drawn["findings"]
+
+    def _path(self, scale: float | str) -> _Drawn:
+        """The path panel on a scale: a B range (degrees) or 'size' (log, mm)."""
+        if ("path", scale) not in self.drawn:
+            fig, ax = self._figure()
+            ax.set_xlim(0.0, 100.0)
+            ax.xaxis.set_major_locator(MaxNLocator(5))
+            ax.tick_params(labelsize=FONT_PT)
+            ax.set_xlabel("position along the path, % of its length", fontsize=FONT_PT + 1)
+            a = ax.plot([], [], ".", ms=3, color="#1f77b4", animated=True)[0]
+            b = ax.plot([], [], "-", lw=1.4, color="#ff7f0e", animated=True)[0]
+            limit = ax.plot([], [], "--", lw=1.2, color="#d62728", animated=True)[0]
+            top = ax.plot([], [], "^", ms=4, color=UNBOUNDED, animated=True, clip_on=False)[0]
+            if scale == "size":
+                ax.set_yscale("log")
+                ax.set_ylim(*ALLOWABLE_RANGE)
+                ax.set_ylabel("size, mm", fontsize=FONT_PT + 1)
+                handles, labels = (a, limit, top), ("allowable", "real size", "unbounded")
+            else:
+                ax.set_ylim(-scale, scale)
+                ax.yaxis.set_major_locator(MaxNLocator(5, symmetric=True))
+                ax.set_ylabel("B, degrees", fontsize=FONT_PT + 1)
+                handles, labels = (a, b), ("best B", "chosen B")
+            fig.legend(handles, labels, fontsize=FONT_PT, loc="outside upper center", ncol=2,
+                       frameon=False, handlelength=1.5)
+            self.drawn["path", scale] = _Drawn(fig, ax, (a, b, limit, top))
+        return self.drawn["path", scale]
 
     def _standard_colours(self, names: tuple[str, ...]) -> np.ndarray:
         """(K+1, 4) uint8: 'none fits' red, then the standard cutters small to large on the
@@ -169,125 +235,100 @@ class JobPainter:
             self.standard_rgba[names] = np.vstack([_rgba_bytes([STANDARD_NONE]), steps])
         return self.standard_rgba[names]
 
-    def _scale_path_axes(self, scale: float | str) -> None:
-        """Put the path panel on a scale (the lines are drawn with the axes' current one)."""
-        if scale == self._path_scale:
-            return
-        ax = self.path_ax
-        if scale == "size":
-            ax.set_yscale("log")
-            ax.set_ylim(*ALLOWABLE_RANGE)
-        else:
-            ax.set_yscale("linear")
-            ax.set_ylim(-scale, scale)
-            ax.yaxis.set_major_locator(MaxNLocator(5, symmetric=True))
-        self._path_scale = scale
-
-    def _background(self, names: tuple[str, ...], scale: float | str) -> object:
-        """The drawn static figure for a family of standard cutters and a path-panel scale (a B
-        range, degrees, or 'size')."""
-        if (names, scale) not in self.backgrounds:
-            ax = self.path_ax
-            for owner in (ax, self.standard_map):
-                if owner.get_legend() is not None:
-                    owner.get_legend().remove()
-            colours = self._standard_colours(names) / 255.0
-            self.standard_map.legend(
-                handles=[Patch(color=c, label=n) for c, n in
-                         zip(colours[::-1], [*names[::-1], "none"], strict=True)],
-                loc="upper left", bbox_to_anchor=(1.0, 1.02), fontsize=6 if len(names) < 16
-                else 5, frameon=False, handlelength=1.0, labelspacing=0.25,
-            )
-            self._scale_path_axes(scale)
-            if scale == "size":
-                ax.set_ylabel("size, mm", fontsize=8)
-                handles, labels = (self.line_a, self.limit), ("allowable", "real size")
-            else:
-                ax.set_ylabel("B, degrees", fontsize=8)
-                handles, labels = (self.line_a, self.line_b), ("best B", "chosen B")
-            ax.legend(handles, labels, fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.0),
-                      ncol=2, frameon=False, handlelength=1.5)
-            self.fig.canvas.draw()
-            self.backgrounds[names, scale] = self.fig.canvas.copy_from_bbox(self.fig.bbox)
-        return self.backgrounds[names, scale]
+    def _png(self, drawn: _Drawn, xy: np.ndarray, rgba: np.ndarray, size: np.ndarray,
+             order: np.ndarray, view: tuple[np.ndarray, float]) -> str:
+        img = drawn.restored()
+        r0, r1, c0, c1 = drawn.box
+        paint_map(img[r0:r1, c0:c1], xy, rgba, size, order, view)
+        return png_base64(img, self.dpi)
 
     def render(
-        self, arrays: dict[str, np.ndarray], standard: StandardCutters, cutter_size: float | None
+        self, arrays: dict[str, np.ndarray], standard: StandardCutters, cutter_size: float | None,
+        symbol: str = "r",
     ) -> tuple[list[str], dict]:
         """The four pictures (base64 PNG) of one job from its point arrays (see
-        `checker.store.point_arrays`), and facts for their captions: view, extent (mm),
-        min_allowable (mm, over the accessible points), findings, has_b."""
-        cc, allowable, verdict = arrays["cc"], arrays["allowable"], arrays["verdict"]
-        i, j = _projection(cc)
-        xy = cc[:, [i, j]]
-        map_px = self.map_boxes[0][1] - self.map_boxes[0][0]
-        dot = max(2, min(7, int(0.8 * map_px / np.sqrt(max(len(xy), 1)))))
-        shown = np.where(np.isnan(allowable), ALLOWABLE_RANGE[1], allowable)
+        `checker.store.point_arrays`; the two cutter maps over the cutting poses with a
+        contact, the findings map over all) and facts for their captions: view, extent (mm),
+        has_b, highlighted (findings drawn), symbol (the allowable variable, r or R)."""
+        cl, verdict = arrays["contact"], arrays["verdict"]
+        i, j = _projection(arrays["cc"])
+        xy = arrays["cc"][:, [i, j]]
+        view = _view(xy) if len(xy) else (np.zeros(2), 1.0)
+        allow = self._allowable(symbol)
+        map_px = allow.box[1] - allow.box[0]
+        dot = max(3, min(12, int(0.8 * map_px / np.sqrt(max(int(cl.sum()), 1)))))
+        allowable = arrays["allowable"][cl]
+        unbounded = np.isnan(allowable)
         allow_rgba = self.allow_cmap(
-            self.allow_norm(np.clip(shown, *ALLOWABLE_RANGE)), bytes=True
+            self.allow_norm(np.clip(np.nan_to_num(allowable, nan=1.0), *ALLOWABLE_RANGE)),
+            bytes=True,
         )
+        allow_rgba[unbounded] = self.unbounded_rgba
         std_rgba = self._standard_colours(standard.names)[standard.largest(allowable) + 1]
-        layers = (
-            (allow_rgba, np.zeros(len(xy), dtype=int)), (std_rgba, np.zeros(len(xy), dtype=int)),
-            (self.verdict_rgba[verdict], (verdict != 0).astype(int)),
-        )
-        scale = self._path_lines(arrays, cutter_size)
-        canvas = self.fig.canvas
-        canvas.restore_region(self._background(standard.names, scale))
-        self._scale_path_axes(scale)
-        img = np.asarray(canvas.buffer_rgba())
-        for (r0, r1, c0, c1), (rgba, group) in zip(self.map_boxes, layers, strict=True):
-            paint_map(img[r0:r1, c0:c1], xy, rgba, dot + 3 * group, group)
-        for artist in (self.line_a, self.line_b, self.limit):
-            self.fig.draw_artist(artist)
-        w = img.shape[1] // 4
+        flat, n = np.full(int(cl.sum()), dot), np.zeros(int(cl.sum()), dtype=int)
+        found = is_finding(verdict).astype(int)
+        pictures = [
+            self._png(allow, xy[cl], allow_rgba, flat, n, view),
+            self._png(self._standard(standard.names), xy[cl], std_rgba, flat, n, view),
+            self._png(self._findings(), xy, self.verdict_rgba[verdict], dot + 3 * found, found,
+                      view),
+        ]
+        path, scale = self._path_panel(arrays, cutter_size)
+        path.restored()
+        for line in path.lines:
+            path.fig.draw_artist(line)
+        pictures.append(png_base64(np.asarray(path.fig.canvas.buffer_rgba()), self.dpi))
         extent = np.ptp(xy, axis=0) if len(xy) else np.zeros(2)
-        reach = allowable[verdict != VERDICTS.index("inaccessible")]
-        facts = {
-            "view": f"{AXES[i]}{AXES[j]}", "extent": [float(extent[0]), float(extent[1])],
-            "min_allowable": float(np.nanmin(reach)) if np.isfinite(reach).any() else None,
-            "findings": int(np.sum(verdict != 0)), "has_b": scale != "size",
-        }
-        return [png_base64(img[:, k * w : (k + 1) * w]) for k in range(4)], facts
+        facts = {"view": f"{AXES[i]}{AXES[j]}", "extent": [float(extent[0]), float(extent[1])],
+                 "has_b": scale != "size", "highlighted": int(found.sum()), "symbol": symbol}
+        return pictures, facts
 
-    def _path_lines(self, arrays: dict[str, np.ndarray], cutter_size: float | None) -> float | str:
-        """Set the path panel's lines; returns its scale (B range, degrees, or 'size')."""
+    def _path_panel(
+        self, arrays: dict[str, np.ndarray], cutter_size: float | None
+    ) -> tuple[_Drawn, float | str]:
+        """The path panel for this job with its lines' data set, and its scale (B range,
+        degrees, or 'size')."""
         cc_only = arrays["kind"]
         s = path_length(arrays["cc"][cc_only])
         s = 100.0 * s / max(float(s[-1]), 1e-9) if len(s) else s
         b_best, b_chosen = arrays["b_best"][cc_only], arrays["b_chosen"][cc_only]
         if np.isfinite(b_chosen).any() or np.isfinite(b_best).any():
-            self.line_a.set_data(s, b_best)
-            self.line_b.set_data(s, b_chosen)
-            self.limit.set_data([], [])
-            return b_range(np.concatenate([b_best, b_chosen]))
-        allowable = arrays["allowable"][cc_only]
-        self.line_a.set_data(s, np.where(np.isnan(allowable), ALLOWABLE_RANGE[1], allowable))
-        self.line_b.set_data([], [])
-        self.limit.set_data([0.0, 100.0], [cutter_size or np.nan] * 2)
-        return "size"
+            scale = b_range(np.concatenate([b_best, b_chosen]))
+            data = ((s, b_best), (s, b_chosen), ([], []), ([], []))
+        else:
+            scale = "size"
+            allowable = arrays["allowable"][cc_only]
+            unbounded = np.isnan(allowable) & arrays["contact"][cc_only]
+            data = ((s, allowable), ([], []), ([0.0, 100.0], [cutter_size or np.nan] * 2),
+                    (s[unbounded], np.full(int(unbounded.sum()), ALLOWABLE_RANGE[1])))
+        drawn = self._path(scale)
+        for line, (x, y) in zip(drawn.lines, data, strict=True):
+            line.set_data(x, y)
+        return drawn, scale
 
 
-def trend_picture(nights: list[dict], dpi: int = 72) -> str:
+def trend_picture(nights: list[dict], dpi: int = 150) -> str:
     """Jobs per night (stacked ok / findings / failed) and finding points per night, as one
     base64 PNG; `nights` are dicts with keys night (YYYY-MM-DD), ok, findings, failed, gouges."""
-    fig = Figure(figsize=(9.0, 2.8), dpi=dpi)
+    fig = Figure(figsize=TREND_IN, dpi=dpi, layout="constrained")
     FigureCanvasAgg(fig)
-    ax = fig.add_axes((0.07, 0.22, 0.80, 0.66))
+    ax = fig.add_subplot()
     x = np.arange(len(nights))
     bottom = np.zeros(len(nights))
     for key, colour in (("ok", "#2ca02c"), ("findings", "#ff7f0e"), ("failed", "#d62728")):
         v = np.array([n[key] for n in nights], dtype=float)
         ax.bar(x, v, bottom=bottom, color=colour, label=f"jobs {key}", width=0.7)
         bottom += v
-    ax.set_ylabel("jobs", fontsize=8)
-    ax.set_xticks(x, [n["night"][5:] for n in nights], fontsize=7, rotation=45)
-    ax.tick_params(labelsize=7)
+    ax.set_ylabel("jobs", fontsize=FONT_PT + 1)
+    ax.set_xticks(x, [n["night"][5:] for n in nights], fontsize=FONT_PT, rotation=45)
+    ax.tick_params(labelsize=FONT_PT)
+    ax.yaxis.set_major_locator(MaxNLocator(5, integer=True))
     ax2 = ax.twinx()
     ax2.plot(x, [n["gouges"] for n in nights], "k.-", label="gouge points")
-    ax2.set_ylabel("gouge points", fontsize=8)
-    ax2.tick_params(labelsize=7)
+    ax2.set_ylabel("gouge points", fontsize=FONT_PT + 1)
+    ax2.tick_params(labelsize=FONT_PT)
     ax2.set_ylim(bottom=0)
-    fig.legend(fontsize=7, loc="upper left", ncol=4, frameon=False, bbox_to_anchor=(0.07, 1.0))
-    fig.canvas.draw()
-    return png_base64(np.asarray(fig.canvas.buffer_rgba()))
+    fig.legend(fontsize=FONT_PT, loc="outside upper center", ncol=4, frameon=False)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    return base64.b64encode(buf.getvalue()).decode("ascii")

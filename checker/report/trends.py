@@ -3,8 +3,8 @@ report time (window 0 is tonight), and per-night totals to compare tonight with.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
+from datetime import datetime
 
 import numpy as np
 
@@ -13,14 +13,20 @@ from checker.store import JobRow
 DAY_S = 86400.0
 
 
+def local_iso(t: float) -> str:
+    """UTC epoch seconds as ISO 8601 local time with its offset, 2026-11-24T07:09:00+01:00: how
+    the report shows and exports every date (the store keeps epoch seconds)."""
+    return datetime.fromtimestamp(t).astimezone().isoformat(timespec="seconds")
+
+
 def night_label(end: float) -> str:
-    """The UTC date (YYYY-MM-DD) on which a night's window ends: the morning of the report."""
-    return time.strftime("%Y-%m-%d", time.gmtime(end))
+    """The local date (YYYY-MM-DD) on which a night's window ends: the morning of the report."""
+    return local_iso(end)[:10]
 
 
 def nights(rows: Sequence[JobRow], until: float, count: int) -> list[dict]:
     """Per-night totals of the `count` 24-hour windows ending at `until` (UTC epoch s), oldest
-    first: night (label), start, jobs, ok, findings, failed, gouges (gouge points),
+    first: night (label), start (UTC epoch s), jobs, ok, findings, failed, gouges (gouge points),
     interference, holder (points), worst_depth (mm, None if no depth)."""
     t = np.array([r.recorded_at for r in rows], dtype=float)
     k = np.floor((until - t) / DAY_S).astype(int)  # 0 = tonight
