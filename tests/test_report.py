@@ -38,7 +38,9 @@ DPI = 150  # the default config's report.picture_dpi
 
 
 def _images(html: str) -> list[Image.Image]:
-    return [Image.open(io.BytesIO(base64.b64decode(b))) for b in PNG_SRC.findall(html)]
+    """The page's pictures as RGB (they are stored with a palette)."""
+    return [Image.open(io.BytesIO(base64.b64decode(b))).convert("RGB")
+            for b in PNG_SRC.findall(html)]
 
 
 def _pngs(html: str) -> list[np.ndarray]:
@@ -225,7 +227,7 @@ def test_allowable_map_marks_unbounded_points():
         pictures = painter.render(arrays, std, doc.job.cutter_size)[0]
         out = []
         for k in (0, 3):  # allowable map, path panel
-            img = np.asarray(Image.open(io.BytesIO(base64.b64decode(pictures[k]))))
+            img = np.asarray(Image.open(io.BytesIO(base64.b64decode(pictures[k]))).convert("RGB"))
             out.append(int(np.all(np.abs(img[:, :, :3].astype(int) - pink) <= 1, axis=2).sum()))
         return out
 
