@@ -17,6 +17,15 @@ def _counts_line(c) -> str:
             f"{c.interference}  holder {c.holder}  crash {c.crash}  inaccessible {c.inaccessible}")
 
 
+def short_cutter(apt: str) -> str:
+    """`CUTTER/12.0,6.0,0.0,0.0,0.0,0.0,0.0` -> `CUTTER/12,6` (trailing zeros dropped)."""
+    word, _, rest = apt.partition("/")
+    values = [float(v) for v in rest.split(",")] if rest else []
+    while len(values) > 1 and values[-1] == 0.0:
+        values.pop()
+    return f"{word}/" + ",".join(f"{v:g}" for v in values)
+
+
 def summary_view(doc):
     """Rich renderables of the results document: the job line, per operation what was done and
     its verdicts, the worst findings (line, depth, where, B) and the largest safe cutter (all
@@ -27,9 +36,12 @@ def summary_view(doc):
 
     s, j = doc.summary, doc.job
     var = parse_cutter(j.cutter).size_symbol
+    cutters = list(dict.fromkeys(short_cutter(c) for c in (j.cutters or [j.cutter])))
     head = (f"{j.path}: {s.cl_points} poses, {s.move_points} moves ({s.poses_checked} poses "
             f"checked), {len(doc.operations)} operation(s), {j.axis_class}, tolerance up to "
             f"{s.tolerance:.4f} mm (part deviation {s.part_deviation:.4f}), {s.time_s:.2f} s\n"
+            f"cutter{'s' if len(cutters) > 1 else ''} (mm): {', '.join(cutters)}; job in "
+            f"{j.units}\n"
             f"{'FINDINGS' if s.status == 'findings' else 'clean'}: {_counts_line(s.counts)}")
     if s.counts_cam is not None:
         head += f"\nat the CAM's own angles: {_counts_line(s.counts_cam)}"
@@ -50,7 +62,7 @@ def summary_view(doc):
             b = "-" if op.b_written is None else (
                 f"{op.b_written[0]:.3f}" if op.b_written[0] == op.b_written[1]
                 else f"{op.b_written[0]:.1f}..{op.b_written[1]:.1f}")
-            t.add_row(str(op.index + 1), op.cutter.removeprefix("CUTTER/"), op.axis_class,
+            t.add_row(str(op.index + 1), short_cutter(op.cutter), op.axis_class,
                       op.handling, b, f"{op.tolerance:.4f}",
                       str(c.gouge + c.interference + c.holder + c.crash))
         out.append(t)
