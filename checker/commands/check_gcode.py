@@ -45,6 +45,7 @@ def check_gcode(program: Path, machine_name, dialect, units, part_path, cutter_t
     pathcheck check-gcode prog.ngc --machine linuxcnc-hmc --json out.json
     pathcheck check-gcode boat.ngc --machine linuxcnc-xyzac-trt --part boat.stl --cutter CUTTER/10
     """
+    from checker.cutter import parse_cutter_in
     from checker.errors import PathcheckError
     from postproc.describe import describe_program, format_program_summary
     from postproc.machine import load_machine
@@ -59,6 +60,8 @@ def check_gcode(program: Path, machine_name, dialect, units, part_path, cutter_t
         )
     with step("read the program"):
         moves = read_gcode(program, dialect or machine.dialect, units=units or machine.units)
+    if isinstance(cutter, str):  # read in the program's units (G20/G21, else --units)
+        cutter = parse_cutter_in(cutter, moves.units)
     if not np.isin(moves.kind, (PROGRAMMED, CYCLE)).any():
         raise PathcheckError(f"no motion: expected G0/G1/G2/G3 moves or drilling cycles, found "
                              f"none in {moves.blocks} blocks", path=program, code="gcode")
@@ -75,12 +78,9 @@ def check_gcode(program: Path, machine_name, dialect, units, part_path, cutter_t
             sys.exit(1)
         return
     from checker.commands.check import finish
-    from checker.cutter import Cutter, parse_cutter_in
     from checker.job import check_toolpath
     from postproc.replay import toolpath_of
 
-    if not isinstance(cutter, Cutter):
-        cutter = parse_cutter_in(cutter, moves.units)
     toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)
     result = check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=machine_name,
                             config=config_path)
