@@ -149,8 +149,11 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
 
     if not job.is_file():
         raise PathcheckError("job file not found: expected an existing CL file", path=job)
-    for target, what in ((output, "G-code"), (json_out, "results JSON")):
-        if target is not None and not opt.json_to_stdout(target):
+    files = [(output, "G-code")]
+    if not opt.json_to_stdout(json_out):
+        files.append((json_out, "results JSON"))
+    for target, what in files:
+        if target is not None:
             check_writable(target, what)
             make_parent(target, what)
     cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
