@@ -151,6 +151,33 @@ def test_json_dash_is_the_document_alone_and_the_summary_names_every_cutter(floo
     assert any(line.startswith("rotary motion:") and "CAM 90.0 deg" in line for line in summary)
 
 
+@pytest.mark.parametrize("command", sorted(HAS_JSON))
+def test_json_dash_puts_only_the_document_on_stdout(command, floor_job, tmp_path):
+    """Every command with a JSON document: `--json -` is that document alone on stdout (the
+    text, if any, on stderr), and the same document as `--json FILE`."""
+    (tmp_path / "p.nc").write_text("G21 G90\nG0 X0 Y0 Z10\nG1 X10 Y0 Z5 F200\nM30\n")
+    (tmp_path / "cc.csv").write_text("x,y,z,nx,ny,nz\n20,10,0,0,0,1\n")
+    part = str(floor_job.parent / "floor.json")
+    args = {"check": [str(floor_job), "--no-store"], "info": ["info", str(floor_job)],
+            "check-gcode": ["check-gcode", "p.nc"],
+            "allowable": ["allowable", "--part", part, "--cc", "cc.csv", "--cutter",
+                          "CUTTER/6,3"]}[command]
+    dash = _pathcheck([*args, "--json", "-"], tmp_path)
+    assert dash.returncode == 0, dash.stderr
+    doc = json.loads(dash.stdout)
+    to_file = _pathcheck([*args, "--json", "doc.json"], tmp_path)
+    assert to_file.returncode == 0 and to_file.stdout.strip()  # the text is on stdout then
+    if command != "info":  # the same text, on stderr with '-' (times aside)
+        def text(t: str) -> str:
+            return re.sub(r"\d+\.\d+ s\b", "T", t).strip()
+
+        assert text(to_file.stdout) == text(dash.stderr)
+    again = json.loads((tmp_path / "doc.json").read_text())
+    for volatile in ("summary", "timing"):  # times differ between two runs
+        doc.pop(volatile, None), again.pop(volatile, None)
+    assert again == doc
+
+
 def test_info_json_dash_and_json_file(floor_job, tmp_path):
     dash = _pathcheck(["info", str(floor_job), "--json", "-"], tmp_path)
     assert dash.returncode == 0 and dash.stderr == ""

@@ -49,6 +49,7 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     """
     from checker.client import Client, raise_for_error
     from checker.config import load_config
+    from checker.progress import step
 
     message: dict[str, Any] = {}
     if request_file is not None:
@@ -62,7 +63,8 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
         timeout_s = 10.0 if op in ("ping", "stats") else 600.0
     address = address or load_config(config_path).service.bind
     with Client(address, timeout_s=timeout_s, retries=retries,
-                kind="dealer" if dealer else "req", curve_keys=curve_keys) as client:
+                kind="dealer" if dealer else "req", curve_keys=curve_keys) as client, \
+            step(f"{op}: waiting for the service"):
         reply = raise_for_error(client.call(**message))
     if gcode_out is not None:
         if not reply.get("gcode"):
