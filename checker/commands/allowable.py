@@ -92,7 +92,7 @@ def parse_axis(text: str) -> np.ndarray:
 @click.option("--cc", "cc_path", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="CSV with header x,y,z,nx,ny,nz (part frame, mm)")
 @opt.cutter_option(help='cutter family, e.g. "CUTTER/10,2", in mm unless --units')
-@opt.units_option()
+@opt.units_option(default_text="mm, as the CC points")
 @opt.tool_option()
 @opt.tool_library_option()
 @click.option("--axis", "axis_text", default="0,0,1", show_default=True,

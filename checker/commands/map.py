@@ -24,9 +24,9 @@ def parse_grid(text: str) -> tuple[int, int]:
 
 
 @click.command("map")
-@opt.part_option(required=True)
+@opt.part_option(required=True, help="part file (geomdl JSON/YAML, STEP, IGES, STL)")
 @opt.cutter_option(help='cutter family, e.g. "CUTTER/10,5", in mm unless --units')
-@opt.units_option()
+@opt.units_option(default_text="mm")
 @opt.tool_option()
 @opt.tool_library_option(hidden_names=("--tools",))
 @click.option("--grid", "grid_text", default="21x21", show_default=True,

@@ -63,10 +63,10 @@ def tool_library_option(*, hidden_names: tuple[str, ...] = ()) -> Callable:
                         help="tool library TOML [default: the shipped one]")
 
 
-def units_option() -> Callable:
+def units_option(*, default_text: str = "the job's units") -> Callable:
     """`--units mm|inch` -> `units`: the unit of --cutter's dimensions."""
     return click.option("--units", "units", type=click.Choice(["mm", "inch"]), default=None,
-                        help="unit of --cutter's dimensions [default: the job's units]")
+                        help=f"unit of --cutter's dimensions [default: {default_text}]")
 
 
 def machine_option(*, help: str = "a shipped machine's name or a machine TOML file "
