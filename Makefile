@@ -24,7 +24,7 @@ demo: setup
 	mkdir -p out
 	PATHCHECK_STORE=out/results.sqlite $(BIN)/pathcheck samples/compressor/compressor_small_d12.apt \
 		--json out/compressor_d12.json -o out/compressor_d12.nc; test $$? -le 1
-	PATHCHECK_STORE=out/results.sqlite $(BIN)/pathcheck report --out out/report.html
+	PATHCHECK_STORE=out/results.sqlite $(BIN)/pathcheck report -o out/report.html
 
 test: setup
 	bash tools/test-setup.sh

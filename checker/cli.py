@@ -10,6 +10,7 @@ import sys
 
 import click
 
+from checker.commands.options import EXIT_CODES
 from checker.errors import PathcheckError
 
 # subcommand name -> "module:attribute" of its click command
@@ -40,7 +41,7 @@ class JobGroup(click.Group):
         if target is None:
             return None
         module_name, attr = target.split(":")
-        return getattr(importlib.import_module(module_name), attr)
+        return _shared(getattr(importlib.import_module(module_name), attr))
 
     def resolve_command(self, ctx: click.Context, args: list[str]):
         if args and args[0] not in SUBCOMMANDS and not args[0].startswith("-"):
@@ -48,21 +49,58 @@ class JobGroup(click.Group):
         return super().resolve_command(ctx, args)
 
 
-@click.group(cls=JobGroup, context_settings={"help_option_names": ["-h", "--help"]})
+def _view(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    """Install the terminal view of `checker.progress` for this command (once) and set
+    --quiet / --verbose on it."""
+    from checker.commands.terminal import TerminalView
+    from checker.progress import watching
+
+    view = ctx.meta.get("pathcheck.view")
+    if view is None:
+        view = ctx.meta["pathcheck.view"] = TerminalView()
+        ctx.with_resource(watching(view))
+        ctx.call_on_close(view.close)
+    if value:
+        setattr(view, param.name, True)
+    if view.quiet and view.verbose:
+        raise click.UsageError("give --quiet or --verbose, not both")
+
+
+_VERBOSITY = (
+    click.Option(["-q", "--quiet"], is_flag=True, expose_value=False, callback=_view,
+                 help="no progress display"),
+    click.Option(["-v", "--verbose"], is_flag=True, expose_value=False, callback=_view,
+                 help="print each step with its time (stderr)"),
+)
+
+
+def _shared(command: click.Command) -> click.Command:
+    """Every command (and a group's subcommands) takes --quiet and --verbose and ends its help
+    with the exit codes (`checker.commands.options.EXIT_CODES`)."""
+    if isinstance(command, click.Group):
+        for sub in command.commands.values():
+            _shared(sub)
+        return command
+    if not any(p.name == "quiet" for p in command.params):
+        command.params.extend(_VERBOSITY)
+        command.epilog = EXIT_CODES
+    return command
+
+
+@click.group(cls=JobGroup, epilog=EXIT_CODES,
+             context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="pathcheck")
 def cli() -> None:
     """pathcheck: check a CNC tool path for gouges and interference, find the largest safe
     cutter and the best table angle B, and post corrected 4-axis G-code.
 
     \b
-    pathcheck JOB.apt [--part PART] [--json OUT] [-o JOB.nc]   check a job
-    pathcheck info FILE [--json]                               what is in a CL or part file
+    pathcheck JOB.apt [--part PART] [--json FILE|-] [-o JOB.nc]   check a job
+    pathcheck info FILE [--json FILE|-]                           what is in a CL or part file
 
     \b
-    Exit codes: 0 clean, 1 findings, 2 bad input, usage, a file that cannot be read or
-    written, or out of memory (one line naming the file), 3 internal error (a bug: one line,
-    the traceback in a log file, $PATHCHECK_LOG_DIR or ~/.local/state/pathcheck/log),
-    130 interrupted, 128 + N ended by signal N.
+    Shell completion (bash; zsh and fish alike):
+    eval "$(_PATHCHECK_COMPLETE=bash_source pathcheck)"
     """
 
 

@@ -454,6 +454,20 @@ def cutter_from_tldata(
     return _make(d, r, R, tip, taper, L, path, line, stmt)
 
 
+def parse_cutter_in(text: str, units: str) -> Cutter:
+    """`parse_cutter` of a statement whose lengths are in `units` ("mm" or "inch"), as a CL
+    file of those units states it: angles stay degrees, lengths come back in mm."""
+    from checker.apt.interpret import MM_PER_INCH
+
+    cutter = parse_cutter(text)
+    if units != "inch":
+        return cutter
+    lengths = ("d", "r", "R", "H", "flute_length", "shank_diameter", "holder_diameter",
+               "holder_length", "stickout")
+    return replace(cutter, **{k: getattr(cutter, k) * MM_PER_INCH for k in lengths
+                              if getattr(cutter, k) is not None})
+
+
 def parse_cutter(
     text: str, *, path: str | Path | None = None, line: int | None = None
 ) -> Cutter:

@@ -171,19 +171,23 @@ def _pose_of_rows(moves, rows: np.ndarray) -> np.ndarray:
     return np.minimum(first, len(moves.row) - 1)
 
 
-def _orientation(program) -> Orientation | None:
+def _orientation(job, program) -> Orientation | None:
+    """The rotary motion (sum of |dB| along every motion row with a B, operation changes
+    included) of the written program (`dp_total_rotation`) and of the CAM's
+    (`original_total_rotation`); the greedy smoothing's inside the planned operations; the
+    points with no feasible B. None when no operation was planned."""
+    from checker.four_axis.orientation import total_rotation
+    from checker.written import cam_b
+
     plans = [p for o, p in program.plans.items() if program.handling[o] != "as-programmed"]
     if not plans:
         return None
-    total = dict(dp_total_rotation=0.0, greedy_total_rotation=0.0,
-                 original_total_rotation=0.0, infeasible_points=0)
-    for p in plans:
-        o = p.orientations
-        total["dp_total_rotation"] += float(o.chosen.total_rotation)
-        total["greedy_total_rotation"] += float(o.greedy.total_rotation)
-        total["original_total_rotation"] += float(o.original_rotation)
-        total["infeasible_points"] += int((~o.chosen.feasible).sum())
-    return Orientation(**total)
+    b_cam = cam_b(job)
+    return Orientation(
+        dp_total_rotation=total_rotation(program.b[np.isfinite(program.b)]),
+        greedy_total_rotation=sum(float(p.orientations.greedy.total_rotation) for p in plans),
+        original_total_rotation=total_rotation(b_cam[np.isfinite(b_cam)]),
+        infeasible_points=sum(int((~p.orientations.chosen.feasible).sum()) for p in plans))
 
 
 def build_document(job, program, cutters: dict, classes: dict, tol, ppath: Path,
@@ -250,7 +254,7 @@ def build_document(job, program, cutters: dict, classes: dict, tol, ppath: Path,
         axis_class=_job_class(classes))
     return ResultsDocument(job=info, summary=summary,
                            operations=_operations(job, program, cutters, classes, tol),
-                           orientation=_orientation(program), points=points)
+                           orientation=_orientation(job, program), points=points)
 
 
 def _surface(job, triangle) -> int | None:

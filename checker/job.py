@@ -17,6 +17,7 @@ import numpy as np
 
 from checker.config import Config, default_config, load_config
 from checker.errors import PathcheckError
+from checker.progress import step
 from checker.results import ResultsDocument
 
 _AXIS_TOL = 1e-9  # axes equal to this are one axis (an indexed operation)
@@ -41,12 +42,15 @@ def _part_path(apt_path: Path, part_path) -> Path:
     return found
 
 
-def _cutters(toolpath, ops: np.ndarray, cutter, apt_path: Path) -> dict[int, object]:
-    """The real cutter of every operation index in `ops`."""
-    from checker.cutter import Cutter, parse_cutter
+def _cutters(toolpath, ops: np.ndarray, cutter, apt_path: Path,
+             cutter_units: str | None = None) -> dict[int, object]:
+    """The real cutter of every operation index in `ops`; a `cutter` statement given as text
+    is read in `cutter_units` (default: the job's units)."""
+    from checker.cutter import Cutter, parse_cutter_in
 
     if cutter is not None:
-        c = cutter if isinstance(cutter, Cutter) else parse_cutter(str(cutter))
+        c = cutter if isinstance(cutter, Cutter) else parse_cutter_in(
+            str(cutter), cutter_units or toolpath.units)
         return {int(o): c for o in np.unique(ops)}
     out = {}
     for o in np.unique(ops):
@@ -73,20 +77,24 @@ def operation_class(axes: np.ndarray, j_tol: float) -> str:
 
 def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
               output=None, *, b_range: tuple[float, float] | None = None,
-              reorient: bool = False, part_transform: str | None = None) -> ResultsDocument:
+              reorient: bool = False, part_transform: str | None = None,
+              cutter_units: str | None = None) -> ResultsDocument:
     """Check a job: `apt_path` the CL file; `part_path` the part (default: the file beside the
     job with the same stem); `cutter` a `Cutter` or "CUTTER/..." overriding the file's; `config`
     a Config or a TOML path; `machine` a machine name or TOML file (default: the CL file's
     `PPRINT/MACHINE`, else fanuc-hmc); `output` the G-code to write; `b_range` (degrees) the B
     range searched for 4-axis operations; `reorient` plans B for 3-axis operations too;
-    `part_transform` moves a part exported in another frame (`geometry.transform`)."""
+    `part_transform` moves a part exported in another frame (`geometry.transform`);
+    `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's)."""
     from checker.apt import read_cl
 
     t0 = time.perf_counter()
-    toolpath = read_cl(Path(apt_path), require_cutter=cutter is None)
+    with step("read the CL file"):
+        toolpath = read_cl(Path(apt_path), require_cutter=cutter is None)
     return check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=machine,
                           config=config, output=output, b_range=b_range, reorient=reorient,
-                          part_transform=part_transform, started=t0)
+                          part_transform=part_transform, started=t0,
+                          cutter_units=cutter_units)
 
 
 @dataclass
@@ -114,7 +122,8 @@ class _Job:
 def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=None,
                    output=None, *, b_range: tuple[float, float] | None = None,
                    reorient: bool = False, part_transform: str | None = None,
-                   started: float | None = None) -> ResultsDocument:
+                   started: float | None = None,
+                   cutter_units: str | None = None) -> ResultsDocument:
     """`check_job` on a tool path already in memory (read from a CL file, or from a G-code
     program by `pathcheck check-gcode`); `toolpath.path` names the job."""
     from checker import written
@@ -132,7 +141,8 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
         raise PathcheckError("no cutting moves: expected GOTO records after FEDRAT, found only "
                              "rapid moves or none", path=apt_path, code="parse")
     ppath = _part_path(apt_path, part_path)
-    part = load_part(ppath, geometry=cfg.geometry)
+    with step("load the part"):
+        part = load_part(ppath, geometry=cfg.geometry)
     transform = None
     if part_transform is not None:
         from checker.geometry.transform import parse_transform, transform_part
@@ -140,11 +150,12 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
         R, t = parse_transform(part_transform)
         part = transform_part(part, R, t)
         transform = np.column_stack([R, t]).ravel().tolist()
-    tris = part_triangles(part, cfg.check.part_deviation, cfg.geometry)
-    job = _Job(toolpath, m, part, tris, MeshIndex.build(tris.vertices, tris.triangles), cfg,
-               apt_path)
+    with step("triangulate the part"):
+        tris = part_triangles(part, cfg.check.part_deviation, cfg.geometry)
+        index = MeshIndex.build(tris.vertices, tris.triangles)
+    job = _Job(toolpath, m, part, tris, index, cfg, apt_path)
     ops = np.unique(m.op)
-    cutters = _cutters(toolpath, ops, cutter, apt_path)
+    cutters = _cutters(toolpath, ops, cutter, apt_path, cutter_units)
     tol = operation_tolerances(toolpath, cfg.check.depth_tolerance, tris.typical,
                                cfg.check.arc_chord_tolerance)
     mach = None
@@ -164,11 +175,14 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
         from postproc.post import machine_for_toolpath
 
         mach = machine_for_toolpath(toolpath, None if machine is None else str(machine))
-    program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach)
-    doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
+    with step("plan and check the program"):
+        program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach)
+    with step("advice at the cutting poses"):
+        doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
     if output is not None:
         try:
-            doc.gcode = str(written.post(job, program, output, mach))
+            with step("post the G-code"):
+                doc.gcode = str(written.post(job, program, output, mach))
         except PathcheckError as err:
             err.document = doc  # the check ran: the caller may still record it (#18)
             raise

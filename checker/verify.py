@@ -21,6 +21,7 @@ import numpy as np
 
 from checker.four_axis.axes import axis_for_b, b_for_axis, rotate_about_y
 from checker.moves import START, Moves
+from checker.progress import step
 
 _MAX_ROUNDS = 60  # halvings at most (2^-60 of a move: far below any tolerance)
 _DEPTH_PRECISION = 0.1  # a move's deepest pose is found to this fraction of its depth
@@ -144,27 +145,29 @@ def along_moves(probe: PoseProbe, moves: Moves, end: np.ndarray, end_depths: np.
     k = np.flatnonzero(length > 0.0)
     t0, t1 = np.zeros(len(k)), np.ones(len(k))
     d0, d1 = end_depths[end[k] - 1], end_depths[end[k]]
-    for _ in range(_MAX_ROUNDS):
-        bound = 0.5 * (d0 + d1 + (t1 - t0) * length[k])
-        known = np.maximum(best.depth[k], ends[k])
-        slack = np.maximum(precision * tolerance[k], _DEPTH_PRECISION * known)
-        open_ = (bound > tolerance[k]) & (bound > known + slack)
-        k, t0, t1, d0, d1 = k[open_], t0[open_], t1[open_], d0[open_], d1[open_]
-        if k.size == 0:
-            break
-        tm = 0.5 * (t0 + t1)
-        tips, axes = _pose_at(moves, end[k], tm, b, center)
-        got = probe(tips, axes)
-        np.add.at(count, k, 1)
-        order = np.lexsort((-got.depth, k))  # per move its deepest new pose first
-        first = order[np.r_[True, k[order][1:] != k[order][:-1]]]
-        take = first[got.depth[first] > best.depth[k[first]]]
-        rows = k[take]
-        best.put(rows, got, take)
-        t_best[rows], tip_best[rows], axis_best[rows] = tm[take], tips[take], axes[take]
-        k = np.r_[k, k]
-        t0, t1 = np.r_[t0, tm], np.r_[tm, t1]
-        d0, d1 = np.r_[d0, got.depth], np.r_[got.depth, d1]
+    with step("check along the moves") as advance:
+        for _ in range(_MAX_ROUNDS):
+            bound = 0.5 * (d0 + d1 + (t1 - t0) * length[k])
+            known = np.maximum(best.depth[k], ends[k])
+            slack = np.maximum(precision * tolerance[k], _DEPTH_PRECISION * known)
+            open_ = (bound > tolerance[k]) & (bound > known + slack)
+            k, t0, t1, d0, d1 = k[open_], t0[open_], t1[open_], d0[open_], d1[open_]
+            if k.size == 0:
+                break
+            tm = 0.5 * (t0 + t1)
+            tips, axes = _pose_at(moves, end[k], tm, b, center)
+            got = probe(tips, axes)
+            advance(1)
+            np.add.at(count, k, 1)
+            order = np.lexsort((-got.depth, k))  # per move its deepest new pose first
+            first = order[np.r_[True, k[order][1:] != k[order][:-1]]]
+            take = first[got.depth[first] > best.depth[k[first]]]
+            rows = k[take]
+            best.put(rows, got, take)
+            t_best[rows], tip_best[rows], axis_best[rows] = tm[take], tips[take], axes[take]
+            k = np.r_[k, k]
+            t0, t1 = np.r_[t0, tm], np.r_[tm, t1]
+            d0, d1 = np.r_[d0, got.depth], np.r_[got.depth, d1]
     return MoveDepths(end, best, t_best, tip_best, axis_best, count)
 
 

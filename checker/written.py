@@ -215,14 +215,20 @@ def _center(mach) -> np.ndarray:
     return np.zeros(3) if mach is None else np.asarray(mach.kinematics.table_center, float)
 
 
+def cam_b(job) -> np.ndarray:
+    """The CAM's table angle B per motion row (degrees; nan where the axis is not in the XZ
+    plane)."""
+    j_ok = np.abs(job.m.axis[:, 1]) <= job.cfg.four_axis.axis_j_tolerance
+    return np.where(j_ok, b_for_axis(job.m.axis), np.nan)
+
+
 def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, mach) -> Program:
     """The program to write and the real tool along it (see the module docstring)."""
     from checker.four_axis.axes import axis_for_b
 
     m = job.m
     center = _center(mach)
-    j_ok = np.abs(m.axis[:, 1]) <= job.cfg.four_axis.axis_j_tolerance
-    b_cam = np.where(j_ok, b_for_axis(m.axis), np.nan)
+    b_cam = cam_b(job)
     turning = np.isin(m.op, [o for o, c in classes.items() if c == "4-axis-Y"])
     b_move = np.where(turning, b_cam, np.nan)  # the CAM's 4-axis moves turn the table too
     cam = verify(job, m.tip, m.axis, b_move, cutters, tol, center)

@@ -45,7 +45,7 @@ def toolpaths(realdata):
 def test_info_json_succeeds_on_every_file(realdata, capsys):
     for p in cl_files(realdata):
         with pytest.raises(SystemExit) as exc:
-            main(["info", "--json", str(p)])
+            main(["info", "--json", "-", str(p)])
         out, err = capsys.readouterr()
         assert exc.value.code == 0, err
         d = json.loads(out)

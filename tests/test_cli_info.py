@@ -48,7 +48,7 @@ def job(tmp_path: Path) -> Path:
 
 
 def test_info_json_counts(job, capsys):
-    code, out, err = run(["info", str(job), "--json"], capsys)
+    code, out, err = run(["info", str(job), "--json", "-"], capsys)
     assert code == 0 and err == ""
     d = json.loads(out)
     assert (d["dialect"], d["units"]) == ("apt", "mm")
@@ -77,7 +77,7 @@ def test_info_text(job, capsys):
 def test_multi_axis_class(tmp_path, capsys):
     p = tmp_path / "five.apt"
     p.write_text("CUTTER/6\nGOTO/0,0,0,0,0.6,0.8\n")
-    _, out, _ = run(["info", str(p), "--json"], capsys)
+    _, out, _ = run(["info", str(p), "--json", "-"], capsys)
     assert json.loads(out)["operations"][0]["axis_class"] == "multi-axis"
 
 
@@ -98,7 +98,7 @@ BAD = [
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, name, text, line, what):
     p = tmp_path / name
     p.write_bytes(text.encode("latin-1"))
-    code, out, err = run(["info", str(p), "--json"], capsys)
+    code, out, err = run(["info", str(p), "--json", "-"], capsys)
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and "Traceback" not in err
     where = f"{p}:{line}: " if line is not None else f"{p}: "
@@ -109,7 +109,7 @@ def test_console_script_in_a_subprocess(job, tmp_path):
     exe = Path(sys.executable).with_name("pathcheck")
     if not exe.exists():
         pytest.skip(f"console script {exe} not installed")
-    ok = subprocess.run([str(exe), "info", "--json", str(job)], capture_output=True, text=True,
+    ok = subprocess.run([str(exe), "info", "--json", "-", str(job)], capture_output=True, text=True,
                         timeout=120)
     assert ok.returncode == 0 and json.loads(ok.stdout)["totals"]["goto"] == 6
     bad = tmp_path / "bad.apt"
@@ -127,7 +127,7 @@ def test_part_files_are_handed_to_the_geometry_info(tmp_path, capsys):
         "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 2 0 0\nvertex 0 3 0\n"
         "endloop\nendfacet\nendsolid t\n"
     )
-    code, out, err = run(["info", str(stl), "--json"], capsys)
+    code, out, err = run(["info", str(stl), "--json", "-"], capsys)
     assert code == 0, err
     d = json.loads(out)
     assert d["kind"] == "mesh" and d["bbox"] == {"min": [0, 0, 0], "max": [2, 3, 0]}

@@ -76,8 +76,8 @@ def test_allowable_pso_method(bowl_files, tmp_path):
 
 
 def test_map_pictures_and_json(bowl_files, tmp_path):
-    run = _cli("map", str(bowl_files / "bowl.json"), "--cutter", "CUTTER/10,5", "--grid", "6x5",
-               "--out", str(tmp_path / "m"))
+    run = _cli("map", "--part", str(bowl_files / "bowl.json"), "--cutter", "CUTTER/10,5",
+               "--grid", "6x5", "-o", str(tmp_path / "m"))
     assert run.returncode == 0, run.stderr
     for name in ("allowable_map.png", "standard_map.png"):
         assert (tmp_path / "m" / name).read_bytes()[:4] == b"\x89PNG"

@@ -171,7 +171,7 @@ _BYTES = (_flip, _insert_byte, _delete_byte, _delete_line, _insert_line, _trunca
 
 
 def _map(path: Path, out: Path) -> list[str]:
-    return ["map", str(path), "--cutter", "CUTTER/10,5", "--grid", "3x3", "--out", str(out)]
+    return ["map", "--part", str(path), "--cutter", "CUTTER/10,5", "--grid", "3x3", "-o", str(out)]
 
 
 def _trimmed_mould() -> dict:

@@ -124,8 +124,8 @@ def test_300k_point_trim_loop_maps_within_bounds(tmp_path):
     engine) answers with memory in O(points) (it passed 4 GB before)."""
     trims = {"data": [{"type": "freeform", "points": _circle(300_000), "reversed": 1}]}
     path = _mould(tmp_path, "trim300k.json", _set("trims", trims))
-    run = run_pathcheck(["map", str(path), "--cutter", "CUTTER/10,5", "--grid", "3x3",
-                         "--out", str(tmp_path / "map")])
+    run = run_pathcheck(["map", "--part", str(path), "--cutter", "CUTTER/10,5", "--grid", "3x3",
+                         "-o", str(tmp_path / "map")])
     assert problems(run, path) == [] and run.rc == 0, run.stderr[-400:]
     assert run.max_rss_mb < 1500
     doc = json.loads((tmp_path / "map" / "map.json").read_text())
@@ -136,7 +136,7 @@ def test_300k_pole_trim_spline_is_sampled_within_bounds(tmp_path):
     """A degree-3 trim spline with 300,000 poles: sampled with fewer points per span (at most
     1,000,000 in all, not 32 per span), so `info` stays small."""
     path = _mould(tmp_path, "spline300k.json", _set("trims", _spline_trim(3, _circle(300_000))))
-    run = run_pathcheck(["info", "--json", str(path)])
+    run = run_pathcheck(["info", "--json", "-", str(path)])
     assert problems(run, path) == [] and run.rc == 0, run.stderr[-400:]
     assert run.max_rss_mb < 1000
     assert json.loads(run.stdout)["surfaces"][0]["trimmed"]

@@ -73,7 +73,7 @@ def test_an_nx_listing_read_in_inches_by_its_first_feed_stays_small(realdata, tm
     assert "FEDRAT/MMPM" in text
     (tmp_path / "inch.txt").write_text(text.replace("FEDRAT/MMPM", "FEDRAT/IPM", 1))
     shutil.copy(MOULD / "mould.json", tmp_path / "inch.json")
-    info = run_pathcheck(["info", "inch.txt", "--json"], cwd=tmp_path)
+    info = run_pathcheck(["info", "inch.txt", "--json", "-"], cwd=tmp_path)
     assert info.code == 0 and json.loads(info.stdout)["units"] == "inch", info.why()
     run = run_pathcheck(["inch.txt", "--cutter", "CUTTER/10", "--no-store"], cwd=tmp_path)
     assert_sane(run, "inch.txt")  # 25.4 times larger, bounded all the same

@@ -29,7 +29,7 @@ cold=$(seconds $(($(date +%s%N) - start)))
 start=$(date +%s%N)
 "$pc" "$job" -o job.nc --json job.json >/dev/null 2>&1 || status=$?
 warm=$(seconds $(($(date +%s%N) - start)))
-"$pc" report --out report.html >/dev/null
+"$pc" report -o report.html >/dev/null
 for f in job.nc job.json report.html; do
     [ -s "$f" ] || { echo "wheel-check: $f not written" >&2; exit 1; }
 done

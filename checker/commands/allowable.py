@@ -1,5 +1,5 @@
 """`pathcheck allowable --part PART --cc CC.csv --cutter "CUTTER/..." [--axis i,j,k]
-[--method pso] [--json OUT]`: the allowable cutter size at given CC points."""
+[--method pso] [--json FILE|-]`: the allowable cutter size at given CC points."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from checker.atomic import write_file
+from checker.commands import options as opt
 from checker.errors import PathcheckError
 
 CC_COLUMNS = ("x", "y", "z", "nx", "ny", "nz")
@@ -87,51 +87,61 @@ def parse_axis(text: str) -> np.ndarray:
 
 
 @click.command()
-@click.option("--part", "part_path", required=True, type=click.Path(dir_okay=False, path_type=Path),
-              help="part file (geomdl JSON/YAML, STEP, IGES, STL)")
+@opt.part_option(required=True, help="part file (geomdl JSON/YAML, STEP, IGES, STL), in the "
+                 "frame of the CC points")
 @click.option("--cc", "cc_path", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="CSV with header x,y,z,nx,ny,nz (part frame, mm)")
-@click.option("--cutter", "cutter_text", required=True, help='cutter, e.g. "CUTTER/10,2"')
+@opt.cutter_option(help='cutter family, e.g. "CUTTER/10,2", in mm unless --units')
+@opt.units_option(default_text="mm, as the CC points")
+@opt.tool_option()
+@opt.tool_library_option()
 @click.option("--axis", "axis_text", default="0,0,1", show_default=True,
               help="tool axis i,j,k (tip -> spindle)")
 @click.option("--method", type=click.Choice(["exact", "pso"]), default="exact", show_default=True,
               help="exact: this engine; pso: the thesis's PSO baseline")
 @click.option("--seed", type=int, default=None, help="random seed of the PSO baseline")
-@click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="write the result document to this file")
+@opt.config_option()
+@opt.json_option("the result document (its main output; the table goes to stderr with '-')")
 @click.option("--b-range", "b_range", default=None, metavar="LO:HI",
               help="also find the best table angle B in LO:HI degrees (4-axis, rotary about Y): "
                    "adds b_best, allowable_at_best and b_feasible for --cutter")
-def allowable(part_path, cc_path, cutter_text, axis_text, method, seed, json_out,
-              b_range) -> None:
-    """The largest gouge- and interference-free cutter of the family of --cutter at each CC
-    point (R for flat, bull-nose and APT cutters; r for ball and tapered ball).
+def allowable(part_path, cc_path, cutter_text, units, tool_name, tool_library, axis_text,
+              method, seed, config_path, json_out, b_range) -> None:
+    """The largest gouge- and interference-free cutter of the family of --cutter (or --tool)
+    at each CC point (R for flat, bull-nose and APT cutters; r for ball and tapered ball).
 
     \b
     pathcheck allowable --part mould.json --cc cc.csv --cutter "CUTTER/10,5"
     pathcheck allowable --part mould.json --cc cc.csv --cutter "CUTTER/10,2" --json out.json
     """
-    from rich.console import Console
-
-    from checker.config import default_config
-    from checker.cutter import parse_cutter
+    from checker.commands.terminal import text_console
+    from checker.config import load_config
+    from checker.cutter import Cutter, parse_cutter_in
     from checker.engine import allowable as run
     from checker.engine.document import allowable_document, allowable_table
     from checker.geometry import load_part
     from checker.geometry.sampling import sample_part
+    from checker.progress import step
 
-    cutter = parse_cutter(cutter_text)
+    cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
+    if cutter is None:
+        raise PathcheckError("give --cutter or --tool: the cutter family", code="usage")
+    if not isinstance(cutter, Cutter):
+        cutter = parse_cutter_in(cutter, units or "mm")
+    config = load_config(config_path)
     axis = parse_axis(axis_text)
     lines: list[int] = []
     cc, normals = read_cc_csv(cc_path, lines_out=lines)
     t0 = time.perf_counter()
-    part = load_part(part_path)
+    with step("load the part"):
+        part = load_part(part_path)
     check_reach(cc, lines, part.bbox, cc_path)
     t1 = time.perf_counter()
-    tp = sample_part(part)
+    with step("sample the part"):
+        tp = sample_part(part)
     t2 = time.perf_counter()
-    res = run(tp, part, cutter, cc, normals, axis, method=method, seed=seed,
-              config=default_config())
+    with step("allowable cutter search"):
+        res = run(tp, part, cutter, cc, normals, axis, method=method, seed=seed, config=config)
     t3 = time.perf_counter()
     doc = allowable_document(res, cc, normals, cutter, method,
                              {"load_s": t1 - t0, "sample_s": t2 - t1, "search_s": t3 - t2})
@@ -141,10 +151,11 @@ def allowable(part_path, cc_path, cutter_text, axis_text, method, seed, json_out
 
         lo, hi = parse_b_range(b_range)
         t4 = time.perf_counter()
-        best_b_points(doc, tp, part, cutter, cc, normals, (lo, hi), default_config())
+        best_b_points(doc, tp, part, cutter, cc, normals, (lo, hi), config)
         doc["timing"]["b_search_s"] = round(time.perf_counter() - t4, 6)
-    Console().print(allowable_table(doc))
-    click.echo(f"{len(cc)} CC points; load {t1 - t0:.3f} s, sample {t2 - t1:.3f} s, "
-               f"search {t3 - t2:.3f} s")
+    to_stderr = opt.json_to_stdout(json_out)
+    text_console(stderr=to_stderr).print(allowable_table(doc))
+    opt.say(f"{len(cc)} CC points; load {t1 - t0:.3f} s, sample {t2 - t1:.3f} s, "
+            f"search {t3 - t2:.3f} s", json_out=json_out)
     if json_out is not None:
-        write_file(json_out, json.dumps(doc, indent=2), what="results JSON")
+        opt.write_json(json_out, json.dumps(doc, indent=2), what="results JSON")

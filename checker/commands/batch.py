@@ -7,8 +7,11 @@ from __future__ import annotations
 
 import os
 import sys
+from pathlib import Path
 
 import click
+
+from checker.commands import options as opt
 
 
 @click.command()
@@ -17,22 +20,20 @@ import click
               help="processes on this machine [default: the number of CPUs]")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="run the jobs on this Dask distributed scheduler (tcp://host:8786)")
-@click.option("--store", "store_path", default=None, metavar="FILE",
-              help="results store [default: PATHCHECK_STORE or config store.path]")
+@opt.store_option()
+@opt.config_option(help="configuration TOML: the store is its store.path")
 @click.option("--job-function", default="checker.job:check_job", hidden=True,
               help="module:function that checks one job (tests and benchmarks)")
-def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str | None,
-          job_function: str) -> None:
+def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: Path | None,
+          config_path: Path | None, job_function: str) -> None:
     """Check every CL file of a directory (recursively) or of a glob pattern.
 
     \b
     pathcheck batch samples/ --workers 2
     pathcheck batch 'night/**/*.apt' --scheduler tcp://cluster:8786
     """
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
-
     from checker.batch import find_jobs, run_batch
+    from checker.progress import step
     from checker.store import ResultsStore, job_status
 
     paths = find_jobs(jobs)
@@ -40,30 +41,23 @@ def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str
         from checker.extras import require
 
         require("distributed", "dask", "running jobs on a Dask cluster")
-    console = Console(stderr=True)
     counts = {"ok": 0, "findings": 0, "failed": 0}
     unrecorded: list[str] = []
-    with ResultsStore(store_path) as store, Progress(
-        TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-        TextColumn("{task.fields[last]}"), console=console, transient=False,
-    ) as progress:
-        task = progress.add_task("checking", total=len(paths), last="")
+    with ResultsStore(opt.store_of(store_path, config_path)) as store, \
+            step(f"checking {len(paths)} jobs", total=len(paths)) as advance:
 
-        def advance(outcome) -> None:
+        def done(outcome) -> None:
             doc = outcome.results()
-            status = "failed" if doc is None else job_status(doc)
-            counts[status] += 1
-            progress.update(task, advance=1, last=f"{os.path.basename(outcome.path)}: {status}")
+            counts["failed" if doc is None else job_status(doc)] += 1
+            advance(1)
             if outcome.error:
-                progress.console.print(f"[red]failed[/red] {outcome.error}", markup=True,
-                                       highlight=False)
+                click.echo(f"failed {outcome.error}", err=True)
             if outcome.unrecorded:
                 unrecorded.append(outcome.path)
-                progress.console.print(f"[yellow]not recorded[/yellow] {outcome.unrecorded}",
-                                       markup=True, highlight=False)
+                click.echo(f"not recorded {outcome.unrecorded}", err=True)
 
         run_batch(paths, store=store, workers=workers or os.cpu_count() or 1,
-                  scheduler=scheduler, job_function=job_function, on_result=advance)
+                  scheduler=scheduler, job_function=job_function, on_result=done)
         where = store.path
     missing = f" ({len(unrecorded)} could not be recorded)" if unrecorded else ""
     click.echo(

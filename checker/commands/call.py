@@ -10,6 +10,7 @@ from typing import Any
 import click
 
 from checker.atomic import write_file
+from checker.commands import options as opt
 from checker.errors import PathcheckError
 
 
@@ -29,13 +30,14 @@ from checker.errors import PathcheckError
               help="JSON object with the request fields ('-' reads stdin); FIELD=VALUE override")
 @click.option("--cc", "cc_csv", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="CSV with a header row and columns x,y,z,nx,ny,nz: the `cc` field")
-@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="write the reply JSON here instead of stdout")
+@opt.output_option("write the reply JSON here instead of stdout", hidden_names=("--out",))
+@opt.config_option(help="configuration TOML: the address is its service.bind")
 @click.option("--gcode-out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="write the reply's `gcode` (check with post=true) to this file")
 def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float | None,
          retries: int, dealer: bool, curve_keys: Path | None, request_file: Any,
-         cc_csv: Path | None, out: Path | None, gcode_out: Path | None) -> None:
+         cc_csv: Path | None, output: Path | None, config_path: Path | None,
+         gcode_out: Path | None) -> None:
     """Call the pathcheck service: OP is ping, stats, allowable or check; each FIELD=VALUE sets
     a request field (VALUE is JSON, else a string; @FILE reads the file's text; dotted names
     nest: part.path=part.json).
@@ -46,7 +48,8 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     pathcheck call check apt=@job.apt part.path=job.json post=true --gcode-out job.nc
     """
     from checker.client import Client, raise_for_error
-    from checker.config import default_config
+    from checker.config import load_config
+    from checker.progress import step
 
     message: dict[str, Any] = {}
     if request_file is not None:
@@ -58,16 +61,18 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     message["op"] = op
     if timeout_s is None:
         timeout_s = 10.0 if op in ("ping", "stats") else 600.0
-    with Client(address or default_config().service.bind, timeout_s=timeout_s, retries=retries,
-                kind="dealer" if dealer else "req", curve_keys=curve_keys) as client:
+    address = address or load_config(config_path).service.bind
+    with Client(address, timeout_s=timeout_s, retries=retries,
+                kind="dealer" if dealer else "req", curve_keys=curve_keys) as client, \
+            step(f"{op}: waiting for the service"):
         reply = raise_for_error(client.call(**message))
     if gcode_out is not None:
         if not reply.get("gcode"):
             raise PathcheckError("the reply has no G-code (ask with post=true)", code="usage")
         write_file(gcode_out, reply["gcode"], what="G-code")
     text = json.dumps(reply, indent=1)
-    if out is not None:
-        write_file(out, text + "\n", what="reply JSON")
+    if output is not None:
+        write_file(output, text + "\n", what="reply JSON")
     else:
         click.echo(text)
 

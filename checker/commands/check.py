@@ -1,4 +1,4 @@
-"""`pathcheck JOB.apt [--part PART] [--cutter "CUTTER/..."] [--json OUT] [-o JOB.nc]`: check a
+"""`pathcheck JOB.apt [--part PART] [--cutter "CUTTER/..."] [--json FILE|-] [-o JOB.nc]`: check a
 job; exit 0 when clean, 1 with findings (gouge, interference, holder, crash) in the program
 that is written, 2 on bad input."""
 
@@ -9,10 +9,21 @@ from pathlib import Path
 
 import click
 
+from checker.commands import options as opt
+
 
 def _counts_line(c) -> str:
     return (f"ok {c.ok}  within tolerance {c.within_tolerance}  gouge {c.gouge}  interference "
             f"{c.interference}  holder {c.holder}  crash {c.crash}  inaccessible {c.inaccessible}")
+
+
+def short_cutter(apt: str) -> str:
+    """`CUTTER/12.0,6.0,0.0,0.0,0.0,0.0,0.0` -> `CUTTER/12,6` (trailing zeros dropped)."""
+    word, _, rest = apt.partition("/")
+    values = [float(v) for v in rest.split(",")] if rest else []
+    while len(values) > 1 and values[-1] == 0.0:
+        values.pop()
+    return f"{word}/" + ",".join(f"{v:g}" for v in values)
 
 
 def summary_view(doc):
@@ -25,9 +36,12 @@ def summary_view(doc):
 
     s, j = doc.summary, doc.job
     var = parse_cutter(j.cutter).size_symbol
+    cutters = list(dict.fromkeys(short_cutter(c) for c in (j.cutters or [j.cutter])))
     head = (f"{j.path}: {s.cl_points} poses, {s.move_points} moves ({s.poses_checked} poses "
             f"checked), {len(doc.operations)} operation(s), {j.axis_class}, tolerance up to "
             f"{s.tolerance:.4f} mm (part deviation {s.part_deviation:.4f}), {s.time_s:.2f} s\n"
+            f"cutter{'s' if len(cutters) > 1 else ''} (mm): {', '.join(cutters)}; job in "
+            f"{j.units}\n"
             f"{'FINDINGS' if s.status == 'findings' else 'clean'}: {_counts_line(s.counts)}")
     if s.counts_cam is not None:
         head += f"\nat the CAM's own angles: {_counts_line(s.counts_cam)}"
@@ -48,7 +62,7 @@ def summary_view(doc):
             b = "-" if op.b_written is None else (
                 f"{op.b_written[0]:.3f}" if op.b_written[0] == op.b_written[1]
                 else f"{op.b_written[0]:.1f}..{op.b_written[1]:.1f}")
-            t.add_row(str(op.index + 1), op.cutter.removeprefix("CUTTER/"), op.axis_class,
+            t.add_row(str(op.index + 1), short_cutter(op.cutter), op.axis_class,
                       op.handling, b, f"{op.tolerance:.4f}",
                       str(c.gouge + c.interference + c.holder + c.crash))
         out.append(t)
@@ -84,14 +98,15 @@ def parse_b_range(text: str | None) -> tuple[float, float] | None:
     return lo, hi
 
 
-def record(doc) -> None:
-    """Record the check in the results store; a store problem (locked, a full disk) is a
-    one-line note on stderr, not a failure."""
+def record(doc, store_path: Path | None = None) -> None:
+    """Record the check in the results store (`store_path`, default PATHCHECK_STORE or config
+    store.path); a store problem (locked, a full disk) is a one-line note on stderr, not a
+    failure."""
     from checker.errors import PathcheckError
     from checker.store import ResultsStore
 
     try:
-        with ResultsStore() as store:
+        with ResultsStore(store_path) as store:
             store.record_job(doc, elapsed_s=doc.summary.time_s, source="cli")
     except PathcheckError as err:
         click.echo(f"pathcheck: note: not recorded in the results store: {err}", err=True)
@@ -99,37 +114,34 @@ def record(doc) -> None:
 
 @click.command()
 @click.argument("job", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--part", "part_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="part file (default: the file beside JOB with the same stem)")
-@click.option("--cutter", "cutter_text", default=None, help='override the cutter, "CUTTER/..."')
-@click.option("--config", "config_path", type=click.Path(dir_okay=False, path_type=Path),
-              default=None, help="configuration TOML overriding the shipped defaults")
-@click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="write the results document (JSON) here")
-@click.option("-o", "gcode_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="write the corrected 4-axis G-code here (atomically)")
-@click.option("--machine", default=None,
-              help="a shipped machine's name or a machine TOML file (default: the CL file's "
-                   "PPRINT/MACHINE, else fanuc-hmc)")
+@opt.part_option(help="part file, in the frame of the CL file (default: the file beside JOB "
+                 "with the same stem)")
+@opt.cutter_option(help='override the cutter, "CUTTER/..." in the job\'s units unless --units')
+@opt.units_option()
+@opt.tool_option()
+@opt.tool_library_option()
+@opt.config_option()
+@opt.json_option()
+@opt.output_option("write the corrected 4-axis G-code here (atomically)")
+@opt.machine_option()
 @click.option("--b-range", "b_range", default=None, metavar="LO:HI",
               help="B range searched for the best table angle, degrees (default from config)")
 @click.option("--reorient", is_flag=True,
               help="plan the table angle B for a 3-axis path (run it on the 4-axis machine)")
-@click.option("--tool", "tool_name", default=None,
-              help="the real cutter from the tool library, with its shank "
-                   "and holder, e.g. BALL-D6")
 @click.option("--part-transform", default=None, metavar="RX,RY,RZ,DX,DY,DZ|3x4",
               help="place a part exported in another frame: rotations about X, Y, Z (degrees) "
                    "then an offset (mm), or a 3x4 matrix row by row")
+@opt.store_option()
 @click.option("--no-store", is_flag=True, help="do not record this check in the results store")
-def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine, b_range,
-          reorient, tool_name, part_transform, no_store) -> None:
+def check(job, part_path, cutter_text, units, tool_name, tool_library, config_path, json_out,
+          output, machine, b_range, reorient, part_transform, store_path, no_store) -> None:
     """Check JOB (APT-CL or NX CLSF) against its part: allowable cutter, verdict and margin at
     every CC point.
 
     \b
     pathcheck samples/mould/mould.apt
     pathcheck samples/mould/mould.apt --json out/mould.json
+    pathcheck samples/mould/mould.apt --json - 2>/dev/null   # the document alone on stdout
     """
     from checker.atomic import check_writable, make_parent
     from checker.errors import PathcheckError
@@ -137,43 +149,39 @@ def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine
 
     if not job.is_file():
         raise PathcheckError("job file not found: expected an existing CL file", path=job)
-    for target, what in ((gcode_out, "G-code"), (json_out, "results JSON")):
+    files = [(output, "G-code")]
+    if not opt.json_to_stdout(json_out):
+        files.append((json_out, "results JSON"))
+    for target, what in files:
         if target is not None:
             check_writable(target, what)
             make_parent(target, what)
-    cutter = cutter_text
-    if tool_name is not None:
-        if cutter_text is not None:
-            raise PathcheckError("give --cutter or --tool, not both", code="usage")
-        from checker.tool_library import load_tool_library
-
-        cutter = load_tool_library()[tool_name]
+    cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
+    store = None if no_store else opt.store_of(store_path, config_path)
     try:
         doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
-                        output=gcode_out, machine=machine, b_range=parse_b_range(b_range),
-                        reorient=reorient, part_transform=part_transform)
+                        output=output, machine=machine, b_range=parse_b_range(b_range),
+                        reorient=reorient, part_transform=part_transform, cutter_units=units)
     except PathcheckError as err:
         checked = getattr(err, "document", None)  # the check ran, its program was not written
         if checked is not None and not no_store:
-            record(checked)
+            record(checked, store)
         raise
-    finish(doc, json_out, store=not no_store)
+    finish(doc, json_out, store=not no_store, store_path=store)
 
 
-def finish(doc, json_out: Path | None, *, store: bool) -> None:
-    """Print the summary, record the check, write the JSON (a file that cannot be written is
-    exit 2, the check recorded all the same); exit 1 when there are findings."""
-    from rich.console import Console
+def finish(doc, json_out: Path | None, *, store: bool, store_path: Path | None = None) -> None:
+    """Print the summary (stderr when `--json -` owns stdout), record the check in `store_path`,
+    write the JSON (a file that cannot be written is exit 2, the check recorded all the same);
+    exit 1 when there are findings."""
+    from checker.commands.terminal import text_console
 
-    from checker.atomic import make_parent, write_file
-
-    console = Console()
+    console = text_console(stderr=opt.json_to_stdout(json_out))
     for item in summary_view(doc):
         console.print(item)
     if store:
-        record(doc)
+        record(doc, store_path)
     if json_out is not None:
-        make_parent(json_out, "results JSON")
-        write_file(json_out, doc.model_dump_json(indent=1), what="results JSON")
+        opt.write_json(json_out, doc.model_dump_json(indent=1), what="results JSON")
     if doc.summary.status == "findings":
         sys.exit(1)

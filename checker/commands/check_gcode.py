@@ -12,12 +12,14 @@ from pathlib import Path
 import click
 import numpy as np
 
+from checker.commands import options as opt
+from checker.progress import step
+
 
 @click.command()
 @click.argument("program", type=click.Path(dir_okay=False, path_type=Path))
-@click.option(
-    "--machine", "machine_name", default=None, help="machine name or .toml (default fanuc-hmc)"
-)
+@click.option("--machine", "machine_name", default=None, metavar="NAME|FILE",
+              help="a shipped machine's name or a machine TOML file [default: fanuc-hmc]")
 @click.option(
     "--dialect", default=None,
     help="override the machine's dialect (fanuc, haas, linuxcnc, siemens, heidenhain, millplus)",
@@ -25,21 +27,16 @@ import numpy as np
 @click.option(
     "--units", type=click.Choice(["mm", "inch"]), default=None, help="units before G20/G21"
 )
-@click.option(
-    "--part", type=click.Path(dir_okay=False, path_type=Path), default=None, help="part file"
-)
-@click.option("--cutter", "cutter_text", default=None, help='cutter, e.g. "CUTTER/6,3"')
-@click.option(
-    "--json",
-    "json_out",
-    type=click.Path(dir_okay=False, path_type=Path),
-    default=None,
-    help="write the summary as JSON to this file",
-)
+@opt.part_option()
+@opt.cutter_option(help='cutter, e.g. "CUTTER/6,3", in the program\'s units (G20/G21, --units)')
+@opt.tool_option()
+@opt.tool_library_option()
+@opt.config_option()
+@opt.json_option("the program's summary (with --part and --cutter: the results document)")
+@opt.store_option()
 @click.option("--no-store", is_flag=True, help="do not record this check in the results store")
-def check_gcode(
-    program: Path, machine_name, dialect, units, part, cutter_text, json_out, no_store
-) -> None:
+def check_gcode(program: Path, machine_name, dialect, units, part_path, cutter_text, tool_name,
+                tool_library, config_path, json_out, store_path, no_store) -> None:
     """Read PROGRAM (G-code) for a machine, bring its moves back into the part frame and, with
     --part and --cutter, check them like `pathcheck JOB.apt` (exit 1 on findings).
 
@@ -48,6 +45,7 @@ def check_gcode(
     pathcheck check-gcode prog.ngc --machine linuxcnc-hmc --json out.json
     pathcheck check-gcode boat.ngc --machine linuxcnc-xyzac-trt --part boat.stl --cutter CUTTER/10
     """
+    from checker.cutter import parse_cutter_in
     from checker.errors import PathcheckError
     from postproc.describe import describe_program, format_program_summary
     from postproc.machine import load_machine
@@ -55,28 +53,27 @@ def check_gcode(
     from postproc.replay import part_motions
 
     machine = load_machine(machine_name)
-    cutter = None
-    if cutter_text is not None:
-        from checker.cutter import parse_cutter
-
-        cutter = parse_cutter(cutter_text)
-    if part is not None and not part.is_file():
+    cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
+    if part_path is not None and not part_path.is_file():
         raise PathcheckError(
-            "part file not found: expected an existing file", path=part, code="part"
+            "part file not found: expected an existing file", path=part_path, code="part"
         )
-    moves = read_gcode(program, dialect or machine.dialect, units=units or machine.units)
+    with step("read the program"):
+        moves = read_gcode(program, dialect or machine.dialect, units=units or machine.units)
+    if isinstance(cutter, str):  # read in the program's units (G20/G21, else --units)
+        cutter = parse_cutter_in(cutter, moves.units)
     if not np.isin(moves.kind, (PROGRAMMED, CYCLE)).any():
         raise PathcheckError(f"no motion: expected G0/G1/G2/G3 moves or drilling cycles, found "
                              f"none in {moves.blocks} blocks", path=program, code="gcode")
-    motions = part_motions(moves, machine)
-    doc = describe_program(moves, motions, machine)
-    click.echo(format_program_summary(doc))
-    if part is None or cutter is None:
-        click.echo("give --part and --cutter to check the program for gouges and interference")
+    with step("the moves in the part frame"):
+        motions = part_motions(moves, machine)
+        doc = describe_program(moves, motions, machine)
+    opt.say(format_program_summary(doc), json_out=json_out)
+    if part_path is None or cutter is None:
+        opt.say("give --part and --cutter to check the program for gouges and interference",
+                json_out=json_out)
         if json_out is not None:
-            from checker.atomic import write_file
-
-            write_file(json_out, json.dumps(doc, indent=2) + "\n", what="program JSON")
+            opt.write_json(json_out, json.dumps(doc, indent=2), what="program JSON")
         if doc["machine_checks"]:
             sys.exit(1)
         return
@@ -85,7 +82,8 @@ def check_gcode(
     from postproc.replay import toolpath_of
 
     toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)
-    result = check_toolpath(toolpath, part_path=part, cutter=cutter, machine=machine_name)
-    finish(result, json_out, store=not no_store)
+    result = check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=machine_name,
+                            config=config_path)
+    finish(result, json_out, store=not no_store, store_path=opt.store_of(store_path, config_path))
     if doc["machine_checks"]:
         sys.exit(1)

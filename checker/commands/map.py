@@ -1,4 +1,4 @@
-"""`pathcheck map PART --cutter ... [--grid 21x21] [--tools TOOLS.toml] [--out DIR]`:
+"""`pathcheck map --part PART --cutter ... [--grid 21x21] [--tool-library TOOLS.toml] [-o DIR]`:
 allowable-cutter and standard-cutter maps of every surface (PNG + JSON)."""
 
 from __future__ import annotations
@@ -10,7 +10,9 @@ from pathlib import Path
 import click
 
 from checker.atomic import write_file
+from checker.commands import options as opt
 from checker.errors import PathcheckError
+from checker.progress import step
 
 
 def parse_grid(text: str) -> tuple[int, int]:
@@ -22,41 +24,53 @@ def parse_grid(text: str) -> tuple[int, int]:
 
 
 @click.command("map")
-@click.argument("part_path", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--cutter", "cutter_text", required=True, help='cutter family, e.g. "CUTTER/10,5"')
+@opt.part_option(required=True, help="part file (geomdl JSON/YAML, STEP, IGES, STL)")
+@opt.cutter_option(help='cutter family, e.g. "CUTTER/10,5", in mm unless --units')
+@opt.units_option(default_text="mm")
+@opt.tool_option()
+@opt.tool_library_option(hidden_names=("--tools",))
 @click.option("--grid", "grid_text", default="21x21", show_default=True,
               help="iso-parametric CC points per surface")
-@click.option("--tools", "tools_path", type=click.Path(dir_okay=False, path_type=Path),
-              default=None, help="tool library (default: the shipped one)")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
-              default=Path("out/map"), show_default=True, help="folder for the PNG and JSON")
-def map_command(part_path, cutter_text, grid_text, tools_path, out_dir) -> None:
-    """Allowable-cutter map and standard-cutter map of PART (thesis figs 3-2, 4-2, 4-3).
+@opt.output_option("folder for the PNG and JSON", hidden_names=("--out",), folder=True,
+                   default=Path("out/map"))
+def map_command(part_path, cutter_text, units, tool_name, tool_library, grid_text,
+                output) -> None:
+    """Allowable-cutter map and standard-cutter map of the part (thesis figs 3-2, 4-2, 4-3)
+    for the family of --cutter (or --tool), with the standard cutters of the tool library.
 
     \b
-    pathcheck map samples/mould/mould.json --cutter "CUTTER/10,5" --out out/map
+    pathcheck map --part samples/mould/mould.json --cutter "CUTTER/10,5" -o out/map
     """
     import numpy as np
 
-    from checker.cutter import parse_cutter
+    from checker.cutter import Cutter, parse_cutter_in
     from checker.engine.maps import allowable_maps, draw_maps, maps_document
     from checker.geometry import load_part
     from checker.geometry.sampling import sample_part
     from checker.tool_library import load_tool_library
 
-    cutter = parse_cutter(cutter_text)
+    cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
+    if cutter is None:
+        raise PathcheckError("give --cutter or --tool: the cutter family", code="usage")
+    if not isinstance(cutter, Cutter):
+        cutter = parse_cutter_in(cutter, units or "mm")
     grid = parse_grid(grid_text)
-    lib = load_tool_library(tools_path)
+    lib = load_tool_library(tool_library)
     r = cutter.family_corner
     tools = lib.family(cutter.kind, r, theta=cutter.theta)
-    part = load_part(part_path)
+    with step("load the part"):
+        part = load_part(part_path)
     if not part.surfaces:
         raise PathcheckError("a map needs a part with surfaces (u, v); this one is a mesh",
                              path=part_path, code="part")
-    maps = allowable_maps(part, sample_part(part), cutter, grid, tools)
-    files = draw_maps(maps, cutter, tools, out_dir, part_path.name)
+    with step("sample the part"):
+        samples = sample_part(part)
+    with step("allowable cutter over the grid"):
+        maps = allowable_maps(part, samples, cutter, grid, tools)
+    with step("draw the maps"):
+        files = draw_maps(maps, cutter, tools, output, part_path.name)
     doc = maps_document(maps, cutter, tools)
-    write_file(out_dir / "map.json", json.dumps(doc, indent=1), what="map JSON")
+    write_file(output / "map.json", json.dumps(doc, indent=1), what="map JSON")
     sizes = np.concatenate([m.size[m.kept] for m in maps])
     fin = sizes[np.isfinite(sizes)]
     name = "r" if r is None else "R"
@@ -68,5 +82,5 @@ def map_command(part_path, cutter_text, grid_text, tools_path, out_dir) -> None:
         smallest = f"{name} unbounded everywhere (no point limits the cutter)"
     click.echo(f"{len(sizes)} CC points on {len(maps)} surfaces; allowable {smallest}; "
                f"{len(tools)} standard {cutter.kind} cutters")
-    for f in [*files, out_dir / "map.json"]:
+    for f in [*files, output / "map.json"]:
         click.echo(f"wrote {f}")

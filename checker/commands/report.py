@@ -1,4 +1,4 @@
-"""`pathcheck report [--since 24h] [--out report.html] [--points-csv FILE]`: the nightly page
+"""`pathcheck report [--since 24h] [-o report.html] [--points-csv FILE]`: the nightly page
 over the results store, with a JSON and a CSV summary beside it, and a CSV of every point."""
 
 from __future__ import annotations
@@ -7,28 +7,35 @@ from pathlib import Path
 
 import click
 
+from checker.commands import options as opt
+
 
 @click.command()
 @click.option("--since", default="24h", show_default=True,
               help="jobs recorded in this last period: 24h, 90m, 7d, 3600s")
-@click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
-              default=Path("report.html"), show_default=True,
-              help="the HTML page; .json and .csv summaries are written beside it")
-@click.option("--store", "store_path", default=None, metavar="FILE",
-              help="results store [default: PATHCHECK_STORE or config store.path]")
+@opt.output_option("the HTML page; .json and .csv summaries are written beside it",
+                   hidden_names=("--out",), default=Path("report.html"))
+@opt.store_option()
+@opt.config_option(help="configuration TOML: the store is its store.path")
 @click.option("--points-csv", "points_csv", default=None, metavar="FILE",
               type=click.Path(dir_okay=False, path_type=Path),
               help="also write every checked point of the jobs as CSV (part frame, mm, degrees)")
-def report(since: str, out: Path, store_path: str | None, points_csv: Path | None) -> None:
+def report(since: str, output: Path, store_path: Path | None, config_path: Path | None,
+           points_csv: Path | None) -> None:
     """Write one self-contained HTML page (no network needed to view it) of the jobs of the
     night: a table, per job the allowable- and standard-cutter maps, B along the path and where
-    the findings are, and trends against previous nights."""
+    the findings are, and trends against previous nights.
+
+    \b
+    pathcheck report --since 24h -o report.html
+    """
+    from checker.progress import step
     from checker.report import build_report, parse_since
     from checker.store import ResultsStore
 
     since_s = parse_since(since)
-    with ResultsStore(store_path) as store:
-        files = build_report(store, out, since_s=since_s, points_csv=points_csv)
+    with ResultsStore(opt.store_of(store_path, config_path)) as store, step("write the report"):
+        files = build_report(store, output, since_s=since_s, points_csv=points_csv)
     what = {0: "no jobs", 1: "1 job"}.get(files.jobs, f"{files.jobs} jobs")
     skipped = (f"; {files.skipped} unreadable row{'s' if files.skipped > 1 else ''} skipped"
                if files.skipped else "")

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import click
 
+from checker.commands import options as opt
 from checker.config import load_config
 
 
@@ -27,17 +28,15 @@ from checker.config import load_config
               help="allow a bind beyond loopback without --curve-keys")
 @click.option("--new-keys", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="write a server and a client key pair into this folder and exit")
-@click.option("--config", "config_file", type=click.Path(dir_okay=False, path_type=Path),
-              default=None, help="TOML file overriding the shipped defaults")
-@click.option("--store", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="results store to record every request in [config: store.path]")
+@opt.config_option()
+@opt.store_option(help="results store to record every request in [config: store.path]")
 @click.option("--no-store", is_flag=True, help="do not record requests")
 @click.option("--keep-days", type=click.FloatRange(min=0), default=None,
               help="retention: delete stored checks and requests older than this, at start "
               "and hourly (as `pathcheck store prune --keep-days`)")
 def serve(bind: str | None, workers: int | None, roots: tuple[Path, ...],
           curve_keys: Path | None, insecure: bool, new_keys: Path | None,
-          config_file: Path | None, store: Path | None, no_store: bool,
+          config_path: Path | None, store_path: Path | None, no_store: bool,
           keep_days: float | None) -> None:
     """Serve checks to CAM post-processors over ZeroMQ (protocol: docs/protocol.md).
     Logs one line per request on stderr.
@@ -56,11 +55,11 @@ def serve(bind: str | None, workers: int | None, roots: tuple[Path, ...],
     from checker.service.broker import Broker, check_bind
     from checker.service.roots import Roots
 
-    config = load_config(config_file)
+    config = load_config(config_path)
     check_bind(bind or config.service.bind, curve=curve_keys is not None, insecure=insecure)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
-    store_path = None if no_store else str(store or config.store.resolved_path())
-    broker = Broker(config, bind=bind, workers=workers, store=store_path, roots=Roots(roots),
+    store = None if no_store else str(store_path or config.store.resolved_path())
+    broker = Broker(config, bind=bind, workers=workers, store=store, roots=Roots(roots),
                     curve_keys=curve_keys, insecure=insecure, keep_days=keep_days)
     for sig in (signal.SIGTERM, signal.SIGINT):
         signal.signal(sig, lambda *_: broker.request_stop())

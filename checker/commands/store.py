@@ -4,7 +4,11 @@ prunes the store on a schedule (e.g. nightly after the report)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
+
+from checker.commands import options as opt
 
 
 @click.group()
@@ -19,10 +23,10 @@ def store() -> None:
               help="keep only the newest N records of each job path")
 @click.option("--vacuum", is_flag=True,
               help="then give the freed space back to the file system (rewrites the file)")
-@click.option("--store", "store_path", default=None, metavar="FILE",
-              help="results store [default: PATHCHECK_STORE or config store.path]")
-def prune(keep_days: float | None, keep: int | None, vacuum: bool,
-          store_path: str | None) -> None:
+@opt.store_option()
+@opt.config_option(help="configuration TOML: the store is its store.path")
+def prune(keep_days: float | None, keep: int | None, vacuum: bool, store_path: Path | None,
+          config_path: Path | None) -> None:
     """Delete old records: older than --keep-days, beyond the newest --keep per job (give one
     or both).
 
@@ -32,6 +36,7 @@ def prune(keep_days: float | None, keep: int | None, vacuum: bool,
     """
     from checker.store import prune as prune_store
 
-    done = prune_store(store_path, keep_days=keep_days, keep=keep, vacuum=vacuum)
+    done = prune_store(opt.store_of(store_path, config_path), keep_days=keep_days, keep=keep,
+                       vacuum=vacuum)
     click.echo(f"deleted {done.jobs} jobs and {done.requests} service requests; "
                f"{done.remaining} jobs kept")

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.four_axis.intervals import Intervals, feasible_intervals
+from checker.progress import step
 
 AllowableFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
 GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
@@ -47,10 +48,18 @@ def _scan(fn: AllowableFn, n: int, grid: np.ndarray) -> np.ndarray:
     _SCAN_BATCH rows, one after the other (the engine's kernels use every core themselves)."""
     per = max(1, _SCAN_BATCH // max(n, 1))
     parts = []
-    for cols in np.array_split(np.arange(grid.size), max(1, -(-grid.size // per))):
-        rows = np.repeat(np.arange(n), cols.size)
-        parts.append(fn(rows, np.tile(grid[cols], n)).reshape(n, cols.size))
+    with step("best B: scan of the B range", total=grid.size) as advance:
+        for cols in np.array_split(np.arange(grid.size), max(1, -(-grid.size // per))):
+            rows = np.repeat(np.arange(n), cols.size)
+            parts.append(fn(rows, np.tile(grid[cols], n)).reshape(n, cols.size))
+            advance(cols.size)
     return np.concatenate(parts, axis=1)
+
+
+def _rounds(width: float, tol: float, shrink: float) -> int:
+    """Rounds that shrink `width` by `shrink` each until it is at most `tol` (the steps'
+    totals)."""
+    return max(0, int(np.ceil(np.log(tol / width) / np.log(shrink)))) if width > tol else 0
 
 
 def _top_local_maxima(samples: np.ndarray, count: int) -> np.ndarray:
@@ -70,20 +79,22 @@ def _golden_max(fn: AllowableFn, rows: np.ndarray, lo: np.ndarray, hi: np.ndarra
     c = b - GOLDEN * (b - a)
     d = a + GOLDEN * (b - a)
     fc, fd = fn(rows, c), fn(rows, d)
-    while np.max(b - a) > tol:
-        left = fc >= fd  # keep [a, d]
-        b = np.where(left, d, b)
-        a = np.where(left, a, c)
-        new_c = b - GOLDEN * (b - a)
-        new_d = a + GOLDEN * (b - a)
-        probe = np.where(left, new_c, new_d)
-        fp = fn(rows, probe)
-        c, fc, d, fd = (
-            np.where(left, new_c, d),
-            np.where(left, fp, fd),
-            np.where(left, c, new_d),
-            np.where(left, fc, fp),
-        )
+    with step("best B: refinement", total=_rounds(float(np.max(b - a)), tol, GOLDEN)) as advance:
+        while np.max(b - a) > tol:
+            left = fc >= fd  # keep [a, d]
+            b = np.where(left, d, b)
+            a = np.where(left, a, c)
+            new_c = b - GOLDEN * (b - a)
+            new_d = a + GOLDEN * (b - a)
+            probe = np.where(left, new_c, new_d)
+            fp = fn(rows, probe)
+            c, fc, d, fd = (
+                np.where(left, new_c, d),
+                np.where(left, fp, fd),
+                np.where(left, c, new_d),
+                np.where(left, fc, fp),
+            )
+            advance(1)
     best_is_c = fc >= fd
     return np.where(best_is_c, c, d), np.where(best_is_c, fc, fd)
 
@@ -91,11 +102,14 @@ def _golden_max(fn: AllowableFn, rows: np.ndarray, lo: np.ndarray, hi: np.ndarra
 def _refine_ends(fn: AllowableFn, rows, inside, outside, level, tol: float) -> np.ndarray:
     """Bisection of the boundary between a feasible B (`inside`) and an infeasible one."""
     inside, outside = inside.copy(), outside.copy()
-    while rows.size and np.max(np.abs(outside - inside)) > tol:
-        mid = 0.5 * (inside + outside)
-        ok = fn(rows, mid) >= level
-        inside = np.where(ok, mid, inside)
-        outside = np.where(ok, outside, mid)
+    width = float(np.max(np.abs(outside - inside))) if rows.size else 0.0
+    with step("best B: feasible interval ends", total=_rounds(width, tol, 0.5)) as advance:
+        while rows.size and np.max(np.abs(outside - inside)) > tol:
+            mid = 0.5 * (inside + outside)
+            ok = fn(rows, mid) >= level
+            inside = np.where(ok, mid, inside)
+            outside = np.where(ok, outside, mid)
+            advance(1)
     return inside
 
 

@@ -1,0 +1,150 @@
+"""The options every command spells the same way (`--part`, `--cutter`, `--tool`,
+`--tool-library`, `--machine`, `--config`, `--store`, `-o/--output`, `--json FILE|-`,
+`--units`) and the exit-code text of every command's help. An old spelling kept for scripts is
+a hidden alias of its option (`AliasOption`), not a second option."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import click
+
+EXIT_CODES = (
+    "\b\nExit codes: 0 clean, 1 findings, 2 bad input, usage, a file that cannot be read or\n"
+    "written, or out of memory (one line naming the file), 3 internal error (a bug: one line,\n"
+    "the traceback in a log file, $PATHCHECK_LOG_DIR or ~/.local/state/pathcheck/log),\n"
+    "130 interrupted, 128 + N ended by signal N."
+)
+
+_FILE = click.Path(dir_okay=False, path_type=Path)
+
+
+class AliasOption(click.Option):
+    """An option whose `hidden` names (old spellings) still parse but are not in the help."""
+
+    def __init__(self, *args, hidden_names: tuple[str, ...] = (), **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.hidden_names = frozenset(hidden_names)
+
+    def get_help_record(self, ctx: click.Context):
+        shown = self.opts
+        self.opts = [o for o in shown if o not in self.hidden_names]
+        try:
+            return super().get_help_record(ctx)
+        finally:
+            self.opts = shown
+
+
+def part_option(*, required: bool = False, help: str = "part file (geomdl JSON/YAML, STEP, "
+                "IGES, STL), in the frame of the CL file") -> Callable:
+    """`--part FILE` -> `part_path`."""
+    return click.option("--part", "part_path", type=_FILE, required=required, default=None,
+                        help=help)
+
+
+def cutter_option(*, required: bool = False, help: str = 'cutter, e.g. "CUTTER/10,2"; '
+                  "dimensions in the job's units unless --units") -> Callable:
+    """`--cutter "CUTTER/..."` -> `cutter_text`."""
+    return click.option("--cutter", "cutter_text", required=required, default=None, help=help)
+
+
+def tool_option() -> Callable:
+    """`--tool NAME` -> `tool_name`: a cutter of the tool library, with its shank and holder."""
+    return click.option("--tool", "tool_name", default=None, metavar="NAME",
+                        help="the real cutter from the tool library (--tool-library), with its "
+                             "shank and holder, e.g. BALL-D6")
+
+
+def tool_library_option(*, hidden_names: tuple[str, ...] = ()) -> Callable:
+    """`--tool-library FILE` -> `tool_library`."""
+    return click.option("--tool-library", *hidden_names, "tool_library", cls=AliasOption,
+                        hidden_names=hidden_names, type=_FILE, default=None,
+                        help="tool library TOML [default: the shipped one]")
+
+
+def units_option(*, default_text: str = "the job's units") -> Callable:
+    """`--units mm|inch` -> `units`: the unit of --cutter's dimensions."""
+    return click.option("--units", "units", type=click.Choice(["mm", "inch"]), default=None,
+                        help=f"unit of --cutter's dimensions [default: {default_text}]")
+
+
+def machine_option(*, help: str = "a shipped machine's name or a machine TOML file "
+                   "[default: the CL file's PPRINT/MACHINE, else fanuc-hmc]") -> Callable:
+    """`--machine NAME|FILE` -> `machine`."""
+    return click.option("--machine", "machine", default=None, metavar="NAME|FILE", help=help)
+
+
+def config_option(*, help: str = "configuration TOML overriding the shipped defaults"
+                  ) -> Callable:
+    """`--config FILE` -> `config_path`."""
+    return click.option("--config", "config_path", type=_FILE, default=None, help=help)
+
+
+def store_option(*, help: str = "results store [default: PATHCHECK_STORE or config "
+                 "store.path]") -> Callable:
+    """`--store FILE` -> `store_path`."""
+    return click.option("--store", "store_path", type=_FILE, default=None, metavar="FILE",
+                        help=help)
+
+
+def output_option(help: str, *, hidden_names: tuple[str, ...] = (), folder: bool = False,
+                  default: Path | None = None) -> Callable:
+    """`-o/--output FILE` (a folder with `folder`) -> `output`: the command's main output."""
+    kind = click.Path(file_okay=False, path_type=Path) if folder else _FILE
+    return click.option("-o", "--output", *hidden_names, "output", cls=AliasOption,
+                        hidden_names=hidden_names, type=kind, default=default,
+                        show_default=default is not None, help=help)
+
+
+def json_option(what: str = "the results document") -> Callable:
+    """`--json FILE|-` -> `json_out`: write the JSON document to FILE, or to stdout with `-`
+    (then the human text goes to stderr)."""
+    return click.option("--json", "json_out", type=click.Path(dir_okay=False, allow_dash=True,
+                                                              path_type=Path),
+                        default=None, metavar="FILE|-",
+                        help=f"write {what} as JSON to FILE, or to stdout with '-' (the text "
+                             "then goes to stderr)")
+
+
+def json_to_stdout(json_out: Path | None) -> bool:
+    """True when `--json -` asks for the JSON document on stdout."""
+    return json_out is not None and str(json_out) == "-"
+
+
+def write_json(json_out: Path, text: str, *, what: str) -> None:
+    """The JSON document to `json_out` (atomically) or to stdout for `-`."""
+    if json_to_stdout(json_out):
+        click.echo(text)
+        return
+    from checker.atomic import make_parent, write_file
+
+    make_parent(json_out, what)
+    write_file(json_out, text if text.endswith("\n") else text + "\n", what=what)
+
+
+def say(text: str, *, json_out: Path | None = None) -> None:
+    """A line of human text: stdout, or stderr when `--json -` owns stdout."""
+    click.echo(text, err=json_to_stdout(json_out))
+
+
+def cutter_choice(cutter_text: str | None, tool_name: str | None, tool_library: Path | None):
+    """The cutter asked for: `--cutter` text, or the `--tool` of the tool library (a `Cutter`
+    with its shank and holder), or None; both is a usage error."""
+    if tool_name is None:
+        return cutter_text
+    from checker.errors import PathcheckError
+    from checker.tool_library import load_tool_library
+
+    if cutter_text is not None:
+        raise PathcheckError("give --cutter or --tool, not both", code="usage")
+    return load_tool_library(tool_library)[tool_name]
+
+
+def store_of(store_path: Path | None, config_path: Path | None) -> Path | None:
+    """The store to record in: --store, else --config's store.path, else the default (None)."""
+    if store_path is not None or config_path is None:
+        return store_path
+    from checker.config import load_config
+
+    return load_config(config_path).store.resolved_path()
