@@ -180,9 +180,12 @@ def moves_from_toolpath(
     )
 
 
-def machine_for_toolpath(toolpath, name: str | None = None) -> Machine:
-    """The machine to post ``toolpath`` for: ``name`` (a machine name or .toml file) when given,
-    else the CL file's ``PPRINT/MACHINE NAME``, else the default machine (fanuc-hmc)."""
+def machine_for_toolpath(toolpath, name: str | Machine | None = None) -> Machine:
+    """The machine to post ``toolpath`` for: ``name`` (a Machine, a machine name or .toml file)
+    when given, else the CL file's ``PPRINT/MACHINE NAME``, else the default machine
+    (fanuc-hmc)."""
+    if isinstance(name, Machine):
+        return name
     if name is None:
         for record in toolpath.records:
             words = (record.text or "").split() if record.word == "PPRINT" else []
@@ -672,7 +675,7 @@ def post_toolpath(
     toolpath,
     out: str | Path,
     *,
-    machine: str | None = None,
+    machine: str | Machine | None = None,
     b_deg=None,
     cc=None,
     normals=None,
