@@ -621,13 +621,13 @@ def _check_travel(rows: Rows, text: str, machine: Machine, moves: PostMoves) -> 
 
 
 def tool_lines(toolpath, cutters: dict[int, object] | None = None) -> list[str]:
-    """One header line per tool of ``toolpath`` in program order, e.g. ``T3 CUTTER/12,6,...``:
+    """One header line per tool of ``toolpath`` in program order, e.g. ``3 CUTTER/12,6,...``:
     every operation's cutter (``cutters`` by operation index where given, else the CL's), each
     tool number and cutter once."""
     out: list[str] = []
     for o, op in enumerate(toolpath.operations):
         cutter = (cutters or {}).get(o, op.cutter)
-        text = f"T{op.tool_number or 0} " + ("-" if cutter is None else cutter.to_apt())
+        text = f"{op.tool_number or 0} " + ("-" if cutter is None else cutter.to_apt())
         if text not in out:
             out.append(text)
     return out
@@ -657,7 +657,7 @@ def post(moves: PostMoves, machine: Machine, *, program_name: str = "PATHCHECK",
     )
     pre = _pre_blocks(assembled, moves, machine, w, choice)
     if tools is None:
-        tools = [f"T{t}" for t in dict.fromkeys(moves.tool.tolist())]
+        tools = [str(t) for t in dict.fromkeys(moves.tool.tolist())]
     header = header_lines(source=moves.source, machine=machine.name, tools=tools, verdict=verdict)
     text = format_program(rows, machine, get_dialect(machine.dialect), pre, program_name, header)
     _check_travel(rows, text, machine, moves)

@@ -32,7 +32,10 @@ def test_shipped_machines_load():
         ('[[rotary_axes]]\nname = "A"\non = "spindle"\ndirection = [1, 0, 0]\n',
          "rotary_axes.0.on"),
         ("[setup]\nrotation = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]\n", "setup.rotation"),
-        ("[format]\nlinear_decimals = 12\n", "format.linear_decimals"),
+        ("[format]\nlinear_increment = 0.005\n", "format.linear_increment': expected a power "
+         "of ten from 1 to 0.000001"),
+        ("[format]\nlinear_decimals = 12\n", "format': linear_decimals must be an integer 0..6"),
+        ("[format]\nblock_max = 5\n", "format': block_max (5) must be at least block_start"),
         ("[feeds]\nmax_linear = -1\n", "feeds.max_linear"),
         ("colour = 'red'\n", "colour"),
         ('[program]\nheader = ["G17 \u00e9"]\n', "program.header"),
