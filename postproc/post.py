@@ -415,6 +415,17 @@ def _assemble(moves: PostMoves, machine: Machine, w: np.ndarray) -> dict[str, np
     return {key: np.concatenate([c[key] for c in chunks]) for key in rows}
 
 
+def _on_increments(rows: dict[str, np.ndarray], machine: Machine) -> dict[str, np.ndarray]:
+    """The rows at the positions the control runs: program X Y Z (mm, rounded in the program's
+    units) and the rotary words and positions rounded to the machine's increments, so that the
+    feed words and the checks are those of the program as written."""
+    fmt = machine.format
+    scale = MM_PER_INCH if machine.units == "inch" else 1.0
+    linear, rotary = fmt.linear_decimals(machine.units), fmt.rotary_decimals
+    return {**rows, "xyz": np.round(rows["xyz"] / scale, linear) * scale,
+            "word": np.round(rows["word"], rotary), "turn": np.round(rows["turn"], rotary)}
+
+
 def _crossing(rows, branch, i: int, machine: Machine, moves: PostMoves) -> list[dict]:
     """Rows that replace the first part of cut ``i`` where an axis's word must change branch:
     cut to the range end, retract to safe Z, turn a full turn back, rapid down, feed in."""
@@ -642,7 +653,7 @@ def post(moves: PostMoves, machine: Machine, *, program_name: str = "PATHCHECK",
     if moves.units is not None and moves.units != machine.units:
         machine = machine.model_copy(update={"units": moves.units})
     w, choice = rotary_words(moves, machine)
-    assembled = _assemble(moves, machine, w)
+    assembled = _on_increments(_assemble(moves, machine, w), machine)
     rows = Rows(
         xyz=assembled["xyz"],
         word=assembled["word"],

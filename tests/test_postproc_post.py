@@ -27,6 +27,7 @@ from postproc.post import (
 from postproc.reader import read_gcode_text
 from postproc.replay import part_motions
 from postproc.writer import comment, write_program
+from tests.test_machines_kinds import increment_bounds
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -77,18 +78,6 @@ def variant(name: str, **update) -> Machine:
     return machine.with_options(rotary_axes=[axis], **update)
 
 
-def rounding_bounds(machine: Machine, tips: np.ndarray) -> tuple[float, float]:
-    """The largest round-trip error the control's increments allow: tip mm (each X Y Z word
-    within half a linear increment, and the tip turned by half a rotary increment at its
-    distance from the table axis) and tool axis degrees (half a rotary increment)."""
-    fmt = machine.format
-    linear = fmt.inch_increment * 25.4 if machine.units == "inch" else fmt.linear_increment
-    reach = np.linalg.norm(tips - np.asarray(machine.kinematics.table_center), axis=1).max()
-    half_turn = fmt.rotary_increment / 2
-    arccos = np.degrees(np.sqrt(4 * np.finfo(float).eps))  # what arccos resolves near 0
-    return np.sqrt(3) * linear / 2 + np.radians(half_turn) * reach + 1e-9, half_turn + arccos
-
-
 def round_trip(moves: PostMoves, machine: Machine):
     posted = post(moves, machine, program_name="RT")
     read = part_motions(read_gcode_text(posted.text, machine.dialect, units=machine.units), machine)
@@ -132,7 +121,7 @@ def test_round_trip_synthetic(name, update):
     posted, read, idx, src, tip_err, axis_err = round_trip(moves, machine)
     # every source move is written (none dropped) and comes back within the increments' bounds
     assert np.array_equal(np.unique(src), np.arange(len(moves)))
-    tip_bound, axis_bound = rounding_bounds(machine, moves.tip)
+    tip_bound, axis_bound = increment_bounds(machine, read, idx)
     assert tip_err.max() < tip_bound
     assert axis_err.max() < axis_bound
     # the feed read back is the programmed feed (tip speed relative to the part)
@@ -167,7 +156,7 @@ def test_round_trip_random_paths(seed, name, wrap, direction):
     moves = PostMoves.build(tip, b, rapid=rapid, feed=rng.uniform(50, 3000), tool=tool)
     _, read, idx, src, tip_err, axis_err = round_trip(moves, machine)
     assert np.array_equal(np.unique(src), np.arange(n))
-    tip_bound, axis_bound = rounding_bounds(machine, moves.tip)
+    tip_bound, axis_bound = increment_bounds(machine, read, idx)
     assert tip_err.max() < tip_bound and axis_err.max() < axis_bound
     assert np.all(read.known[idx])
 
@@ -196,9 +185,9 @@ def test_round_trip_sample_jobs(dialect_machine):
     machine = load_machine(dialect_machine)
     for job in jobs:
         moves = moves_from_toolpath(read_cl(job))
-        _, _, _, src, tip_err, axis_err = round_trip(moves, machine)
+        _, read, idx, src, tip_err, axis_err = round_trip(moves, machine)
         assert np.array_equal(np.unique(src), np.arange(len(moves))), job
-        tip_bound, axis_bound = rounding_bounds(machine, moves.tip)
+        tip_bound, axis_bound = increment_bounds(machine, read, idx)
         assert tip_err.max() < tip_bound, job
         assert axis_err.max() < axis_bound, job
 
