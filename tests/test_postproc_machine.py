@@ -143,3 +143,12 @@ def test_older_four_axis_form_reads_as_the_same_b_table(tmp_path):
     tip = np.c_[50 * np.sin(np.radians(b)), np.zeros(40), 50 * np.cos(np.radians(b))]
     moves = PostMoves.build(tip, b, feed=500.0, tool=1)
     assert post_program(moves, legacy) == post_program(moves, chain_form)
+
+
+def test_older_decimals_are_read_as_increments(tmp_path):
+    path = tmp_path / "old.toml"
+    path.write_text('name = "old"\n[format]\nlinear_decimals = 4\nrotary_decimals = 5\n')
+    fmt = load_machine(path).format
+    assert (fmt.linear_increment, fmt.inch_increment, fmt.rotary_increment) == (1e-4, 1e-4, 1e-5)
+    assert (fmt.linear_decimals("mm"), fmt.linear_decimals("inch"), fmt.rotary_decimals) == (
+        4, 4, 5)

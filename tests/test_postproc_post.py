@@ -443,3 +443,23 @@ def test_write_program_is_atomic(tmp_path, monkeypatch):
         write_program("NEW PROGRAM\n", target)
     assert target.read_text() == "OLD\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["job.nc"]
+
+
+def test_block_numbers_wrap_at_the_machines_maximum():
+    """fanuc-hmc numbers blocks N10, N20, ... up to N99990 (its block_max 99999), then again
+    from N10: a program of 10,500 moves read back has every move, and its N numbers rise by 10
+    and wrap once."""
+    n = 10_500
+    tip = np.c_[np.linspace(0.0, 100.0, n), np.zeros(n), np.full(n, 20.0)]
+    rapid = np.zeros(n, bool)
+    rapid[0] = True
+    machine = load_machine("fanuc-hmc")
+    assert (machine.format.block_max, machine.format.block_increment) == (99999, 10)
+    text = post_program(PostMoves.build(tip, 0.0, rapid=rapid, feed=500.0, tool=1), machine)
+    read = read_gcode_text(text, "fanuc")
+    assert np.isfinite(read.xyz[:, 0]).sum() >= n
+    numbers = np.array([int(v) for v in re.findall(r"^N(\d+) ", text, flags=re.M)])
+    wraps = np.flatnonzero(np.diff(numbers) != 10)
+    assert len(numbers) > 10_000 and wraps.tolist() == [9998]
+    assert numbers[9998] == 99990 and numbers[9999] == 10
+    assert numbers.max() <= 99999
