@@ -94,21 +94,18 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
                           on_findings=on_findings)
 
 
-def post_unchecked(apt_path, output, cutter=None, machine=None, config=None):
+def post_unchecked(apt_path, output, cutter=None, machine=None, config=None) -> Path:
     """Post a job without checking it (no part needed): the CL's own tool axes (the machine's
     inverse kinematics finds the rotary words, B on a 4-axis table), every operation's cutter
     (or `cutter`, a `Cutter` or "CUTTER/...") in the header, which says NOT CHECKED. Returns
     the path written."""
     from checker.apt import read_cl
-    from checker.cutter import Cutter, parse_cutter
     from postproc.post import post_toolpath
 
     cfg = _config(config)
     toolpath = read_cl(Path(apt_path), require_cutter=False)
-    cutters = None
-    if cutter is not None:
-        c = cutter if isinstance(cutter, Cutter) else parse_cutter(str(cutter))
-        cutters = dict.fromkeys(range(len(toolpath.operations)), c)
+    ops = np.arange(len(toolpath.operations))
+    cutters = None if cutter is None else _cutters(toolpath, ops, cutter, Path(apt_path))
     return post_toolpath(toolpath, output, machine=machine, cutters=cutters,
                          arc_chord_tol=cfg.check.arc_chord_tolerance)
 
