@@ -137,9 +137,9 @@ def moves_from_toolpath(
     out of the material) and ``cutter`` the tip is recomputed from the contact by
     ``cutter.tip_from_contact(cc, n, axis)`` at the new axis. ``comments`` (one per row, ''
     none) are written before the blocks (flags), ``stops (N,)`` bool an optional stop (M01)
-    after them. ``tip (N,3)`` (part frame, mm) replaces the
-    CL tips outright (the checker's recomputed tips at the chosen B). ``four_axis=False`` keeps
-    the CL axes as they are (5-axis jobs; the machine's inverse kinematics finds the words)."""
+    after them. ``tip (N,3)`` (part frame, mm) replaces the CL tips outright (the checker's
+    recomputed tips at the chosen B). ``four_axis=False`` keeps the CL axes as they are (5-axis
+    jobs; the machine's inverse kinematics finds the words)."""
     if arc_chord_tol is None:
         arc_chord_tol = default_config().check.arc_chord_tolerance
     arrays = toolpath.motion_arrays(arc_chord_tol)
