@@ -295,20 +295,16 @@ def flags(job, program: Program) -> list[str]:
     first), a finding along the move that reaches it (the first), no feasible B at it."""
     w = program.written
     at: dict[int, list[str]] = {}
-    pose_rows: set[int] = set()
-    for i in np.flatnonzero(vd.is_finding(w.pose_verdict)):
-        row = int(w.moves.row[i])
-        if row not in pose_rows:
-            pose_rows.add(row)
-            at.setdefault(row, []).append(f"{str(w.pose_verdict[i]).upper()} CL LINE "
-                                          f"{int(job.m.line[row])} DEPTH {w.poses.depth[i]:.4f}")
-    move_rows: set[int] = set()
-    for k in np.flatnonzero(vd.is_finding(w.move_verdict)):
-        row = int(w.moves.row[w.along.end[k]])
-        if row not in move_rows:
-            move_rows.add(row)
-            at.setdefault(row, []).append(f"{str(w.move_verdict[k]).upper()} ALONG THE MOVE "
-                                          f"DEPTH {w.along.depths.depth[k]:.4f}")
+    for rows, verdict, depth, where in (
+            (w.moves.row, w.pose_verdict, w.poses.depth, "CL LINE {line}"),
+            (w.moves.row[w.along.end], w.move_verdict, w.along.depths.depth, "ALONG THE MOVE")):
+        hit = np.flatnonzero(vd.is_finding(verdict))
+        _, first = np.unique(rows[hit], return_index=True)
+        for i in hit[first]:
+            row = int(rows[i])
+            at.setdefault(row, []).append(f"{str(verdict[i]).upper()} "
+                                          f"{where.format(line=int(job.m.line[row]))} "
+                                          f"DEPTH {depth[i]:.4f}")
     for row in infeasible_rows(program).tolist():
         at.setdefault(int(row), []).append("NO FEASIBLE B")
     out = [""] * len(job.m)
@@ -322,8 +318,8 @@ def post(job, program: Program, output, mach, cutters: dict, counts: dict[str, i
     """Write the program (`postproc.post.post_toolpath`) with its header (every cutter of
     ``cutters``, the verdict from ``counts``) and what is wrong before each offending move: a
     comment (``comment``), a comment and an optional stop M01 (``stop``); ``refuse`` writes
-    nothing when any count is non-zero (PostRefusedError). A multi-axis program cannot be posted for
-    a B-table machine."""
+    nothing when any count is non-zero (PostRefusedError). A multi-axis program cannot be
+    posted for a B-table machine."""
     from postproc.header import verdict_text
     from postproc.post import post_toolpath
 
