@@ -20,7 +20,7 @@ def main() -> None:
     job = Path(sys.argv[1]) if len(sys.argv) > 1 else JOB
     with tempfile.TemporaryDirectory() as tmp:
         t = time.perf_counter()
-        doc = check_job(job, output=Path(tmp) / "out.nc")
+        doc = check_job(job, output=Path(tmp) / "out.nc", on_findings="comment")
         wall = time.perf_counter() - t
     s, o = doc.summary, doc.orientation
     print(f"{job.name}: {s.cl_points} poses at CL records, {s.poses_checked} poses checked "

@@ -37,8 +37,9 @@ def _part_path(apt_path: Path, part_path) -> Path:
     found = find_part_beside(apt_path)
     if found is None:
         raise PathcheckError(
-            f"no part given and none beside the job: expected --part PATH or a file "
-            f"{apt_path.stem}{{{','.join(BESIDE_SUFFIXES)}}}", path=apt_path, code="part")
+            f"no part given and none beside the job: expected --part PATH, a file "
+            f"{apt_path.stem}{{{','.join(BESIDE_SUFFIXES)}}} (any case), or --no-check to "
+            "post without checking", path=apt_path, code="part")
     return found
 
 
@@ -78,14 +79,17 @@ def operation_class(axes: np.ndarray, j_tol: float) -> str:
 def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
               output=None, *, b_range: tuple[float, float] | None = None,
               reorient: bool = False, part_transform: str | None = None,
-              cutter_units: str | None = None) -> ResultsDocument:
+              cutter_units: str | None = None,
+              on_findings: str = "refuse") -> ResultsDocument:
     """Check a job: `apt_path` the CL file; `part_path` the part (default: the file beside the
     job with the same stem); `cutter` a `Cutter` or "CUTTER/..." overriding the file's; `config`
     a Config or a TOML path; `machine` a machine name or TOML file (default: the CL file's
     `PPRINT/MACHINE`, else fanuc-hmc); `output` the G-code to write; `b_range` (degrees) the B
     range searched for 4-axis operations; `reorient` plans B for 3-axis operations too;
     `part_transform` moves a part exported in another frame (`geometry.transform`);
-    `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's)."""
+    `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's);
+    `on_findings` what posting does when the program as written has findings or points
+    without a feasible B (`written.post`: refuse raises `written.PostRefusedError`)."""
     from checker.apt import read_cl
 
     t0 = time.perf_counter()
@@ -94,7 +98,26 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
     return check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=machine,
                           config=config, output=output, b_range=b_range, reorient=reorient,
                           part_transform=part_transform, started=t0,
-                          cutter_units=cutter_units)
+                          cutter_units=cutter_units, on_findings=on_findings)
+
+
+def post_unchecked(apt_path, output, cutter=None, machine=None, config=None,
+                   cutter_units: str | None = None) -> Path:
+    """Post a job without checking it (no part needed): the CL's own tool axes (the machine's
+    inverse kinematics finds the rotary words, B on a 4-axis table), every operation's cutter
+    (or `cutter`, a `Cutter` or "CUTTER/..." read in `cutter_units`, default the job's) in the
+    header, which says NOT CHECKED. Returns the path written."""
+    from checker.apt import read_cl
+    from postproc.post import post_toolpath
+
+    cfg = _config(config)
+    toolpath = read_cl(Path(apt_path), require_cutter=False)
+    ops = np.arange(len(toolpath.operations))
+    cutters = None if cutter is None else _cutters(toolpath, ops, cutter, Path(apt_path),
+                                                   cutter_units)
+    with step("post the G-code"):
+        return post_toolpath(toolpath, output, machine=machine, cutters=cutters,
+                             arc_chord_tol=cfg.check.arc_chord_tolerance)
 
 
 @dataclass
@@ -122,8 +145,8 @@ class _Job:
 def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=None,
                    output=None, *, b_range: tuple[float, float] | None = None,
                    reorient: bool = False, part_transform: str | None = None,
-                   started: float | None = None,
-                   cutter_units: str | None = None) -> ResultsDocument:
+                   started: float | None = None, cutter_units: str | None = None,
+                   on_findings: str = "refuse") -> ResultsDocument:
     """`check_job` on a tool path already in memory (read from a CL file, or from a G-code
     program by `pathcheck check-gcode`); `toolpath.path` names the job."""
     from checker import written
@@ -180,11 +203,14 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
     with step("advice at the cutting poses"):
         doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
     if output is not None:
+        counts = written.written_counts(doc.summary.counts, program)
         try:
             with step("post the G-code"):
-                doc.gcode = str(written.post(job, program, output, mach))
-        except PathcheckError as err:
+                doc.gcode = str(written.post(job, program, output, mach, cutters, counts,
+                                             on_findings))
+        except (PathcheckError, written.PostRefusedError) as err:
             err.document = doc  # the check ran: the caller may still record it (#18)
+            doc.summary.time_s = time.perf_counter() - t0
             raise
     doc.summary.time_s = time.perf_counter() - t0
     return doc

@@ -266,9 +266,67 @@ def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, 
     return Program(tip, axis, b, new, cam, handling, plans)
 
 
-def post(job, program: Program, output, mach):
-    """Write the program (`postproc.post.post_toolpath`), findings as comments; a multi-axis
-    program cannot be posted for a B-table machine."""
+ON_FINDINGS = ("refuse", "stop", "comment")
+
+
+class PostRefusedError(Exception):
+    """The program was not written (``--on-findings refuse``): ``counts`` the findings of the
+    program as written (`written_counts`), ``document`` the check that ran."""
+
+    def __init__(self, counts: dict[str, int], document=None) -> None:
+        self.counts = counts
+        self.document = document
+        super().__init__("the program has " + ", ".join(f"{k} {n}" for k, n in counts.items()
+                                                        if n))
+
+
+def infeasible_rows(program: Program) -> np.ndarray:
+    """Motion rows whose written B is a re-oriented operation's chosen B where no B is feasible
+    (the allowable cutter is smaller than the real one at every B)."""
+    rows = [p.rows[~np.asarray(p.orientations.chosen.feasible, bool)]
+            for o, p in program.plans.items() if program.handling[o] == "re-oriented"]
+    return np.concatenate(rows) if rows else np.zeros(0, dtype=int)
+
+
+def written_counts(counts, program: Program) -> dict[str, int]:
+    """What the program as written has against it: the document's finding counts (``counts``,
+    its poses and moves) and its points without a feasible B."""
+    out = {v: int(getattr(counts, v)) for v in vd.FINDINGS}
+    out["no feasible B"] = int(infeasible_rows(program).size)
+    return out
+
+
+def flags(job, program: Program) -> list[str]:
+    """Per motion row the comment written before it ('' none): a finding at its pose (the
+    first), a finding along the move that reaches it (the first), no feasible B at it."""
+    w = program.written
+    at: dict[int, list[str]] = {}
+    for rows, verdict, depth, where in (
+            (w.moves.row, w.pose_verdict, w.poses.depth, "CL LINE {line}"),
+            (w.moves.row[w.along.end], w.move_verdict, w.along.depths.depth, "ALONG THE MOVE")):
+        hit = np.flatnonzero(vd.is_finding(verdict))
+        _, first = np.unique(rows[hit], return_index=True)
+        for i in hit[first]:
+            row = int(rows[i])
+            at.setdefault(row, []).append(f"{str(verdict[i]).upper()} "
+                                          f"{where.format(line=int(job.m.line[row]))} "
+                                          f"DEPTH {depth[i]:.4f}")
+    for row in infeasible_rows(program).tolist():
+        at.setdefault(int(row), []).append("NO FEASIBLE B")
+    out = [""] * len(job.m)
+    for row, texts in at.items():
+        out[row] = "PATHCHECK " + "; ".join(texts)
+    return out
+
+
+def post(job, program: Program, output, mach, cutters: dict, counts: dict[str, int],
+         on_findings: str = "refuse"):
+    """Write the program (`postproc.post.post_toolpath`) with its header (every cutter of
+    ``cutters``, the verdict from ``counts``) and what is wrong before each offending move: a
+    comment (``comment``), a comment and an optional stop M01 (``stop``); ``refuse`` writes
+    nothing when any count is non-zero (PostRefusedError). A multi-axis program cannot be
+    posted for a B-table machine."""
+    from postproc.header import verdict_text
     from postproc.post import post_toolpath
 
     if np.isnan(program.b).any():
@@ -276,13 +334,13 @@ def post(job, program: Program, output, mach):
         raise PathcheckError("cannot post a multi-axis path for a 4-axis machine: expected tool "
                              "axes perpendicular to Y (j = 0)", path=job.apt_path, line=bad,
                              code="not-4-axis")
-    w = program.written
-    comments = [""] * len(job.m)
-    bad = np.flatnonzero(vd.is_finding(w.pose_verdict))
-    for i in bad[::-1]:
-        row = int(w.moves.row[i])
-        comments[row] = (f"PATHCHECK {str(w.pose_verdict[i]).upper()} CL LINE "
-                         f"{int(job.m.line[row])} DEPTH {w.poses.depth[i]:.4f}")
-    return post_toolpath(job.toolpath, output, machine=None if mach is None else mach.name,
-                         b_deg=program.b, comments=comments,
-                         arc_chord_tol=job.cfg.check.arc_chord_tolerance, tip=program.tip)
+    if on_findings not in ON_FINDINGS:
+        raise PathcheckError(f"on_findings '{on_findings}': expected one of "
+                             f"{', '.join(ON_FINDINGS)}", code="usage")
+    if on_findings == "refuse" and any(counts.values()):
+        raise PostRefusedError(counts)
+    comments = flags(job, program)
+    stops = np.array([bool(c) for c in comments]) if on_findings == "stop" else None
+    return post_toolpath(job.toolpath, output, machine=mach, b_deg=program.b, comments=comments,
+                         stops=stops, arc_chord_tol=job.cfg.check.arc_chord_tolerance,
+                         tip=program.tip, cutters=cutters, verdict=verdict_text(counts))

@@ -162,17 +162,68 @@ class Setup(_Model):
         return value
 
 
+_DECIMAL_INCREMENTS = {10.0**-k: k for k in range(7)}  # 1 ... 0.000001
+
+
 class Format(_Model):
-    """How numbers and blocks are written."""
+    """How numbers and blocks are written. The control's least input increments (its increment
+    system, e.g. Fanuc IS-B: 0.001 mm, 0.0001 in, 0.001 deg): ``linear_increment`` mm for
+    programs in mm, ``inch_increment`` in for programs in inches, ``rotary_increment`` deg;
+    powers of ten, every word is rounded to them. Block numbers run from ``block_start`` by
+    ``block_increment``; past ``block_max`` (the largest N the control takes) they start again
+    at ``block_increment``. The older ``linear_decimals`` / ``rotary_decimals`` (digits after
+    the point) are read as the increments they stand for."""
 
     block_numbers: bool = True
     block_start: int = Field(10, ge=0)
     block_increment: int = Field(10, ge=1)
-    linear_decimals: int = Field(4, ge=0, le=6)
-    rotary_decimals: int = Field(5, ge=0, le=6)
+    block_max: int = Field(99999, ge=1)
+    linear_increment: float = 0.001
+    inch_increment: float = 0.0001
+    rotary_increment: float = 0.001
     feed_decimals: int = Field(1, ge=0, le=6)
     inverse_time_digits: int = Field(6, ge=3, le=10)  # significant digits of G93 F words
     program_number: int = Field(1000, ge=1, le=99999999)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _decimals(cls, data: Any) -> Any:
+        if not isinstance(data, dict) or not {"linear_decimals", "rotary_decimals"} & set(data):
+            return data
+        data = dict(data)
+        for old, new in (("linear_decimals", ("linear_increment", "inch_increment")),
+                         ("rotary_decimals", ("rotary_increment",))):
+            if old in data:
+                digits = data.pop(old)
+                if not isinstance(digits, int) or not 0 <= digits <= 6:
+                    raise ValueError(f"{old} must be an integer 0..6, found {digits!r}")
+                data.update({key: 10.0**-digits for key in new})
+        return data
+
+    @field_validator("linear_increment", "inch_increment", "rotary_increment")
+    @classmethod
+    def _power_of_ten(cls, value: float) -> float:
+        for inc in _DECIMAL_INCREMENTS:
+            if abs(value - inc) <= 1e-9 * inc:
+                return inc
+        raise ValueError("expected a power of ten from 1 to 0.000001, e.g. 0.001")
+
+    @model_validator(mode="after")
+    def _numbers(self) -> Format:
+        if self.block_max < max(self.block_start, self.block_increment):
+            raise ValueError(f"block_max ({self.block_max}) must be at least block_start "
+                             f"({self.block_start}) and block_increment ({self.block_increment})")
+        return self
+
+    def linear_decimals(self, units: str) -> int:
+        """Digits after the point of X Y Z words in a program in ``units`` ('mm' or 'inch')."""
+        return _DECIMAL_INCREMENTS[self.inch_increment if units == "inch" else
+                                   self.linear_increment]
+
+    @property
+    def rotary_decimals(self) -> int:
+        """Digits after the point of rotary words."""
+        return _DECIMAL_INCREMENTS[self.rotary_increment]
 
 
 class Program(_Model):

@@ -19,6 +19,7 @@ import numpy as np
 from checker.config import default_config
 from checker.errors import PathcheckError
 from postproc.dialects import get_dialect
+from postproc.header import NOT_CHECKED, header_lines
 from postproc.kinematics import (
     PATH_SUBSTEPS,
     Chain,
@@ -41,7 +42,8 @@ class PostMoves:
     (0 off, 7 mist, 8 flood, -1 unknown), ``tool (N,)`` in effect (0 unknown), ``comment`` one
     text per move ('' none; flagged points), ``line (N,)`` source line of each move, ``source``
     the CL file (named in errors), ``units`` the job's units ('mm' or 'inch'): the program is
-    written in them (None: the machine's)."""
+    written in them (None: the machine's), ``stop (N,)`` an optional stop (M01) after the move's
+    comment (None: none)."""
 
     tip: np.ndarray
     axis: np.ndarray
@@ -55,6 +57,7 @@ class PostMoves:
     line: np.ndarray
     source: str | None = None
     units: str | None = None
+    stop: np.ndarray | None = None
 
     @classmethod
     def build(
@@ -72,6 +75,7 @@ class PostMoves:
         line: np.ndarray | None = None,
         source: str | None = None,
         units: str | None = None,
+        stop: np.ndarray | None = None,
     ) -> PostMoves:
         """Moves from tips ``(N,3)`` and either B ``(N,)`` degrees (the axis follows from B) or
         part-frame tool ``axis (N,3)`` (any direction: 5-axis); scalars broadcast, missing fields
@@ -104,6 +108,7 @@ class PostMoves:
             line=full(line, 0, int) if line is not None else np.arange(1, n + 1),
             source=source,
             units=units,
+            stop=None if stop is None else full(stop, False, bool),
         )
 
     def __len__(self) -> int:
@@ -121,6 +126,7 @@ def moves_from_toolpath(
     comments: list[str] | None = None,
     tip=None,
     four_axis: bool = True,
+    stops: np.ndarray | None = None,
 ) -> PostMoves:
     """PostMoves from a `checker.toolpath.ToolPath`: the rows of
     ``toolpath.motion_arrays(arc_chord_tol)`` (arcs cut into chords of that sagitta, mm; None:
@@ -130,9 +136,10 @@ def moves_from_toolpath(
     b)``, else B follows from the CL axis; with ``cc (N,3)``, ``normals (N,3)`` (part frame,
     out of the material) and ``cutter`` the tip is recomputed from the contact by
     ``cutter.tip_from_contact(cc, n, axis)`` at the new axis. ``comments`` (one per row, ''
-    none) are written before the blocks (flags). ``tip (N,3)`` (part frame, mm) replaces the
-    CL tips outright (the checker's recomputed tips at the chosen B). ``four_axis=False`` keeps
-    the CL axes as they are (5-axis jobs; the machine's inverse kinematics finds the words)."""
+    none) are written before the blocks (flags), ``stops (N,)`` bool an optional stop (M01)
+    after them. ``tip (N,3)`` (part frame, mm) replaces the CL tips outright (the checker's
+    recomputed tips at the chosen B). ``four_axis=False`` keeps the CL axes as they are (5-axis
+    jobs; the machine's inverse kinematics finds the words)."""
     if arc_chord_tol is None:
         arc_chord_tol = default_config().check.arc_chord_tolerance
     arrays = toolpath.motion_arrays(arc_chord_tol)
@@ -169,12 +176,16 @@ def moves_from_toolpath(
         line=lines,
         source=str(toolpath.path),
         units=toolpath.units,
+        stop=stops,
     )
 
 
-def machine_for_toolpath(toolpath, name: str | None = None) -> Machine:
-    """The machine to post ``toolpath`` for: ``name`` (a machine name or .toml file) when given,
-    else the CL file's ``PPRINT/MACHINE NAME``, else the default machine (fanuc-hmc)."""
+def machine_for_toolpath(toolpath, name: str | Machine | None = None) -> Machine:
+    """The machine to post ``toolpath`` for: ``name`` (a Machine, a machine name or .toml file)
+    when given, else the CL file's ``PPRINT/MACHINE NAME``, else the default machine
+    (fanuc-hmc)."""
+    if isinstance(name, Machine):
+        return name
     if name is None:
         for record in toolpath.records:
             words = (record.text or "").split() if record.word == "PPRINT" else []
@@ -204,6 +215,10 @@ def _validate(moves: PostMoves, machine: Machine) -> None:
             raise PathcheckError(
                 f"PostMoves.{name} has {len(getattr(moves, name))} rows, expected {n}", code="post"
             )
+    if moves.stop is not None and len(moves.stop) != n:
+        raise PathcheckError(
+            f"PostMoves.stop has {len(moves.stop)} rows, expected {n}", code="post"
+        )
     if len(moves.comment) != n:
         raise PathcheckError(
             f"PostMoves.comment has {len(moves.comment)} rows, expected {n}", code="post"
@@ -400,6 +415,17 @@ def _assemble(moves: PostMoves, machine: Machine, w: np.ndarray) -> dict[str, np
     return {key: np.concatenate([c[key] for c in chunks]) for key in rows}
 
 
+def _on_increments(rows: dict[str, np.ndarray], machine: Machine) -> dict[str, np.ndarray]:
+    """The rows at the positions the control runs: program X Y Z (mm, rounded in the program's
+    units) and the rotary words and positions rounded to the machine's increments, so that the
+    feed words and the checks are those of the program as written."""
+    fmt = machine.format
+    scale = MM_PER_INCH if machine.units == "inch" else 1.0
+    linear, rotary = fmt.linear_decimals(machine.units), fmt.rotary_decimals
+    return {**rows, "xyz": np.round(rows["xyz"] / scale, linear) * scale,
+            "word": np.round(rows["word"], rotary), "turn": np.round(rows["turn"], rotary)}
+
+
 def _crossing(rows, branch, i: int, machine: Machine, moves: PostMoves) -> list[dict]:
     """Rows that replace the first part of cut ``i`` where an axis's word must change branch:
     cut to the range end, retract to safe Z, turn a full turn back, rapid down, feed in."""
@@ -526,6 +552,7 @@ def _pre_blocks(
         toolchange | np.concatenate([[True], moves.coolant[1:] != moves.coolant[:-1]])
     )
     has_comment = np.array([bool(c.strip()) for c in moves.comment])
+    stop = np.zeros(n, bool) if moves.stop is None else moves.stop
     big = np.zeros(n, bool)
     big[_big_turns(moves, machine, w)] = True
     notes: dict[int, list[str]] = {}
@@ -536,7 +563,7 @@ def _pre_blocks(
     tcp = machine.tcp.enabled
     separate_tcp = tcp and "{tool" not in dialect.tcp_on_block
     pre: dict[int, list[str]] = {}
-    events = np.flatnonzero(has_comment | big | toolchange | spindle_change | coolant_change
+    events = np.flatnonzero(has_comment | stop | big | toolchange | spindle_change | coolant_change
                             | noted | starts)
     row_of = dict(zip(src_ids.tolist(), first_row.tolist(), strict=True))
     names = [a.name for a in machine.rotary_axes]
@@ -544,6 +571,8 @@ def _pre_blocks(
         blocks = []
         if has_comment[k]:
             blocks.append(dialect.comment(moves.comment[k]))
+        if stop[k]:
+            blocks.append(code("M", 1))
         for text in notes.get(k, ()):
             blocks.append(dialect.comment(f"PATHCHECK KINEMATICS {text}"))
         if big[k]:
@@ -602,14 +631,29 @@ def _check_travel(rows: Rows, text: str, machine: Machine, moves: PostMoves) -> 
     )
 
 
-def post(moves: PostMoves, machine: Machine, *, program_name: str = "PATHCHECK") -> PostedProgram:
+def tool_lines(toolpath, cutters: dict[int, object] | None = None) -> list[str]:
+    """One header line per tool of ``toolpath`` in program order, e.g. ``3 CUTTER/12,6,...``:
+    every operation's cutter (``cutters`` by operation index where given, else the CL's), each
+    tool number and cutter once."""
+    out: list[str] = []
+    for o, op in enumerate(toolpath.operations):
+        cutter = (cutters or {}).get(o, op.cutter)
+        text = f"{op.tool_number or 0} " + ("-" if cutter is None else cutter.to_apt())
+        if text not in out:
+            out.append(text)
+    return out
+
+
+def post(moves: PostMoves, machine: Machine, *, program_name: str = "PATHCHECK",
+         tools: list[str] | None = None, verdict: str = NOT_CHECKED) -> PostedProgram:
     """Post ``moves`` for ``machine`` in the job's units: the program text, the row table and
-    the rotary solution chosen (see PostedProgram)."""
+    the rotary solution chosen (see PostedProgram). The header names ``tools`` (default: the
+    moves' tool numbers) and the ``verdict`` (`postproc.header.verdict_text`)."""
     _validate(moves, machine)
     if moves.units is not None and moves.units != machine.units:
         machine = machine.model_copy(update={"units": moves.units})
     w, choice = rotary_words(moves, machine)
-    assembled = _assemble(moves, machine, w)
+    assembled = _on_increments(_assemble(moves, machine, w), machine)
     rows = Rows(
         xyz=assembled["xyz"],
         word=assembled["word"],
@@ -623,38 +667,48 @@ def post(moves: PostMoves, machine: Machine, *, program_name: str = "PATHCHECK")
         tool=moves.tool[assembled["src"]],
     )
     pre = _pre_blocks(assembled, moves, machine, w, choice)
-    text = format_program(rows, machine, get_dialect(machine.dialect), pre, program_name)
+    if tools is None:
+        tools = [str(t) for t in dict.fromkeys(moves.tool.tolist())]
+    header = header_lines(source=moves.source, machine=machine.name, tools=tools, verdict=verdict)
+    text = format_program(rows, machine, get_dialect(machine.dialect), pre, program_name, header)
     _check_travel(rows, text, machine, moves)
     return PostedProgram(text=text, rows=rows, choice=choice,
                          notes=[t for _, t in choice.notes])
 
 
-def post_program(moves: PostMoves, machine: Machine, *, program_name: str = "PATHCHECK") -> str:
+def post_program(moves: PostMoves, machine: Machine, *, program_name: str = "PATHCHECK",
+                 tools: list[str] | None = None, verdict: str = NOT_CHECKED) -> str:
     """G-code text for ``moves`` on ``machine`` (see `post`)."""
-    return post(moves, machine, program_name=program_name).text
+    return post(moves, machine, program_name=program_name, tools=tools, verdict=verdict).text
 
 
 def post_toolpath(
     toolpath,
     out: str | Path,
     *,
-    machine: str | None = None,
+    machine: str | Machine | None = None,
     b_deg=None,
     cc=None,
     normals=None,
     cutter=None,
     comments: list[str] | None = None,
+    stops: np.ndarray | None = None,
     arc_chord_tol: float | None = None,
     tip=None,
+    cutters: dict[int, object] | None = None,
+    verdict: str = NOT_CHECKED,
 ) -> Path:
     """The job's corrected G-code in one call (what `pathcheck JOB.apt -o JOB.nc [--machine
     NAME]` needs): the machine by `machine_for_toolpath`, the moves by `moves_from_toolpath`
-    (same arguments), posted and written atomically to ``out``; returns the path written."""
+    (same arguments), posted with a header naming every tool (`tool_lines`, ``cutters`` the
+    real cutter per operation index) and the ``verdict``, and written atomically to ``out``;
+    returns the path written."""
     mach = machine_for_toolpath(toolpath, machine)
     moves = moves_from_toolpath(
         toolpath, b_deg, cc, normals, cutter, arc_chord_tol=arc_chord_tol, comments=comments,
-        tip=tip, four_axis=b_deg is not None,
+        tip=tip, four_axis=b_deg is not None, stops=stops,
     )
     name = Path(str(toolpath.path)).stem.upper() or "PATHCHECK"
-    text = post_program(moves, mach, program_name=name)
+    text = post_program(moves, mach, program_name=name, tools=tool_lines(toolpath, cutters),
+                        verdict=verdict)
     return write_program(text, out)

@@ -5,6 +5,7 @@ write (`checker.atomic`) so a failed run never leaves half a program."""
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -84,19 +85,22 @@ def format_program(
     dialect: Dialect,
     pre: dict[int, list[str]],
     program_name: str,
+    header: Sequence[str] = (),
 ) -> str:
-    """Program text for ``rows``; ``pre[i]`` are blocks written before row ``i`` (comments start
-    with '('). Fills ``rows.line``."""
+    """Program text for ``rows``; ``header`` lines are written as comments right after the
+    program start, ``pre[i]`` are blocks written before row ``i`` (comments start with '(' or
+    ';'). Block numbers wrap at the machine's ``block_max``. Fills ``rows.line``."""
     fmt = machine.format
     scale = 1.0 / MM_PER_INCH if machine.units == "inch" else 1.0
     code = dialect.format_code
     m = len(rows.word)
     force = rows.force.astype(bool)
     words = {}
+    linear = fmt.linear_decimals(machine.units)
     for j, letter in enumerate("XYZ"):
-        vals = np.round(rows.xyz[:, j] * scale, fmt.linear_decimals) + 0.0  # no "-0.0"
+        vals = np.round(rows.xyz[:, j] * scale, linear) + 0.0  # no "-0.0"
         valid = np.isfinite(vals)
-        texts = format_number(np.where(valid, vals, 0.0), fmt.linear_decimals)
+        texts = format_number(np.where(valid, vals, 0.0), linear)
         words[letter] = (texts, _changed(texts, valid, force))
     for j, axis in sorted(enumerate(machine.rotary_axes), key=lambda t: t[1].name):
         signed = axis.wrap == "signed"
@@ -123,6 +127,7 @@ def format_program(
 
     name = dialect.comment(program_name)[1:].strip(" )")
     lines: list[str] = list(dialect.program_start(name, machine.units, fmt.program_number))
+    lines += [dialect.comment(text) for text in header]
     header = machine.program.header
     blocks: list[str] = list(dialect.header if header is None else header)
     blocks.append(dialect.units_code(machine.units))
@@ -142,6 +147,8 @@ def format_program(
         else:
             lines.append(f"N{number} {text}{end}")
             number += fmt.block_increment
+            if number > fmt.block_max:
+                number = fmt.block_increment
 
     for text in blocks:
         emit(text)

@@ -96,7 +96,7 @@ def test_cli_outputs_have_the_umask_permissions(repo, tmp_path):
     nc, js = tmp_path / "small.nc", tmp_path / "small.json"
     run = subprocess.run(
         [sys.executable, "-m", "checker.cli", str(repo / "samples/compressor/compressor_small.apt"),
-         "-o", str(nc), "--json", str(js)],
+         "-o", str(nc), "--json", str(js), "--on-findings", "comment"],
         capture_output=True, text=True, timeout=600, preexec_fn=lambda: os.umask(0o027),
         env=dict(os.environ, PATHCHECK_STORE=str(tmp_path / "results.sqlite")))
     assert run.returncode in (0, 1), run.stderr

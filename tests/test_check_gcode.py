@@ -67,7 +67,8 @@ def test_five_axis_machine_program_reads_back_to_the_cl_motion(repo, tmp_path, m
     from scipy.spatial import cKDTree
 
     cut = ~np.asarray(cl.rapid)
-    # each CL cutting point is a program point (the program adds approach and retract points)
+    # each CL cutting point is a program point (the program adds approach and retract points),
+    # to the rounding of the X Y Z words (the axis is +Z throughout: the rotary words are exact)
     dist, _ = cKDTree(back.tip).query(cl.tip[cut])
-    assert dist.max() < 1e-4
+    assert dist.max() <= np.sqrt(3) * m.format.linear_increment / 2 + 1e-9
     assert np.abs(back.axis - [0.0, 0.0, 1.0]).max() < 1e-9

@@ -23,7 +23,8 @@ RS274 = shutil.which("rs274")
 pytestmark = pytest.mark.skipif(
     RS274 is None, reason="LinuxCNC's rs274 is not installed (tools/test-setup.sh installs "
     "Debian's linuxcnc-uspace where it can)")
-REAL = Path(__file__).resolve().parents[2] / "shared" / "realdata" / "linuxcnc-5axis-gcode"
+REPO = Path(__file__).resolve().parents[1]
+REAL = REPO.parent / "shared" / "realdata" / "linuxcnc-5axis-gcode"
 _MOVE = re.compile(r"(STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED)\(([^)]*)\)")
 
 
@@ -65,13 +66,14 @@ def run_rs274(interp, program: Path) -> tuple[np.ndarray, np.ndarray]:
     return np.array(out).reshape(-1, 6), np.array(m6, dtype=bool)
 
 
-def _compare(run: tuple[np.ndarray, np.ndarray], text: str) -> tuple[int, float]:
-    """Our reader's motion rows against rs274's moves in order: every row of ours pairs with the
-    next canonical move at the same position (1e-3; our unknown coordinates after G53 match any);
-    rs274 may add moves of its own only before a tool change (M6 moving the quill up) or at the
-    start. Returns the rows compared and the largest difference."""
+def _compare(run: tuple[np.ndarray, np.ndarray], text: str,
+             dialect: str = "linuxcnc") -> tuple[int, float]:
+    """Our reader's motion rows (in ``dialect``) against rs274's moves in order: every row of
+    ours pairs with the next canonical move at the same position (1e-3; our unknown coordinates
+    after G53 match any); rs274 may add moves of its own only before a tool change (M6 moving
+    the quill up) or at the start. Returns the rows compared and the largest difference."""
     canon, m6 = run
-    ours = read_gcode_text(text, "linuxcnc")
+    ours = read_gcode_text(text, dialect)
     mine = np.c_[ours.xyz, ours.abc]
     j, skipped, errs = 0, [], []
     for i in range(len(mine)):  # a walk over two short sequences, test code only
@@ -107,6 +109,31 @@ def test_rs274_accepts_our_linuxcnc_posts(interp, tmp_path, name, tcp, capsys):
               f"{rows} compared, max |ours - rs274| {err:.1e}")
     assert rows > len(moves) // 2
     assert err < 1e-4  # rs274 prints 4 decimals
+
+
+def test_rs274_reads_the_fanuc_post_of_the_compressor_as_we_do(interp, tmp_path, capsys):
+    """The compressor sample posted for fanuc-hmc (Fanuc dialect, header block included):
+    rs274 and our Fanuc reader read the same moves; without the header rs274 reads the very
+    same canonical moves (the header is comments only)."""
+    from checker.apt import read_cl
+    from postproc.post import post_toolpath
+
+    toolpath = read_cl(REPO / "samples" / "compressor" / "compressor.apt")
+    program = post_toolpath(toolpath, tmp_path / "compressor.nc", machine="fanuc-hmc")
+    text = program.read_text()
+    lines = text.splitlines()
+    header = lines[2:lines.index("(PATHCHECK VERDICT NOT CHECKED)") + 1]
+    assert header[0].startswith("(PATHCHECK ") and header[3].startswith("(TOOL 1 CUTTER/6.0")
+    run = run_rs274(interp, program)
+    rows, err = _compare(run, text, "fanuc")
+    bare = tmp_path / "bare.nc"
+    bare.write_text("\n".join(line for line in lines if line not in header) + "\n")
+    assert np.array_equal(run_rs274(interp, bare)[0], run[0])
+    with capsys.disabled():
+        print(f"\nrs274 on the Fanuc post of compressor.apt: {len(run[0])} moves, {rows} "
+              f"compared, max |ours - rs274| {err:.1e}")
+    assert rows > len(toolpath.motion_arrays().tip) * 0.99
+    assert err <= 5e-5  # rs274 prints 4 decimals, the program has 3
 
 
 @pytest.mark.parametrize("program", ["boat-xyzac.ngc", "boat-xyzbc.ngc", "impeller-7bl-xyzac.ngc"])

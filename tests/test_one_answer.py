@@ -16,6 +16,7 @@ from checker.service.ops import WorkerState
 from checker.service.recorder import NullRecorder
 from checker.service.worker import handle
 from checker.store import ResultsStore
+from postproc.header import read_verdict
 
 SMALL_D12 = "samples/compressor/compressor_small_d12.apt"
 
@@ -34,11 +35,11 @@ def _clean_job(tmp_path):
     return tmp_path / "floor.apt"
 
 
-def _run(repo, tmp_path, job, store):
+def _run(repo, tmp_path, job, store, *args: str):
     env = dict(os.environ, PATHCHECK_STORE=str(store))
     run = subprocess.run(
         [sys.executable, "-m", "checker.cli", str(job), "-o", str(tmp_path / "job.nc"), "--json",
-         str(tmp_path / "job.json")], capture_output=True, text=True, cwd=repo, env=env,
+         str(tmp_path / "job.json"), *args], capture_output=True, text=True, cwd=repo, env=env,
         timeout=600)
     report = subprocess.run([sys.executable, "-m", "checker.cli", "report", "--out",
                              str(tmp_path / "report.html")], capture_output=True, text=True,
@@ -58,7 +59,7 @@ def _service_status(job, part=None) -> str:
 
 def test_findings_are_findings_everywhere(repo, tmp_path):
     store = tmp_path / "results.sqlite"
-    run, doc = _run(repo, tmp_path, repo / SMALL_D12, store)
+    run, doc = _run(repo, tmp_path, repo / SMALL_D12, store, "--on-findings", "comment")
     assert run.returncode == 1, run.stderr
     assert "FINDINGS:" in run.stdout
     assert doc["summary"]["status"] == "findings"
@@ -67,6 +68,7 @@ def test_findings_are_findings_everywhere(repo, tmp_path):
     assert all(f["b"] is not None for f in doc["summary"]["worst"])
     gcode = (tmp_path / "job.nc").read_text()
     assert "PATHCHECK GOUGE" in gcode or "PATHCHECK INTERFERENCE" in gcode
+    assert read_verdict(gcode) == "FINDINGS"  # the program's own header says so too
     with ResultsStore(store) as s:
         (row,) = s.jobs()
     assert row.status == "findings"
@@ -82,6 +84,7 @@ def test_clean_is_clean_everywhere(repo, tmp_path):
     assert run.returncode == 0, run.stdout + run.stderr
     assert "clean:" in run.stdout and doc["summary"]["status"] == "ok"
     assert "PATHCHECK" not in (tmp_path / "job.nc").read_text().replace("(PATHCHECK", "")
+    assert read_verdict((tmp_path / "job.nc").read_text()) == "CLEAN"
     with ResultsStore(store) as s:
         (row,) = s.jobs()
     assert row.status == "ok"

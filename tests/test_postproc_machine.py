@@ -32,7 +32,10 @@ def test_shipped_machines_load():
         ('[[rotary_axes]]\nname = "A"\non = "spindle"\ndirection = [1, 0, 0]\n',
          "rotary_axes.0.on"),
         ("[setup]\nrotation = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]\n", "setup.rotation"),
-        ("[format]\nlinear_decimals = 12\n", "format.linear_decimals"),
+        ("[format]\nlinear_increment = 0.005\n", "format.linear_increment': expected a power "
+         "of ten from 1 to 0.000001"),
+        ("[format]\nlinear_decimals = 12\n", "format': linear_decimals must be an integer 0..6"),
+        ("[format]\nblock_max = 5\n", "format': block_max (5) must be at least block_start"),
         ("[feeds]\nmax_linear = -1\n", "feeds.max_linear"),
         ("colour = 'red'\n", "colour"),
         ('[program]\nheader = ["G17 \u00e9"]\n', "program.header"),
@@ -140,3 +143,12 @@ def test_older_four_axis_form_reads_as_the_same_b_table(tmp_path):
     tip = np.c_[50 * np.sin(np.radians(b)), np.zeros(40), 50 * np.cos(np.radians(b))]
     moves = PostMoves.build(tip, b, feed=500.0, tool=1)
     assert post_program(moves, legacy) == post_program(moves, chain_form)
+
+
+def test_older_decimals_are_read_as_increments(tmp_path):
+    path = tmp_path / "old.toml"
+    path.write_text('name = "old"\n[format]\nlinear_decimals = 4\nrotary_decimals = 5\n')
+    fmt = load_machine(path).format
+    assert (fmt.linear_increment, fmt.inch_increment, fmt.rotary_increment) == (1e-4, 1e-4, 1e-5)
+    assert (fmt.linear_decimals("mm"), fmt.linear_decimals("inch"), fmt.rotary_decimals) == (
+        4, 4, 5)

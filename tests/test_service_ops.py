@@ -261,11 +261,23 @@ def test_post_hook_writes_the_gcode_the_service_returns(served, tiny_job, tmp_pa
     spec.loader.exec_module(hook)
     job, part = tiny_job, SMALL.with_suffix(".json")
     out = tmp_path / "tiny.nc"
-    code = hook.main([str(job), "--part", str(part), "-o", str(out), "--address", served])
+    code = hook.main([str(job), "--part", str(part), "-o", str(out), "--address", served,
+                      "--on-findings", "comment"])
     printed = capsys.readouterr()
     assert code in (0, 1), printed.err
-    findings = [int(n) for n in re.findall(r"(\d+) (?:gouge|interference|holder)", printed.out)]
-    assert code == (1 if sum(findings) else 0)
+    # the exit code is the verdict the written program states, and that is its findings
+    (verdict,) = re.findall(r"^\(PATHCHECK VERDICT ([A-Z]+)", out.read_text(), flags=re.M)
+    findings = [int(n) for n in re.findall(r"(\d+) (?:gouge|interference|holder|crash)",
+                                           printed.out)]
+    assert (verdict, code) == (("FINDINGS", 1) if sum(findings) else ("CLEAN", 0))
+    refused = tmp_path / "refused.nc"
+    code = hook.main([str(job), "--part", str(part), "-o", str(refused), "--address", served])
+    printed = capsys.readouterr()
+    if verdict == "FINDINGS":  # the default refuses it: nothing written, exit 1, why on stderr
+        assert code == 1 and not refused.exists(), printed.err
+        assert "G-code not written: the program has" in printed.err
+    else:
+        assert code == 0 and refused.is_file()
     blocks = [Line(text) for text in out.read_text().splitlines() if text.strip("% ")]
     assert any("B" in {w.letter for w in line.block.words} for line in blocks)
     assert "(TINY)" in out.read_text()  # the hook sends the job's name

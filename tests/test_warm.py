@@ -25,7 +25,7 @@ _NO_COMPILE = textwrap.dedent("""
 
     event.register("numba:compile", Compiles())
     from checker.job import check_job
-    check_job(sys.argv[1], output=sys.argv[2])
+    check_job(sys.argv[1], output=sys.argv[2], on_findings="stop")
     print("compiled:", " ".join(compiled))
 """)
 

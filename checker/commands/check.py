@@ -133,8 +133,18 @@ def record(doc, store_path: Path | None = None) -> None:
                    "then an offset (mm), or a 3x4 matrix row by row")
 @opt.store_option()
 @click.option("--no-store", is_flag=True, help="do not record this check in the results store")
+@click.option("--on-findings", type=click.Choice(["refuse", "stop", "comment"]),
+              default="refuse", show_default=True,
+              help="posting (-o) when the program as written has gouges, interference, holder "
+                   "hits, crashes or points without a feasible B: refuse (write nothing, exit "
+                   "1), stop (a comment and an optional stop M01 before each offending move) or "
+                   "comment (a comment before each)")
+@click.option("--no-check", is_flag=True,
+              help="post -o without checking (no part read); the program's header says NOT "
+                   "CHECKED")
 def check(job, part_path, cutter_text, units, tool_name, tool_library, config_path, json_out,
-          output, machine, b_range, reorient, part_transform, store_path, no_store) -> None:
+          output, machine, b_range, reorient, part_transform, store_path, no_store, on_findings,
+          no_check) -> None:
     """Check JOB (APT-CL or NX CLSF) against its part: allowable cutter, verdict and margin at
     every CC point.
 
@@ -157,17 +167,47 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
             check_writable(target, what)
             make_parent(target, what)
     cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
+    if no_check:
+        post_without_check(job, output, cutter, machine, config_path, part_path, json_out, units)
+        return
+    from checker.written import PostRefusedError
+
     store = None if no_store else opt.store_of(store_path, config_path)
     try:
         doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
                         output=output, machine=machine, b_range=parse_b_range(b_range),
-                        reorient=reorient, part_transform=part_transform, cutter_units=units)
+                        reorient=reorient, part_transform=part_transform, cutter_units=units,
+                        on_findings=on_findings)
+    except PostRefusedError as refused:
+        try:
+            finish(refused.document, json_out, store=not no_store, store_path=store)
+        finally:
+            click.echo(f"pathcheck: {output}: not written: {refused}; give --on-findings "
+                       "stop (an optional stop M01 before each) or comment to write it", err=True)
+        sys.exit(1)
     except PathcheckError as err:
         checked = getattr(err, "document", None)  # the check ran, its program was not written
         if checked is not None and not no_store:
             record(checked, store)
         raise
     finish(doc, json_out, store=not no_store, store_path=store)
+
+
+def post_without_check(job: Path, output: Path | None, cutter, machine: str | None,
+                       config_path: Path | None, part_path: Path | None,
+                       json_out: Path | None, units: str | None) -> None:
+    """`--no-check`: post JOB to -o without reading a part; nothing is recorded."""
+    from checker.errors import PathcheckError
+    from checker.job import post_unchecked
+
+    for given, name in ((output is None, "expected -o FILE"),
+                        (part_path is not None, "no part is read: remove --part"),
+                        (json_out is not None, "there are no results: remove --json")):
+        if given:
+            raise PathcheckError(f"--no-check posts without checking: {name}", code="usage")
+    path = post_unchecked(job, output, cutter=cutter, machine=machine, config=config_path,
+                          cutter_units=units)
+    click.echo(f"G-code written: {path} (NOT CHECKED: no part was read)")
 
 
 def finish(doc, json_out: Path | None, *, store: bool, store_path: Path | None = None) -> None:

@@ -30,17 +30,24 @@ __all__ = ["BESIDE_SUFFIXES", "find_part_beside", "load_part", "reader_limits"]
 
 
 def find_part_beside(job_path: str | Path) -> Path | None:
-    """The part file beside a job with the same stem (first of BESIDE_SUFFIXES, in any case:
-    SolidWorks writes `JOB.STL`), or None."""
+    """The part file beside a job with the same stem, whatever the case of stem and suffix
+    (SolidWorks writes `JOB.STL`, others `Job.Step`): the first of BESIDE_SUFFIXES found, or
+    None. Two files of that suffix differing only in case (`job.stl`, `JOB.STL`) are an error
+    naming both."""
     job = Path(job_path)
     try:
-        beside = {p.name.lower(): p for p in job.parent.iterdir() if p.is_file()}
+        files = [p for p in job.parent.iterdir() if p.is_file()]
     except OSError:
         return None
     for suffix in BESIDE_SUFFIXES:
-        cand = beside.get((job.stem + suffix).lower())
-        if cand is not None:
-            return cand
+        name = (job.stem + suffix).lower()
+        found = sorted(p for p in files if p.name.lower() == name)
+        if len(found) > 1:
+            raise PathcheckError(
+                f"more than one part beside the job ({', '.join(p.name for p in found)}): "
+                "expected one, or --part PATH", path=job, code="part")
+        if found:
+            return found[0]
     return None
 
 

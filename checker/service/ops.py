@@ -97,7 +97,8 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
 
 
 def check(req: p.CheckRequest, state: WorkerState) -> dict:
-    """Check a job with `checker.job.check_toolpath`; `post` also returns the G-code text.
+    """Check a job with `checker.job.check_toolpath`; `post` also returns the G-code text, or
+    `refused` (the reason) where `on_findings` refuses the program as written.
     Inline CL text is named `NAME.apt` (`<apt>` without a name) in errors and in the document.
     Every file is read through the roots: the CL file, the part (given or beside the CL file)
     and a machine file (`machine`, else the CL file's `PPRINT/MACHINE`)."""
@@ -107,6 +108,7 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
     config = _with_options(state.config, req.options)
     read_cl = _library("checker.apt", "read_cl", "check")
     check_toolpath = _library("checker.job", "check_toolpath", "check")
+    refused_error = _library("checker.written", "PostRefusedError", "check")
     with tempfile.TemporaryDirectory(prefix="pathcheck-service-") as tmp:
         label = f"{req.name}.apt" if req.name else INLINE_APT
         apt_path = given_apt or Path(tmp) / f"{req.name or 'job'}.apt"
@@ -115,6 +117,7 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
         if part_path is None and req.part is not None:
             part_path = _part_file(req.part, Path(tmp))
         gcode_path = Path(tmp) / "job.nc" if req.post else None
+        refused = None
         try:
             t0 = time.perf_counter()
             toolpath = read_cl(apt_path, require_cutter=req.cutter is None)
@@ -124,7 +127,10 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
             doc = check_toolpath(toolpath, part_path=part_path, cutter=req.cutter,
                                  machine=machine, config=config, output=gcode_path,
                                  b_range=req.b_range, reorient=req.reorient,
-                                 part_transform=req.part_transform, started=t0)
+                                 part_transform=req.part_transform, started=t0,
+                                 on_findings=req.on_findings)
+        except refused_error as err:
+            doc, refused = err.document, f"G-code not written: {err} (on_findings=refuse)"
         except PathcheckError as err:
             if req.apt is None or err.path != str(apt_path):
                 raise files.shown(err) from None
@@ -132,7 +138,9 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
         doc.job.path = label if req.apt is not None else req.apt_path
         state.last_document, state.last_job_path = doc, doc.job.path
         out: dict[str, Any] = {"results": doc.model_dump(mode="json")}
-        if gcode_path is not None:
+        if refused is not None:
+            out["refused"] = refused
+        elif gcode_path is not None:
             out["gcode"] = gcode_path.read_text()
         return out
 

@@ -99,7 +99,9 @@ class CheckRequest(_Request):
     """Check a job: the CL file as text (`apt`) or as a path on the service's machine
     (`apt_path`), with optional part, cutter override (`CUTTER/...`), machine name, config
     options, the B range searched (degrees) and `reorient` (plan B for a 3-axis path too);
-    `post: true` also returns the corrected G-code."""
+    `post: true` also returns the corrected G-code; `on_findings` what posting does when the
+    program as written has findings or points without a feasible B (as `pathcheck check
+    --on-findings`: `refuse` returns no `gcode` but `refused`, the reason)."""
 
     op: Literal["check"]
     apt: str | None = Field(None, min_length=1)
@@ -116,6 +118,7 @@ class CheckRequest(_Request):
         None, max_length=400, description="'rx,ry,rz,dx,dy,dz' or a 3x4 matrix: the part's "
         "placement in the CL frame (as `pathcheck --part-transform`)")
     post: bool = False
+    on_findings: Literal["refuse", "stop", "comment"] = "refuse"
 
     @model_validator(mode="after")
     def _one_source(self) -> CheckRequest:
