@@ -4,6 +4,7 @@ JSON, for scripts. An error reply is one line on stderr and exit code 2."""
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -66,7 +67,8 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
                 kind="dealer" if dealer else "req", curve_keys=curve_keys) as client, \
             step(f"{op}: waiting for the service"):
         reply = raise_for_error(client.call(**message))
-    if gcode_out is not None:
+    refused = gcode_out is not None and reply.get("refused")
+    if gcode_out is not None and not refused:
         if not reply.get("gcode"):
             raise PathcheckError("the reply has no G-code (ask with post=true)", code="usage")
         write_file(gcode_out, reply["gcode"], what="G-code")
@@ -75,6 +77,10 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
         write_file(output, text + "\n", what="reply JSON")
     else:
         click.echo(text)
+    if refused:  # as `pathcheck check -o` does: nothing written, exit 1 (findings)
+        click.echo(f"pathcheck: {gcode_out}: not written: {refused}; send on_findings=stop or "
+                   "comment to write it", err=True)
+        sys.exit(1)
 
 
 def _json_object(text: str, name: str) -> dict:
