@@ -104,3 +104,21 @@ def test_allowable_bad_input(bowl_files, tmp_path, args, text):
     assert run.returncode == 2
     assert "Traceback" not in run.stderr and text in run.stderr
     assert len(run.stderr.strip().splitlines()) == 1
+
+
+def test_cc_points_off_the_part(bowl_files, tmp_path):
+    """A CC point that lies on no surface (the contact pairs are empty: once an IndexError,
+    exit 3): a ball resting on the axis d mm above the bottom of the bowl (the lower hemisphere
+    of radius RHO about (0, 0, RHO)), normal +z, has its centre at height d + r; it grows until
+    it reaches the rim, the circle of radius RHO at height RHO: RHO^2 + (d + r - RHO)^2 = r^2,
+    allowable r = (RHO^2 + (RHO - d)^2) / (2 (RHO - d)) (before that the hemisphere below the
+    rim stays outside it)."""
+    d = np.array([2.0, 6.0])
+    cc = tmp_path / "off.csv"
+    cc.write_text("x,y,z,nx,ny,nz\n" + "".join(f"0,0,{h},0,0,1\n" for h in d))
+    out = tmp_path / "off.json"
+    run = _cli("allowable", "--part", str(bowl_files / "bowl.json"), "--cc", str(cc),
+               "--cutter", "CUTTER/30,15", "--json", str(out))
+    assert run.returncode == 0, run.stderr
+    got = [p["allowable"] for p in json.loads(out.read_text())["points"]]
+    np.testing.assert_allclose(got, (RHO**2 + (RHO - d) ** 2) / (2 * (RHO - d)), atol=1e-4)

@@ -395,8 +395,8 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.nd
                                                np.linalg.norm(ev.dv, axis=1)]), 1e-12)
     to_uv = _tangent_to_uv(ev.du, ev.dv)
     even = np.arange(8) * np.pi / 4
-    angles = np.broadcast_to(np.arange(_FIRST_RING) * 2 * np.pi / _FIRST_RING,
-                             (len(rows), _FIRST_RING))
+    first = np.arange(_FIRST_RING) * 2 * np.pi / _FIRST_RING
+    angles = np.broadcast_to(first, (len(rows), _FIRST_RING))
     out = []
     for j, radius in enumerate(radii):
         m = angles.shape[1]
@@ -412,7 +412,7 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.nd
         half = radius * per_mm * (1.0 if j == 0 else 0.5)
         out.append((rows[ok], sid[ok], ring[ar, k][ok], half[ok]))
         if j == 0:
-            best = _best_angle(f, angles[0])
+            best = _best_angle(f, first)
             at_cc = _limit_at_cc(cutter, frame, Q, part, rows, sid, uv, lo, hi, to_uv, best,
                                  radius)
             angles = np.column_stack([best, best + np.pi, np.broadcast_to(even, (len(rows), 8))])
