@@ -105,7 +105,7 @@ def record(doc) -> None:
 @click.option("--config", "config_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="configuration TOML overriding the shipped defaults")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="write the results document (JSON) here")
+              help="write the results document (JSON) here; - for stdout")
 @click.option("-o", "gcode_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="write the corrected 4-axis G-code here (atomically)")
 @click.option("--machine", default=None,
@@ -138,7 +138,7 @@ def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine
     if not job.is_file():
         raise PathcheckError("job file not found: expected an existing CL file", path=job)
     for target, what in ((gcode_out, "G-code"), (json_out, "results JSON")):
-        if target is not None:
+        if target is not None and str(target) != "-":
             check_writable(target, what)
             make_parent(target, what)
     cutter = cutter_text
@@ -162,17 +162,21 @@ def check(job, part_path, cutter_text, config_path, json_out, gcode_out, machine
 
 def finish(doc, json_out: Path | None, *, store: bool) -> None:
     """Print the summary, record the check, write the JSON (a file that cannot be written is
-    exit 2, the check recorded all the same); exit 1 when there are findings."""
+    exit 2, the check recorded all the same); exit 1 when there are findings. `json_out` "-":
+    the JSON alone on stdout, the summary on stderr (docs/cam-command.md)."""
     from rich.console import Console
 
     from checker.atomic import make_parent, write_file
 
-    console = Console()
+    to_stdout = json_out is not None and str(json_out) == "-"
+    console = Console(stderr=to_stdout)
     for item in summary_view(doc):
         console.print(item)
     if store:
         record(doc)
-    if json_out is not None:
+    if to_stdout:
+        click.echo(doc.model_dump_json(indent=1))
+    elif json_out is not None:
         make_parent(json_out, "results JSON")
         write_file(json_out, doc.model_dump_json(indent=1), what="results JSON")
     if doc.summary.status == "findings":
