@@ -15,7 +15,8 @@ import click
 @click.argument("jobs", metavar="DIR_OR_GLOB")
 @click.option("--workers", type=click.IntRange(min=1), default=None,
               help="processes on this machine [default: the number of CPUs]")
-@click.option("--scheduler", default=None, metavar="ADDRESS",
+@click.option("--scheduler", default=None, metavar="ADDRESS", envvar="DASK_SCHEDULER_ADDRESS",
+              show_envvar=True,
               help="run the jobs on this Dask distributed scheduler (tcp://host:8786)")
 @click.option("--store", "store_path", default=None, metavar="FILE",
               help="results store [default: PATHCHECK_STORE or config store.path]")

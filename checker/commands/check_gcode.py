@@ -13,6 +13,24 @@ import click
 import numpy as np
 
 
+def assumed_units(moves, given: str | None, machine) -> None:
+    """A program that states no units is read in `--units`, else in the units its machine file
+    states, with a note on stderr naming the file and the unit; neither: a PathcheckError."""
+    if moves.units_stated:
+        return
+    from checker.errors import PathcheckError
+    from postproc.dialects import get_dialect
+
+    codes = "/".join(f"G{c}" for c in get_dialect(moves.dialect).units_codes)
+    if given is None and "units" not in machine.model_fields_set:
+        raise PathcheckError(
+            f"the program states no units (no {codes}) and machine {machine.name} gives none: "
+            "expected --units mm|inch", path=moves.path, code="usage")
+    source = "--units" if given else f"the units of machine {machine.name}"
+    click.echo(f"pathcheck: note: {moves.path} states no units (no {codes}): read in "
+               f"{moves.units}, {source}", err=True)
+
+
 @click.command()
 @click.argument("program", type=click.Path(dir_okay=False, path_type=Path))
 @click.option(
@@ -23,7 +41,8 @@ import numpy as np
     help="override the machine's dialect (fanuc, haas, linuxcnc, siemens, heidenhain, millplus)",
 )
 @click.option(
-    "--units", type=click.Choice(["mm", "inch"]), default=None, help="units before G20/G21"
+    "--units", type=click.Choice(["mm", "inch"]), default=None,
+    help="units of a program that states none (no G20/G21) [default: the machine file's]"
 )
 @click.option(
     "--part", type=click.Path(dir_okay=False, path_type=Path), default=None, help="part file"
@@ -65,6 +84,7 @@ def check_gcode(
             "part file not found: expected an existing file", path=part, code="part"
         )
     moves = read_gcode(program, dialect or machine.dialect, units=units or machine.units)
+    assumed_units(moves, units, machine)
     if not np.isin(moves.kind, (PROGRAMMED, CYCLE)).any():
         raise PathcheckError(f"no motion: expected G0/G1/G2/G3 moves or drilling cycles, found "
                              f"none in {moves.blocks} blocks", path=program, code="gcode")
