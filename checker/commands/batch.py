@@ -24,7 +24,8 @@ import click
               help="module:function that checks one job (tests and benchmarks)")
 def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: str | None,
           job_function: str) -> None:
-    """Check every CL file of a directory (recursively) or of a glob pattern.
+    """Check every CL file (APT-CL or NX CLSF, known by content) of a directory (recursively)
+    or of a glob pattern; on a Dask cluster with --scheduler or DASK_SCHEDULER_ADDRESS.
 
     \b
     pathcheck batch samples/ --workers 2
