@@ -45,18 +45,26 @@ class JobOutcome:
 
 
 def find_jobs(spec: str | Path) -> list[Path]:
-    """The CL files of a directory (recursively) or matched by a glob pattern, sorted."""
+    """The CL files of a directory (recursively) or matched by a glob pattern, sorted: files
+    with a CL suffix (CL_SUFFIXES; one that does not read fails in the batch, named) and any
+    other file whose content is APT-CL or NX CLSF (`is_cl_file`: an NX listing saved as
+    `.txt`); other files (parts, G-code, notes) are skipped. A file given by name is a job."""
+    from checker.apt import is_cl_file
+
     path = Path(spec)
+    if path.is_file():
+        return [path]
     if path.is_dir():
-        found = [p for p in path.rglob("*") if p.suffix.lower() in CL_SUFFIXES and p.is_file()]
-    elif path.is_file():
-        found = [path]
+        candidates = path.rglob("*")
     else:
-        found = [Path(p) for p in glob.glob(str(spec), recursive=True) if Path(p).is_file()]
+        candidates = (Path(p) for p in glob.glob(str(spec), recursive=True))
+    found = [p for p in candidates
+             if p.is_file() and (p.suffix.lower() in CL_SUFFIXES or is_cl_file(p))]
     if not found:
         raise PathcheckError(
-            "expected a directory of CL files (" + ", ".join(CL_SUFFIXES) + ") or a glob "
-            "pattern that matches files, found nothing", path=spec, code="usage",
+            "expected a directory of CL files (" + ", ".join(CL_SUFFIXES) + ", or APT-CL / "
+            "NX CLSF by their content) or a glob pattern that matches them, found nothing",
+            path=spec, code="usage",
         )
     return sorted(found)
 
@@ -184,10 +192,28 @@ def _local(paths: list[str], workers: int, job_function: str) -> Iterator[JobOut
                     yield item
 
 
+DASK_RETRIES = 1  # as the local pool's "once more"
+
+
+def run_on_dask(path: str, job_function: str = DEFAULT_JOB_FUNCTION) -> JobOutcome:
+    """`run_one` in a Dask worker thread with one numba thread (numba's count is per calling
+    thread): a worker with T threads runs T jobs at once on T cores, not T x cores threads."""
+    try:
+        import numba
+    except ImportError:  # a job function that needs no kernels
+        pass
+    else:
+        numba.set_num_threads(1)
+    return run_one(path, job_function)
+
+
 def _dask(
     paths: list[str], scheduler: object, job_function: str, connect_timeout_s: float
 ) -> Iterator[JobOutcome]:
-    """Jobs on a Dask cluster: `scheduler` is an address ('tcp://host:8786') or a Client."""
+    """Jobs on a Dask cluster: `scheduler` is an address ('tcp://host:8786') or a Client. A
+    task that raises on its worker (outside `run_one`: it cannot be unpickled there, a
+    BaseException) runs DASK_RETRIES more times; one whose worker dies is rescheduled by the
+    scheduler (`distributed.scheduler.allowed-failures`) and then fails alone (KilledWorker)."""
     require("distributed", "dask", "running jobs on a Dask cluster")
     from distributed import Client
     from distributed import as_completed as dask_completed
@@ -200,7 +226,8 @@ def _dask(
             f"cannot reach the Dask scheduler: {err}", path=str(scheduler), code="usage"
         ) from err
     try:
-        futures = client.map(run_one, paths, job_function=job_function, pure=False)
+        futures = client.map(run_on_dask, paths, job_function=job_function, pure=False,
+                             retries=DASK_RETRIES)
         path_of = {f.key: p for f, p in zip(futures, paths, strict=True)}
         for future in dask_completed(futures):
             yield _outcome(future, path_of[future.key], "Dask worker")

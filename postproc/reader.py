@@ -74,6 +74,7 @@ class GcodeMoves:
     comments: tuple[tuple[int, str], ...] = ()
     other: dict[str, int] = field(default_factory=dict)
     blocks: int = 0  # blocks read (program lines with code or a comment)
+    units_stated: bool = False  # the program states its units (G20/G21 or the dialect's own)
 
     def __len__(self) -> int:
         return len(self.line)
@@ -550,6 +551,7 @@ class _Program:
             comments=tuple(self.comments),
             other=dict(self.other),
             blocks=self.blocks,
+            units_stated=self.units_seen is not None,
         )
 
 

@@ -151,3 +151,97 @@ def test_a_dying_worker_process_fails_its_job_alone(jobs, tmp_path):
     assert recorded[seed_2] == "failed"
     others = [o for o in outcomes if o.path != seed_2]  # retried after the pool broke: own results
     assert all(o.error is None and recorded[o.path] == "findings" for o in others)
+
+
+def test_find_jobs_knows_cl_files_by_content(realdata, tmp_path):
+    """NX CLSF listings saved as .txt are jobs; notes, licences, parts and G-code are not."""
+    clsf = sorted((realdata / "mech491-nx-clsf").glob("APT_*.txt"))
+    assert len(clsf) == 7
+    assert find_jobs(realdata / "mech491-nx-clsf") == clsf  # LICENSE, SOURCES.txt skipped
+    amorim = realdata / "amorim-solidworkscam-apt"
+    assert find_jobs(amorim) == sorted(amorim.glob("*.apt"))  # README quotes CUTTER/: skipped
+    folder = tmp_path / "mixed"
+    folder.mkdir()
+    for source, name in ((clsf[2], "facing.cls"), (clsf[3], "variable.ptp"),
+                         (REPO / "samples" / "mould" / "mould.apt", "mould.clsf"),
+                         (REPO / "samples" / "mould" / "mould.json", "mould.json"),
+                         (realdata / "linuxcnc-5axis-gcode" / "b-index.ngc", "b-index.txt"),
+                         (realdata / "bladex-propeller-iges" / "lower.stl", "lower.txt"),
+                         (amorim / "SOURCES.txt", "notes.txt")):
+        (folder / name).write_bytes(source.read_bytes())
+    assert [p.name for p in find_jobs(folder)] == ["facing.cls", "mould.clsf", "variable.ptp"]
+    assert [p.name for p in find_jobs(str(folder / "*"))] == ["facing.cls", "mould.clsf",
+                                                              "variable.ptp"]
+
+
+def motions_job(apt_path: str):
+    """A job function that reads the CL file (any dialect) and reports its motion count as
+    `summary.cl_points` of a small synthetic document."""
+    from checker.apt import read_cl
+
+    doc = synthetic_document(0, n=2, four_axis=False, path=apt_path)
+    doc.summary.cl_points = len(read_cl(apt_path, require_cutter=False).motion_arrays().tip)
+    return doc
+
+
+def test_batch_runs_the_nx_listings_through_the_reader(realdata, tmp_path):
+    folder = tmp_path / "nx"
+    folder.mkdir()
+    for source in (realdata / "mech491-nx-clsf").iterdir():
+        (folder / source.name).write_bytes(source.read_bytes())
+    jobs = find_jobs(folder)
+    outcomes = run_batch(jobs, store=None, workers=1, job_function=f"{__name__}:motions_job")
+    assert [o.error for o in outcomes] == [None] * 7
+    for job, outcome in zip(jobs, outcomes, strict=True):
+        gotos = sum(line.lstrip().upper().startswith("GOTO/")
+                    for line in job.read_text(errors="replace").splitlines())
+        assert outcome.results().summary.cl_points == gotos > 0, job.name
+
+
+def threads_job(apt_path: str):
+    """Records the numba threads and the Dask worker of the task beside the job, then runs it."""
+    import numba
+    from distributed import get_worker
+
+    from checker.report.synthetic import synthetic_job
+
+    Path(apt_path + ".ran").write_text(f"{numba.get_num_threads()} {get_worker().address}")
+    return synthetic_job(apt_path)
+
+
+def test_dask_from_the_environment_one_numba_thread_per_task_and_a_retry(jobs, tmp_path,
+                                                                          monkeypatch, capsys):
+    """`pathcheck batch` on the cluster of DASK_SCHEDULER_ADDRESS, each task on one numba
+    thread (this thread's count untouched); a task that fails on its worker runs again."""
+    distributed = pytest.importorskip("distributed")
+    numba = pytest.importorskip("numba")
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one numba thread on this machine: nothing to cap")
+    _, paths = jobs
+    good = [p for p in paths if p.stem.startswith("job")]
+    monkeypatch.setenv("PATHCHECK_STORE", str(tmp_path / "cli.sqlite"))
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster:
+        monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", cluster.scheduler_address)
+        with pytest.raises(SystemExit) as exit_info:
+            main(["batch", str(good[0].parent.parent / "**" / "job*.apt"),
+                  "--job-function", f"{__name__}:threads_job"])
+        (worker,) = cluster.scheduler_info["workers"]
+        calls = []
+        cap = numba.set_num_threads
+
+        def flaky(n: int) -> None:  # the first task fails on its worker, outside run_one
+            calls.append(n)
+            if len(calls) == 1:
+                raise RuntimeError("numba's thread pool is not available")
+            cap(n)
+
+        monkeypatch.setattr(numba, "set_num_threads", flaky)  # the worker is in this process
+        retried = run_batch(good[:2], store=None, scheduler=cluster.scheduler_address,
+                            job_function=SYNTHETIC)
+    assert exit_info.value.code == 1  # the synthetic jobs have findings
+    assert "4 jobs: 0 clean, 4 with findings, 0 failed" in capsys.readouterr().out
+    ran = [Path(f"{p}.ran").read_text().split() for p in good]
+    assert ran == [["1", worker]] * 4  # on the cluster's worker, one numba thread each
+    assert numba.get_num_threads() == numba.config.NUMBA_NUM_THREADS  # this thread: untouched
+    assert [o.error for o in retried] == [None, None] and calls == [1, 1, 1]  # one retry

@@ -14,8 +14,8 @@ import pytest
 from checker.config import default_config
 from checker.service.cache import PartCache
 from checker.service.ops import WorkerState
-from checker.service.protocol import AllowablePoint
 from checker.service.recorder import NullRecorder
+from checker.service.replies import AllowablePoint
 from checker.service.worker import handle
 
 REPO = Path(__file__).resolve().parents[1]

@@ -13,6 +13,7 @@ _APT = re.compile(
     r"RAPID|CIRCLE|SPINDL|COOLNT|PPRINT|INSERT|CYCLE|CUTCOM|FINI)\b",
     re.M | re.I,
 )
+_MOTION = re.compile(r"^[ \t]*GOTO[ \t]*/[ \t]*[-+.\d]", re.M | re.I)
 
 Dialect = Literal["apt", "clsf"]
 
@@ -33,3 +34,11 @@ def detect_dialect(text: str, *, path: str) -> Dialect:
         line=1,
         code="dialect",
     )
+
+
+def is_cl_text(text: str) -> bool:
+    """Whether `text` (e.g. the head of a file) is a CL program: it has an NX CLSF statement,
+    or a line that is an APT-CL motion (`GOTO/` and a number). Stricter than
+    `detect_dialect`, to tell CL files from other text: notes that quote a `CUTTER/` line, or
+    prose with a line that starts "From", are not CL."""
+    return _CLSF.search(text) is not None or _MOTION.search(text) is not None

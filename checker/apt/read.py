@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from checker.apt.dialect import detect_dialect
+from checker.apt.dialect import detect_dialect, is_cl_text
 from checker.apt.interpret import interpret
 from checker.apt.lexer import is_card_image, lex
 from checker.errors import PathcheckError
@@ -13,6 +13,7 @@ from checker.toolpath import ToolPath
 
 # control characters that never occur in text (tab, LF, FF and CR do)
 _BINARY = re.compile(r"[\x00-\x08\x0b\x0e-\x1f\x7f]")
+SNIFF_BYTES = 64 * 1024  # how much of a file `is_cl_file` reads
 
 
 def _decode(data: bytes) -> str:
@@ -73,3 +74,15 @@ def read_cl(
     return read_cl_text(
         _decode(data), str(p), column72=column72, require_cutter=require_cutter
     )
+
+
+def is_cl_file(path: str | Path) -> bool:
+    """Whether a file is CL text by its content, whatever its suffix (an NX CLSF listing saved
+    as `.txt`): its first SNIFF_BYTES are text, not binary, with CL statements
+    (`is_cl_text`). A file that cannot be read is not."""
+    try:
+        with Path(path).open("rb") as fh:
+            head = _decode(fh.read(SNIFF_BYTES))
+    except OSError:
+        return False
+    return _BINARY.search(head.rstrip("\x1a")) is None and is_cl_text(head)

@@ -18,7 +18,8 @@ from checker.commands import options as opt
 @click.argument("jobs", metavar="DIR_OR_GLOB")
 @click.option("--workers", type=click.IntRange(min=1), default=None,
               help="processes on this machine [default: the number of CPUs]")
-@click.option("--scheduler", default=None, metavar="ADDRESS",
+@click.option("--scheduler", default=None, metavar="ADDRESS", envvar="DASK_SCHEDULER_ADDRESS",
+              show_envvar=True,
               help="run the jobs on this Dask distributed scheduler (tcp://host:8786)")
 @opt.store_option()
 @opt.config_option(help="configuration TOML: the store is its store.path")
@@ -26,7 +27,8 @@ from checker.commands import options as opt
               help="module:function that checks one job (tests and benchmarks)")
 def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: Path | None,
           config_path: Path | None, job_function: str) -> None:
-    """Check every CL file of a directory (recursively) or of a glob pattern.
+    """Check every CL file (APT-CL or NX CLSF, known by content) of a directory (recursively)
+    or of a glob pattern; on a Dask cluster with --scheduler or DASK_SCHEDULER_ADDRESS.
 
     \b
     pathcheck batch samples/ --workers 2

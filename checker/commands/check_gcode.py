@@ -16,6 +16,24 @@ from checker.commands import options as opt
 from checker.progress import step
 
 
+def assumed_units(moves, given: str | None, machine) -> None:
+    """A program that states no units is read in `--units`, else in the units its machine file
+    states, with a note on stderr naming the file and the unit; neither: a PathcheckError."""
+    if moves.units_stated:
+        return
+    from checker.errors import PathcheckError
+    from postproc.dialects import get_dialect
+
+    codes = "/".join(f"G{c}" for c in get_dialect(moves.dialect).units_codes)
+    if given is None and "units" not in machine.model_fields_set:
+        raise PathcheckError(
+            f"the program states no units (no {codes}) and machine {machine.name} gives none: "
+            "expected --units mm|inch", path=moves.path, code="usage")
+    source = "--units" if given else f"the units of machine {machine.name}"
+    click.echo(f"pathcheck: note: {moves.path} states no units (no {codes}): read in "
+               f"{moves.units}, {source}", err=True)
+
+
 @click.command()
 @click.argument("program", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--machine", "machine_name", default=None, metavar="NAME|FILE",
@@ -25,7 +43,8 @@ from checker.progress import step
     help="override the machine's dialect (fanuc, haas, linuxcnc, siemens, heidenhain, millplus)",
 )
 @click.option(
-    "--units", type=click.Choice(["mm", "inch"]), default=None, help="units before G20/G21"
+    "--units", type=click.Choice(["mm", "inch"]), default=None,
+    help="units of a program that states none (no G20/G21) [default: the machine file's]"
 )
 @opt.part_option()
 @opt.cutter_option(help='cutter, e.g. "CUTTER/6,3", in the program\'s units (G20/G21, --units)')
@@ -60,6 +79,7 @@ def check_gcode(program: Path, machine_name, dialect, units, part_path, cutter_t
         )
     with step("read the program"):
         moves = read_gcode(program, dialect or machine.dialect, units=units or machine.units)
+    assumed_units(moves, units, machine)
     if isinstance(cutter, str):  # read in the program's units (G20/G21, else --units)
         cutter = parse_cutter_in(cutter, moves.units)
     if not np.isin(moves.kind, (PROGRAMMED, CYCLE)).any():

@@ -103,6 +103,10 @@ class CheckRequest(_Request):
     program as written has findings or points without a feasible B (as `pathcheck check
     --on-findings`: `refuse` returns no `gcode` but `refused`, the reason)."""
 
+    model_config = ConfigDict(json_schema_extra={"oneOf": [  # exactly one source, as _one_source
+        {"required": [name], "properties": {name: {"type": "string"}}}
+        for name in ("apt", "apt_path")]})
+
     op: Literal["check"]
     apt: str | None = Field(None, min_length=1)
     apt_path: str | None = Field(None, min_length=1, max_length=4096)
@@ -130,45 +134,10 @@ class CheckRequest(_Request):
 
 
 Request = PingRequest | StatsRequest | SleepRequest | AllowableRequest | CheckRequest
-_REQUEST = TypeAdapter(Annotated[Request, Field(discriminator="op")])
+REQUEST = TypeAdapter(Annotated[Request, Field(discriminator="op")])
 
 
-# --- replies -------------------------------------------------------------------------------
-
-
-class ErrorInfo(BaseModel):
-    code: str
-    message: str
-    line: int | None = None
-
-
-class Reply(BaseModel):
-    """Common reply fields; op results add their own fields (see docs/protocol.md)."""
-
-    model_config = ConfigDict(extra="allow")
-
-    ok: bool
-    v: int = PROTOCOL_VERSION
-    id: str | int | None = None
-    op: str | None = None
-    error: ErrorInfo | None = None
-
-
-class AllowablePoint(BaseModel):
-    """One CC point as in `pathcheck allowable --json`: sizes mm, B degrees."""
-
-    index: int
-    cc: Vec3
-    normal: Vec3
-    allowable: float | None = Field(description="allowable size, mm; null = unbounded")
-    limiting_point: Vec3 | None = None
-    limiting_surface: int | None = None
-    verdict: str
-    margin: float | None = Field(None, description="allowable - real size, mm")
-    evaluations: int | None = None
-    b_best: float | None = None
-    allowable_at_best: float | None = None
-    b_feasible: list[tuple[float, float]] | None = None
+# --- replies (their models: checker/service/replies.py) ---------------------------------------
 
 
 def error_reply(err: PathcheckError, *, request_id: Any = None, op: str | None = None) -> dict:
@@ -242,7 +211,7 @@ def parse_request(
             f"request is {len(raw)} bytes, the limit is {max_bytes} bytes", code="limit"
         )
     try:
-        request = _REQUEST.validate_json(raw)
+        request = REQUEST.validate_json(raw)
     except ValidationError as err:
         raise _request_error(err) from None
     if isinstance(request, SleepRequest) and not debug_ops:
