@@ -271,3 +271,9 @@ def test_service_check_refuses_or_posts_as_asked(jobs):
     assert refused["results"]["summary"]["status"] == "findings"
     assert stopped["ok"] and "refused" not in stopped
     assert read_verdict(stopped["gcode"]) == "FINDINGS" and "M01" in stopped["gcode"]
+    import jsonschema  # both replies are what the published reply schema describes
+
+    from checker.resources import resource
+    schema = json.loads((resource("schemas") / "service-reply.schema.json").read_text())
+    for reply in (refused, stopped):
+        jsonschema.validate(json.loads(json.dumps(reply)), schema)

@@ -171,11 +171,14 @@ class AllowableReply(_OkReply):
 
 
 class CheckReply(_OkReply):
-    """The results document; `gcode` the corrected program's text when `post` was true."""
+    """The results document; `gcode` the corrected program's text when `post` was true, or
+    `refused` (why it was not written) when `on_findings` is refuse and the program as written
+    has findings."""
 
     op: Literal["check"]
     results: ResultsDocument
     gcode: str | None = None
+    refused: str | None = None
 
 
 class ErrorReply(BaseModel):
