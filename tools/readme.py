@@ -31,6 +31,7 @@ REPO = Path(__file__).resolve().parents[1]
 README = REPO / "README.md"
 _FENCE = re.compile(r"^```(\w*)\s*$")
 _EXIT = re.compile(r"#.*\bexit (\d+)\b")
+_BACKGROUND = re.compile(r"&(?=\s*(#.*)?$)")  # the `&` that ends a command line
 _DECIMAL = re.compile(r"-?\d+\.\d+(e[-+]?\d+)?")
 _DRAWING = re.compile(r"[\u2500-\u257f]+")  # rich's table borders, as wide as their columns
 NOT_RUN = ("make test",)  # the suite itself: tests/test_readme.py runs inside it
@@ -40,10 +41,12 @@ SERVER_START_S = 3.0
 
 @dataclass
 class Command:
-    """One command of a block: its text (continuation lines joined), the exit code it must give,
-    whether it runs in the background, and (console blocks) the output recorded after it."""
+    """One command of a block: what runs (continuation lines joined, comments dropped), the line
+    as written, the exit code it must give, whether it runs in the background, and (console
+    blocks) the output recorded after it."""
 
     text: str
+    source: str
     exit_code: int = 0
     background: bool = False
     recorded: list[str] = field(default_factory=list)
@@ -65,11 +68,12 @@ class Block:
 
 
 def _command(text: str) -> Command:
+    """A command line as the shell runs it (bash drops the comment itself), without its `&`."""
     code = _EXIT.search(text)
     words = shlex.split(text, comments=True)
     background = bool(words) and words[-1] == "&"
-    bare = shlex.join(words[:-1] if background else words)
-    return Command(bare, int(code.group(1)) if code else 0, background)
+    run = _BACKGROUND.sub(" ", text).strip() if background else text.strip()
+    return Command(run, text.strip(), int(code.group(1)) if code else 0, background)
 
 
 def _joined(lines: list[str]) -> list[tuple[int, str]]:
@@ -176,7 +180,7 @@ def run_block(block: Block, env: dict[str, str]) -> list[Outcome]:
     env = dict(env)
     try:
         for cmd in block.commands:
-            words = shlex.split(cmd.text)
+            words = shlex.split(cmd.text, comments=True)
             if words[0] == "export":  # the block's later commands see it, as in a shell
                 env.update(w.split("=", 1) for w in words[1:])
                 continue
@@ -199,7 +203,7 @@ def run_block(block: Block, env: dict[str, str]) -> list[Outcome]:
     finally:
         for cmd, proc in servers:
             if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGTERM)
+                proc.send_signal(signal.SIGTERM)  # as Ctrl-C or a service manager stops it
                 try:
                     out, _ = proc.communicate(timeout=30)
                 except subprocess.TimeoutExpired:
@@ -217,7 +221,7 @@ def write_outputs(text: str, results: dict[int, list[Outcome]]) -> str:
             continue
         body = []
         for outcome in results[block.first]:
-            body.append(f"$ {outcome.command.text}")
+            body.append(f"$ {outcome.command.source}")
             body.extend(outcome.output)
         lines[block.first - 1:block.last] = body
     return "\n".join(lines) + "\n"
