@@ -116,18 +116,13 @@ def allowable(part_path, cc_path, cutter_text, units, tool_name, tool_library, a
     """
     from checker.commands.terminal import text_console
     from checker.config import load_config
-    from checker.cutter import Cutter, parse_cutter_in
     from checker.engine import allowable as run
     from checker.engine.document import allowable_document, allowable_table
     from checker.geometry import load_part
     from checker.geometry.sampling import sample_part
     from checker.progress import step
 
-    cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
-    if cutter is None:
-        raise PathcheckError("give --cutter or --tool: the cutter family", code="usage")
-    if not isinstance(cutter, Cutter):
-        cutter = parse_cutter_in(cutter, units or "mm")
+    cutter = opt.cutter_family(cutter_text, tool_name, tool_library, units)
     config = load_config(config_path)
     axis = parse_axis(axis_text)
     lines: list[int] = []

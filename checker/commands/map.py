@@ -43,17 +43,12 @@ def map_command(part_path, cutter_text, units, tool_name, tool_library, grid_tex
     """
     import numpy as np
 
-    from checker.cutter import Cutter, parse_cutter_in
     from checker.engine.maps import allowable_maps, draw_maps, maps_document
     from checker.geometry import load_part
     from checker.geometry.sampling import sample_part
     from checker.tool_library import load_tool_library
 
-    cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
-    if cutter is None:
-        raise PathcheckError("give --cutter or --tool: the cutter family", code="usage")
-    if not isinstance(cutter, Cutter):
-        cutter = parse_cutter_in(cutter, units or "mm")
+    cutter = opt.cutter_family(cutter_text, tool_name, tool_library, units)
     grid = parse_grid(grid_text)
     lib = load_tool_library(tool_library)
     r = cutter.family_corner

@@ -141,6 +141,19 @@ def cutter_choice(cutter_text: str | None, tool_name: str | None, tool_library: 
     return load_tool_library(tool_library)[tool_name]
 
 
+def cutter_family(cutter_text: str | None, tool_name: str | None, tool_library: Path | None,
+                  units: str | None):
+    """The `Cutter` whose family `allowable` and `map` search: `--cutter` (read in `units`,
+    default mm) or `--tool`; neither is a usage error."""
+    from checker.cutter import Cutter, parse_cutter_in
+    from checker.errors import PathcheckError
+
+    cutter = cutter_choice(cutter_text, tool_name, tool_library)
+    if cutter is None:
+        raise PathcheckError("give --cutter or --tool: the cutter family", code="usage")
+    return cutter if isinstance(cutter, Cutter) else parse_cutter_in(cutter, units or "mm")
+
+
 def store_of(store_path: Path | None, config_path: Path | None) -> Path | None:
     """The store to record in: --store, else --config's store.path, else the default (None)."""
     if store_path is not None or config_path is None:
