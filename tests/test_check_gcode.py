@@ -40,7 +40,7 @@ def test_posted_program_checks_like_its_cl_job(repo, tmp_path, machine):
         return  # the reading differs per machine; the verdict that follows does not
     # a ball larger than the bowl's smallest concave radius gouges it
     big = args.copy()
-    big[big.index("CUTTER/10,5")] = "CUTTER/40,20"
+    big[big.index("CUTTER/10,5")] = "CUTTER/24,12"
     assert _exit_code(big) == 1
 
 
