@@ -26,15 +26,19 @@ def info(file: Path, json_out: Path | None) -> None:
     """
     if file.suffix.lower() in PART_SUFFIXES:
         from checker.geometry.info import describe_part, format_part_info
+        from checker.progress import step
 
-        doc = describe_part(file)
+        with step("read the part"):  # a STEP or IGES file: seconds in OpenCASCADE
+            doc = describe_part(file)
         _show(doc, format_part_info(doc), json_out)
         return
     from checker.apt import read_cl
     from checker.apt.info import describe_toolpath, format_toolpath_info
     from checker.errors import PathcheckError
+    from checker.progress import step
 
-    toolpath = read_cl(file)
+    with step("read the CL file"):
+        toolpath = read_cl(file)
     if not len(toolpath.motions):
         raise PathcheckError("no motion: expected GOTO/, FROM/ or GODLTA/ records, found none",
                              path=file, code="parse")
