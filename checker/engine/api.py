@@ -28,6 +28,7 @@ _SNAP = 1e-3  # mm: CC points this close to a surface are moved onto it
 _SNAP_ANGLE = 1e-6  # rad: given normals this close to the surface normal are replaced by it
 _GRAPH_K = 8
 _FIRST_TRIAL = 4.0  # first trial size of the scan at most this many times s0
+_HINT_MARGIN = 0.1  # a hinted first trial: this fraction above the hint and the slack
 _FIRST_RING = 16  # directions on the first ring around a CC point
 _RING_RATIO = 3.0  # the wider rings' radii grow by at most this
 _BOUND_POINTS = 256  # test points (evenly spread over their order) that start `upper_bounds`
@@ -114,14 +115,17 @@ def _tool_frames(tp: TestPoints, cutter, cc: np.ndarray, normals: np.ndarray, ax
 
 def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.0, 0.0, 1.0), *,
               cc_surface=None, cc_uv=None, toward=None, method: str = "exact",
-              seed: int | None = None, config: Config | None = None) -> AllowableResult:
+              seed: int | None = None, config: Config | None = None,
+              hint: np.ndarray | None = None) -> AllowableResult:
     """Allowable size at N CC points `cc (N, 3)` with unit normals `normals (N, 3)` (out of the
     material) and tool axes `axes (N, 3)` or (3,) (tip -> spindle), all part frame, mm. The
     minimum over all test points of every surface, refined in (u, v) to the true minimum.
     `cc_surface (N,)`, `cc_uv (N, 2)`: the CC point's own surface and parameters (better
     curvature limit; else the nearest test point's surface is used for the verdict). `toward
     (N, 3)`: a direction from the CC point towards the tool axis (from the CL data) for normals
-    along the axis. `method`: "exact" (this engine) or "pso" (thesis baseline, `seed`)."""
+    along the axis. `method`: "exact" (this engine) or "pso" (thesis baseline, `seed`).
+    `hint (N,)`: sizes expected (mm, e.g. at a nearby axis; nan: none): a first trial of the
+    scan just above them, which only the time depends on."""
     cfg = config or default_config()
     if method not in ("exact", "pso"):
         raise PathcheckError(f"unknown method '{method}', expected 'exact' or 'pso'", code="input")
@@ -151,7 +155,8 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
 
             found = pso_search(part, cutter, frame, Q, np.random.default_rng(seed), cfg.engine)
         else:
-            found = _exact(tp, part, cutter, frame, Q, axes[rows], own[rows], uv_own, cfg)
+            hinted = None if hint is None else np.asarray(hint, dtype=np.float64)[rows]
+            found = _exact(tp, part, cutter, frame, Q, axes[rows], own[rows], uv_own, cfg, hinted)
         s, p, sid, uv, ev = found
         size[rows], lim_p[rows], lim_s[rows], lim_uv[rows], evals[rows] = s, p, sid, uv, ev
     size = np.where(size > cfg.engine.max_size, np.inf, size)
@@ -259,7 +264,7 @@ def _snap(tp: TestPoints, part: Part, cc: np.ndarray, normals: np.ndarray):
 
 
 def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, axes: np.ndarray,
-           own: np.ndarray, uv_own: np.ndarray | None, cfg: Config):
+           own: np.ndarray, uv_own: np.ndarray | None, cfg: Config, hint: np.ndarray | None):
     """Scan + refinement for rows of any tool axes `axes (N, 3)` (part frame) with tool frames
     `Q (N, 3, 3)`; returns per row (size, limiting point (part frame), surface, uv,
     evaluations)."""
@@ -282,6 +287,9 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     # s_start can be far above the minimum (a convex spot); a small first trial finds the same
     # answer from fewer candidates (scan: `first`). Contour crossings need the full disc.
     first = None if cross is not None else np.minimum(s_start, _FIRST_TRIAL * s0)
+    if first is not None and hint is not None:
+        near = (hint + slack) * (1.0 + _HINT_MARGIN) + slack
+        first = np.where(np.isfinite(near) & (near > 0.0), np.minimum(first, near), first)
     sc = binned_scan(tp, cutter, frame, Q, axes, s_start, eng.max_size, slack, eng.refine_seeds,
                      _neighbours(tp), cross, first)
     size, arg = sc.best.copy(), sc.arg

@@ -65,13 +65,19 @@ def _over_b(contacts, sizes):
 def allowable_over_b(test_points, part, cutter, contacts, cfg: Config):
     """`fn(rows, b_deg) -> sizes` for the best-B search: the engine's allowable size of CC
     point `rows` at table angle `b_deg`; 0 where the point faces away from that axis.
-    `contacts` has `cc`, `normal` (N, 3) and `surface`, `uv` (None when unknown)."""
+    `contacts` has `cc`, `normal` (N, 3) and `surface`, `uv` (None when unknown). Each point's
+    last size hints the engine's next evaluation of it (the search moves B in small steps;
+    only the time depends on the hint)."""
     from checker.engine import allowable
 
+    last = np.full(len(contacts.cc), np.nan)
+
     def sizes(r: np.ndarray, axes: np.ndarray) -> np.ndarray:
-        return allowable(test_points, part, cutter, contacts.cc[r], contacts.normal[r], axes,
-                         cc_surface=_take(contacts.surface, r), cc_uv=_take(contacts.uv, r),
-                         config=cfg).size
+        out = allowable(test_points, part, cutter, contacts.cc[r], contacts.normal[r], axes,
+                        cc_surface=_take(contacts.surface, r), cc_uv=_take(contacts.uv, r),
+                        config=cfg, hint=last[r]).size
+        last[r] = out
+        return out
 
     return _over_b(contacts, sizes)
 
