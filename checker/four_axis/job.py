@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from checker.config import Config
+from checker.engine.bins import drop_table_grids
 from checker.four_axis.axes import (
     axis_for_b,
     b_for_axis,
@@ -52,6 +53,7 @@ def plan_b(*, test_points, part, cutter, contacts, tips: np.ndarray, axes: np.nd
     bound = bound_over_b(test_points, part, cutter, contacts, coarse_cfg)
     orientations = plan_orientations(fn, coarse, b_original, step,
                                      cutter.size + cfg.check.tolerance, cfg, (lo, hi), bound)
+    drop_table_grids(test_points)  # the search's grids, one per table angle of its lattice
     b_chosen = orientations.chosen.b
     return orientations, b_chosen, moved_tips(cutter, contacts, tips, b_original, b_chosen)
 
