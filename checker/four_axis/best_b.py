@@ -62,8 +62,7 @@ def _scan(fn: AllowableFn, n: int, grid: np.ndarray, bound: AllowableFn | None =
     b = np.repeat(grid, n)
     if bound is None:
         return _batched(fn, rows, b, "best B: scan of the B range").reshape(grid.size, n).T
-    with step("best B: bounds over the B range"):
-        out = bound(rows, b).reshape(grid.size, n).T.copy()
+    out = _batched(bound, rows, b, "best B: bounds over the B range").reshape(grid.size, n).T.copy()
     points = np.arange(n)
     first = np.argmax(out, axis=1)
     top = fn(points, grid[first])

@@ -52,8 +52,8 @@ def plan_b(*, test_points, part, cutter, contacts, tips: np.ndarray, axes: np.nd
     coarse = allowable_over_b(test_points, part, cutter, contacts, coarse_cfg)
     bound = bound_over_b(test_points, part, cutter, contacts, coarse_cfg)
     orientations = plan_orientations(fn, coarse, b_original, step,
-                                     cutter.size + cfg.check.tolerance, cfg, (lo, hi), bound)
-    drop_table_grids(test_points)  # the search's grids, one per table angle of its lattice
+                                     cutter.size + cfg.check.tolerance, cfg, (lo, hi), bound,
+                                     searched=lambda: drop_table_grids(test_points))
     b_chosen = orientations.chosen.b
     return orientations, b_chosen, moved_tips(cutter, contacts, tips, b_original, b_chosen)
 

@@ -104,17 +104,21 @@ def plan_orientations(
     cfg: Config,
     b_range: tuple[float, float],
     bound_fn=None,
+    searched=None,
 ) -> Orientations:
     """Best B and feasible intervals of every CC point (`fn` exact, `coarse_fn` its cheaper
     upper bound for the scan, `bound_fn` a still cheaper one of that: see `best_b`), then the
     shortest-path and greedy orientations inside them. `b_original` (N,) the CAM's B (nan:
     none), `path_length` (N,) mm of the step arriving at each point, `required` the size the
-    real cutter needs (mm)."""
+    real cutter needs (mm). `searched()`, when given, is called once the best-B search is done
+    (before the shortest path's own memory is taken)."""
     fa = cfg.four_axis
     n = len(b_original)
     best = best_b(fn, n, b_min=b_range[0], b_max=b_range[1], coarse_step=fa.b_coarse_step,
                   tolerance=fa.b_tolerance, required=required, reference=b_original,
                   coarse_fn=coarse_fn, bound_fn=bound_fn)
+    if searched is not None:
+        searched()
     optima = interval_optima(best.grid, best.samples, best.feasible)
     greedy, _ = greedy_smoothing(optima, best.b_best)
     extra = np.concatenate(optima) if any(len(o) for o in optima) else None
