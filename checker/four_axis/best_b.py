@@ -30,7 +30,7 @@ GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
 PLATEAU = 1e-6  # mm: coarse samples this close to the top make a flat top
 COARSE_PLATEAU = 1e-3  # mm: the same for a coarse evaluation (a cheaper upper bound)
 END_TOLERANCE = 0.2  # degrees: the feasible intervals' ends, kept on the feasible side
-_SCAN_BATCH = 40_000  # (point, B) rows per engine call of the coarse scan
+_SCAN_BATCH = 10_000  # (point, B) rows per engine call of the coarse scan
 
 
 @dataclass(frozen=True)
