@@ -4,25 +4,28 @@ one cell grid, each row keeps its own tool frame.
 An axis shared by at least `_OWN_GRID_ROWS` rows gets a grid of its own (exactly the frame of
 those rows). The other rows fall into the cells of a fixed lattice on the unit sphere (polar
 angle steps of `_BIN_DEG` degrees, azimuth steps of about as much), so that repeated calls reuse
-the cached grids; a cell holding a single distinct axis uses that axis (but for the table's
-lattice, below, whose grids are kept). In a bin, row i sees a
-grid point p as `D_i @ p` with `D_i = Q_i Q_bin^T`; candidates are found in the grid's frame with
-the search disc widened by the largest sideways move such a rotation causes over the candidate
-slab (candidates.py) and then tested exactly in the row's frame, so the candidate sets, and the
-results, are those of a grid built for the row's own axis.
+the cached grids; a cell holding a single distinct axis uses that axis (but on the table's
+circle, below). In a bin, row i sees a grid point p as `D_i @ p` with `D_i = Q_i Q_bin^T`;
+candidates are found in the grid's frame with the search disc widened by the largest sideways
+move such a rotation causes over the candidate slab (candidates.py) and then tested exactly in
+the row's frame, so the candidate sets, and the results, are those of a grid built for the
+row's own axis.
 
 The best-B search of a 4-axis job turns the part about the table's axis (Y): every tool axis
-it asks for lies on the great circle of the axes perpendicular to Y, where the lattice is a
-lattice of table angles (`_BIN_DEG` steps; the coarse scan's B values, multiples of 6 degrees
-from -180, are lattice axes, and their rows, sharing an axis, use those grids exactly). The
-grids of those lattice axes are kept for the part instead of taking turns in the cache (at most
-360 / `_BIN_DEG` of them, each built once, about 1.2 MB for 18k test points): the spatial
-structure of every B is built once per part, and every row, whatever its B, is tested in its
-own frame through D. A single grid in the table's frame (z along Y) would serve every B too,
-but each row's axis is then perpendicular to the grid's z, its region's footprint on the grid
-is a strip across the part rather than a disc, and the traversal would need a third cell
-dimension; the scan's cost is in the sweep's evaluations, not in building grids (about 3 ms
-each), so the lattice keeps the sweep's discs as tight as they are and costs memory only.
+it asks for lies on the circle of axes perpendicular to Y, where the sphere's lattice is a
+lattice of table angles B in `_BIN_DEG` steps (the coarse scan's B values, multiples of 6
+degrees from -180, are lattice axes). The grids of those lattice axes are kept apart from the
+other cached grids, each built once for the whole search (`drop_table_grids` frees them after
+it: at most 360 / `_BIN_DEG`, about 1.2 MB each for 18k test points), and every row on the
+circle is tested in its own frame through D from the lattice grid of its bin, whatever its B;
+only an axis that 64 rows share exactly (the scan's columns, the golden section's first
+probes) may use an exact grid. Measured on the compressor job: 128 lattice grids for every B,
+124 exact ones, 268 builds in all (646 before, when 32 grids took turns). A single grid in
+the table's frame (z along Y) would also serve every B, but each row's axis is then
+perpendicular to the grid's z: a row's region covers a strip across the grid instead of a
+disc, which needs a traversal with a third cell dimension; building a grid costs about 3 ms
+against seconds of evaluations in the sweeps, so the lattice keeps the sweeps' discs as tight
+as before and costs only memory.
 """
 
 from __future__ import annotations

@@ -11,8 +11,10 @@ hundred test points and a descent from them), rows that cannot matter are not ev
 sample whose bound is below `required` and below the point's top by more than the plateau is
 infeasible and no top, so neither the intervals, nor the top, nor a flat top, nor the optimum
 of an interval change when the bound stands in for it (a lower sample only moves a crossing
-that the bisection of the ends replaces); and a bisection probe whose bound is below the level
-is on the infeasible side. Every answer is the one without the bound.
+that the bisection of the ends replaces); a bisection probe whose bound is below the level is
+on the infeasible side. Every answer is the one without the bound. (The golden section gains
+nothing from it: its probes lie near the top, where the bound is seldom below the point a
+probe is compared with; about 4 % of them on the compressor job.)
 """
 
 from __future__ import annotations
@@ -102,6 +104,19 @@ def _top_local_maxima(samples: np.ndarray, count: int) -> np.ndarray:
     return np.where(valid, order, first)
 
 
+def _unless_below(fn: AllowableFn, bound: AllowableFn | None, rows: np.ndarray, b: np.ndarray,
+                  against: np.ndarray) -> np.ndarray:
+    """fn(rows, b), but where `bound` (an upper bound of fn) is below `against` (mm, per row):
+    the bound itself (then fn is below `against` too)."""
+    if bound is None:
+        return fn(rows, b)
+    out = bound(rows, b)
+    need = out >= against
+    if need.any():
+        out[need] = fn(rows[need], b[need])
+    return out
+
+
 def _golden_max(fn: AllowableFn, rows: np.ndarray, lo: np.ndarray, hi: np.ndarray, tol: float):
     """Vectorised golden-section search for the maximum of fn(row, b) on [lo, hi] per row."""
     a, b = lo.copy(), hi.copy()
@@ -137,9 +152,7 @@ def _refine_ends(fn: AllowableFn, rows, inside, outside, level, tol: float,
     with step("best B: feasible interval ends", total=_rounds(width, tol, 0.5)) as advance:
         while rows.size and np.max(np.abs(outside - inside)) > tol:
             mid = 0.5 * (inside + outside)
-            ok = np.ones(rows.size, dtype=bool) if bound is None else bound(rows, mid) >= level
-            if ok.any():
-                ok[ok] = fn(rows[ok], mid[ok]) >= level[ok]
+            ok = _unless_below(fn, bound, rows, mid, level) >= level
             inside = np.where(ok, mid, inside)
             outside = np.where(ok, outside, mid)
             advance(1)
