@@ -32,7 +32,7 @@ _HINT_MARGIN = 0.1  # a hinted first trial: this fraction above the hint and the
 _FIRST_RING = 16  # directions on the first ring around a CC point
 _RING_RATIO = 3.0  # the wider rings' radii grow by at most this
 _BOUND_POINTS = 256  # test points (evenly spread over their order) that start `upper_bounds`
-_BOUND_BLOCK = 1 << 21  # (row, start point) pairs per call of `upper_bounds`' kernel
+_BOUND_BLOCK = 1 << 19  # (row, start point) pairs per call of `upper_bounds`' kernel
 
 
 @dataclass
