@@ -38,7 +38,8 @@ _SCAN_BATCH = 10_000  # (point, B) rows per engine call of the coarse scan
 @dataclass(frozen=True)
 class BestB:
     """Per point: best B and the allowable size there, the feasible intervals, and the coarse
-    samples (grid (K,), sizes (N, K)) they came from."""
+    samples (grid (K,), sizes (N, K), mm) they came from (a sample skipped by `bound_fn` holds
+    its bound: below `required` and below the point's top)."""
 
     b_best: np.ndarray
     allowable_at_best: np.ndarray
