@@ -82,3 +82,30 @@ def test_best_b_agrees_with_a_brute_force_scan(passage, cutter_text):
             assert on_top.min() - STEP <= best.b_best[i] <= on_top.max() + STEP
     if cutter.kind == "bullnose":
         assert strict_peaks >= 4, "the passage should give the bull-nose clear best B values"
+
+
+@pytest.mark.parametrize("cutter_text", ["CUTTER/12,2", "CUTTER/12,6"])
+def test_bounds_hold_and_skipping_changes_no_answer(passage, cutter_text):
+    """`bound_over_b` never lies below the coarse engine's size (at every point and B of a
+    2-degree scan), and the search that skips rows by it gives the same best B, size there and
+    feasible intervals as the one that evaluates every row."""
+    from checker.four_axis.plan import bound_over_b, coarse_config
+
+    part, tp, con = passage
+    cfg = default_config()
+    cutter = parse_cutter(cutter_text)
+    fn = allowable_over_b(tp, part, cutter, con, cfg)
+    coarse = allowable_over_b(tp, part, cutter, con, coarse_config(cfg))
+    bound = bound_over_b(tp, part, cutter, con, coarse_config(cfg))
+    n = len(con.cc)
+    b = np.arange(B_RANGE[0], B_RANGE[1] + 1e-9, 2.0)
+    rows = np.repeat(np.arange(n), b.size)
+    assert (bound(rows, np.tile(b, n)) >= coarse(rows, np.tile(b, n))).all()
+    required = cutter.size + cfg.check.tolerance
+    args = dict(b_min=B_RANGE[0], b_max=B_RANGE[1], coarse_step=4.0, tolerance=0.01,
+                required=required, coarse_fn=coarse)
+    plain = best_b(fn, n, **args)
+    skipped = best_b(fn, n, **args, bound_fn=bound)
+    np.testing.assert_array_equal(skipped.b_best, plain.b_best)
+    np.testing.assert_array_equal(skipped.allowable_at_best, plain.allowable_at_best)
+    assert skipped.feasible == plain.feasible

@@ -10,10 +10,11 @@ import numpy as np
 from checker.config import Config, default_config
 from checker.engine import limits
 from checker.engine.bins import binned_scan, part_tops
+from checker.engine.bound import warm_bounds
 from checker.engine.family import family_bounds
 from checker.engine.frames import group_axes, rotate_rows, tool_rotations
 from checker.engine.refine import refine
-from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes
+from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes, size_args
 from checker.engine.verdict import verdicts
 from checker.errors import PathcheckError
 from checker.geometry.evaluate import evaluate_mixed
@@ -27,8 +28,11 @@ _SNAP = 1e-3  # mm: CC points this close to a surface are moved onto it
 _SNAP_ANGLE = 1e-6  # rad: given normals this close to the surface normal are replaced by it
 _GRAPH_K = 8
 _FIRST_TRIAL = 4.0  # first trial size of the scan at most this many times s0
+_HINT_MARGIN = 0.1  # a hinted first trial: this fraction above the hint and the slack
 _FIRST_RING = 16  # directions on the first ring around a CC point
 _RING_RATIO = 3.0  # the wider rings' radii grow by at most this
+_BOUND_POINTS = 256  # test points (evenly spread over their order) that start `upper_bounds`
+_BOUND_BLOCK = 1 << 19  # (row, start point) pairs per call of `upper_bounds`' kernel
 
 
 @dataclass
@@ -88,16 +92,40 @@ def _cache_of(tp: TestPoints) -> dict:
     return tp.__dict__.setdefault("_engine_cache", {})
 
 
+def _tool_frames(tp: TestPoints, cutter, cc: np.ndarray, normals: np.ndarray, axes: np.ndarray,
+                 toward: np.ndarray | None, cfg: Config):
+    """The rows' tool frames (part frame in, unit `normals` and `axes` (N, 3)): (axes (N, 3),
+    axes equal to 12 decimals made one; `Q (K, 3, 3)` part -> tool frame of the K rows that
+    face the axis; `faces_away (N,)`; those rows `rows (K,)`; their `RowFrame` (tool frame,
+    mm), None when K = 0)."""
+    keys, group = group_axes(axes)
+    axes = keys[group]  # axes equal to 12 decimals are one axis
+    Q = tool_rotations(axes)  # each row's own tool frame
+    n_t = rotate_rows(Q, normals)
+    faces_away = n_t[:, 2] <= 1e-12
+    rows = np.flatnonzero(~faces_away)
+    if not rows.size:
+        return axes, Q[rows], faces_away, rows, None
+    Q, n_t = Q[rows], n_t[rows]
+    cc_t = rotate_rows(Q, cc[rows])
+    e_t, degen = horizontal_e(n_t, None if toward is None else rotate_rows(Q, toward[rows]))
+    fam = family_bounds(cutter, cc_t, n_t, e_t, degen, part_tops(tp, Q))
+    return axes, Q, faces_away, rows, RowFrame(cc_t, n_t, e_t, fam, cfg.engine.exclusion)
+
+
 def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.0, 0.0, 1.0), *,
               cc_surface=None, cc_uv=None, toward=None, method: str = "exact",
-              seed: int | None = None, config: Config | None = None) -> AllowableResult:
+              seed: int | None = None, config: Config | None = None,
+              hint: np.ndarray | None = None) -> AllowableResult:
     """Allowable size at N CC points `cc (N, 3)` with unit normals `normals (N, 3)` (out of the
     material) and tool axes `axes (N, 3)` or (3,) (tip -> spindle), all part frame, mm. The
     minimum over all test points of every surface, refined in (u, v) to the true minimum.
     `cc_surface (N,)`, `cc_uv (N, 2)`: the CC point's own surface and parameters (better
     curvature limit; else the nearest test point's surface is used for the verdict). `toward
     (N, 3)`: a direction from the CC point towards the tool axis (from the CL data) for normals
-    along the axis. `method`: "exact" (this engine) or "pso" (thesis baseline, `seed`)."""
+    along the axis. `method`: "exact" (this engine) or "pso" (thesis baseline, `seed`).
+    `hint (N,)`: sizes expected (mm, e.g. at a nearby axis; nan: none): a first trial of the
+    scan just above them, which only the time depends on."""
     cfg = config or default_config()
     if method not in ("exact", "pso"):
         raise PathcheckError(f"unknown method '{method}', expected 'exact' or 'pso'", code="input")
@@ -118,18 +146,8 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
     lim_s = np.full(n_rows, -1, dtype=np.int64)
     lim_uv = np.full((n_rows, 2), np.nan)
     evals = np.zeros(n_rows, dtype=np.int64)
-    keys, group = group_axes(axes)
-    axes = keys[group]  # axes equal to 12 decimals are one axis
-    Q = tool_rotations(axes)  # each row's own tool frame
-    n_t = rotate_rows(Q, normals)
-    faces_away = n_t[:, 2] <= 1e-12
-    rows = np.flatnonzero(~faces_away)
+    axes, Q, faces_away, rows, frame = _tool_frames(tp, cutter, cc, normals, axes, tw, cfg)
     if rows.size:
-        Q, n_t = Q[rows], n_t[rows]
-        cc_t = rotate_rows(Q, cc[rows])
-        e_t, degen = horizontal_e(n_t, None if tw is None else rotate_rows(Q, tw[rows]))
-        fam = family_bounds(cutter, cc_t, n_t, e_t, degen, part_tops(tp, Q))
-        frame = RowFrame(cc_t, n_t, e_t, fam, cfg.engine.exclusion)
         uv_own = None if cc_uv is None else \
             np.asarray(cc_uv, dtype=np.float64).reshape(n_rows, 2)[rows]
         if method == "pso":
@@ -137,7 +155,8 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
 
             found = pso_search(part, cutter, frame, Q, np.random.default_rng(seed), cfg.engine)
         else:
-            found = _exact(tp, part, cutter, frame, Q, axes[rows], own[rows], uv_own, cfg)
+            hinted = None if hint is None else np.asarray(hint, dtype=np.float64)[rows]
+            found = _exact(tp, part, cutter, frame, Q, axes[rows], own[rows], uv_own, cfg, hinted)
         s, p, sid, uv, ev = found
         size[rows], lim_p[rows], lim_s[rows], lim_uv[rows], evals[rows] = s, p, sid, uv, ev
     size = np.where(size > cfg.engine.max_size, np.inf, size)
@@ -150,6 +169,41 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
                        cfg.check.gouge_neighbourhood * 0.5 * float(cutter.d))
     size[faces_away] = 0.0
     return AllowableResult(size, lim_p, lim_s, lim_uv, verdict, size - real, evals)
+
+
+def upper_bounds(test_points: TestPoints, part: Part, cutter, cc, normals, axes, *,
+                 cc_surface=None, config: Config | None = None) -> np.ndarray:
+    """(N,) upper bounds (mm, inf: none) of `allowable(...).size` for the same arguments (the
+    exact method), far cheaper: 0 where the row faces away from its axis, else the smallest
+    size at `_BOUND_POINTS` test points spread over the part and along the descent from the
+    smallest of them on the sample graph. Sound: the engine's size is at most the smallest
+    size over all test points (the scan's exact minimum, which the refinement only lowers),
+    where that is within `max_size`. A mesh part has none (inf)."""
+    cfg = config or default_config()
+    cc = _rows3(cc, None, "cc")
+    n_rows = len(cc)
+    normals = _unit(_rows3(normals, n_rows, "normals"), "normals")
+    axes = _unit(_rows3(axes, n_rows, "axes"), "axes")
+    bound = np.full(n_rows, np.inf)
+    if part.mesh is not None:
+        return bound
+    tp = test_points
+    if cc_surface is None:
+        cc, normals, _, _ = _snap(tp, part, cc, normals)
+    _, Q, faces_away, rows, frame = _tool_frames(tp, cutter, cc, normals, axes, None, cfg)
+    bound[faces_away] = 0.0
+    m = len(tp.points)
+    if not rows.size or not m:
+        return bound
+    starts = np.unique(np.linspace(0, m - 1, min(_BOUND_POINTS, m)).astype(np.int64))
+    knn = _neighbours(tp)
+    per = max(1, _BOUND_BLOCK // starts.size)
+    for a in range(0, len(rows), per):
+        r = np.arange(a, min(a + per, len(rows)))
+        u, _ = warm_bounds(tp.points, Q[r], np.broadcast_to(starts, (r.size, starts.size)),
+                           size_args(cutter, frame, r), knn)
+        bound[rows[r]] = np.where(u <= cfg.engine.max_size, u, np.inf)
+    return bound
 
 
 _MESH_INDEX: dict[str, object] = {}
@@ -210,7 +264,7 @@ def _snap(tp: TestPoints, part: Part, cc: np.ndarray, normals: np.ndarray):
 
 
 def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, axes: np.ndarray,
-           own: np.ndarray, uv_own: np.ndarray | None, cfg: Config):
+           own: np.ndarray, uv_own: np.ndarray | None, cfg: Config, hint: np.ndarray | None):
     """Scan + refinement for rows of any tool axes `axes (N, 3)` (part frame) with tool frames
     `Q (N, 3, 3)`; returns per row (size, limiting point (part frame), surface, uv,
     evaluations)."""
@@ -233,6 +287,9 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     # s_start can be far above the minimum (a convex spot); a small first trial finds the same
     # answer from fewer candidates (scan: `first`). Contour crossings need the full disc.
     first = None if cross is not None else np.minimum(s_start, _FIRST_TRIAL * s0)
+    if first is not None and hint is not None:
+        near = (hint + slack) * (1.0 + _HINT_MARGIN) + slack
+        first = np.where(np.isfinite(near) & (near > 0.0), np.minimum(first, near), first)
     sc = binned_scan(tp, cutter, frame, Q, axes, s_start, eng.max_size, slack, eng.refine_seeds,
                      _neighbours(tp), cross, first)
     size, arg = sc.best.copy(), sc.arg

@@ -4,11 +4,28 @@ one cell grid, each row keeps its own tool frame.
 An axis shared by at least `_OWN_GRID_ROWS` rows gets a grid of its own (exactly the frame of
 those rows). The other rows fall into the cells of a fixed lattice on the unit sphere (polar
 angle steps of `_BIN_DEG` degrees, azimuth steps of about as much), so that repeated calls reuse
-the cached grids; a cell holding a single distinct axis uses that axis. In a bin, row i sees a
-grid point p as `D_i @ p` with `D_i = Q_i Q_bin^T`; candidates are found in the grid's frame with
-the search disc widened by the largest sideways move such a rotation causes over the candidate
-slab (candidates.py) and then tested exactly in the row's frame, so the candidate sets, and the
-results, are those of a grid built for the row's own axis.
+the cached grids; a cell holding a single distinct axis uses that axis (but on the table's
+circle, below). In a bin, row i sees a grid point p as `D_i @ p` with `D_i = Q_i Q_bin^T`;
+candidates are found in the grid's frame with the search disc widened by the largest sideways
+move such a rotation causes over the candidate slab (candidates.py) and then tested exactly in
+the row's frame, so the candidate sets, and the results, are those of a grid built for the
+row's own axis.
+
+The best-B search of a 4-axis job turns the part about the table's axis (Y): every tool axis
+it asks for lies on the circle of axes perpendicular to Y, where the sphere's lattice is a
+lattice of table angles B in `_BIN_DEG` steps (the coarse scan's B values, multiples of 6
+degrees from -180, are lattice axes). The grids of those lattice axes are kept apart from the
+other cached grids, each built once for the whole search (`drop_table_grids` frees them after
+it: at most 360 / `_BIN_DEG`, about 1.2 MB each for 18k test points), and every row on the
+circle is tested in its own frame through D from the lattice grid of its bin, whatever its B;
+only an axis that 64 rows share exactly (the scan's columns, the golden section's first
+probes) may use an exact grid. Measured on the compressor job: 128 lattice grids for every B,
+124 exact ones, 268 builds in all (646 before, when 32 grids took turns). A single grid in
+the table's frame (z along Y) would also serve every B, but each row's axis is then
+perpendicular to the grid's z: a row's region covers a strip across the grid instead of a
+disc, which needs a traversal with a third cell dimension; building a grid costs about 3 ms
+against seconds of evaluations in the sweeps, so the lattice keeps the sweeps' discs as tight
+as before and costs only memory.
 """
 
 from __future__ import annotations
@@ -24,7 +41,7 @@ from checker.geometry.sampling import TestPoints
 
 _BIN_DEG = 2.0  # lattice step on the unit sphere, degrees
 _OWN_GRID_ROWS = 64  # rows that share an axis exactly and get a grid of their own
-_GRIDS_MAX = 32  # cached grids per set of test points
+_GRIDS_MAX = 32  # cached grids per set of test points, besides the table lattice's
 _TOP_CHUNK = 1 << 21  # (row, hull vertex) products per block in `part_tops`
 
 
@@ -35,17 +52,34 @@ def _cache_of(tp: TestPoints) -> dict:
 
 def tool_grid(tp: TestPoints, axis: np.ndarray, Q: np.ndarray | None = None) -> CellGrid:
     """Cell grid of the test points rotated by `Q` (default `tool_rotation(axis)`) into the tool
-    frame of the unit `axis` (part frame); cached per axis."""
-    grids = _cache_of(tp).setdefault("grids", {})
+    frame of the unit `axis` (part frame); cached per axis: kept for the part on the table
+    lattice (module docstring), else one of the last `_GRIDS_MAX`."""
+    cache = _cache_of(tp)
     key = tuple(np.round(axis, 12).tolist())
-    hit = grids.get(key)
+    table = cache.setdefault("table", {})
+    grids = cache.setdefault("grids", {})
+    hit = table.get(key, grids.get(key))
     if hit is None:
         Q = tool_rotation(axis) if Q is None else Q
         hit = build_grid(tp.points @ Q.T)
-        if len(grids) >= _GRIDS_MAX:
-            grids.pop(next(iter(grids)))
-        grids[key] = hit
+        if _on_table_lattice(np.asarray(axis, dtype=np.float64)):
+            table[key] = hit
+        else:
+            if len(grids) >= _GRIDS_MAX:
+                grids.pop(next(iter(grids)))
+            grids[key] = hit
     return hit
+
+
+def drop_table_grids(tp: TestPoints) -> None:
+    """Free the table lattice's grids of `tp` (after a best-B search: the memory goes back)."""
+    _cache_of(tp).pop("table", None)
+
+
+def _on_table_lattice(axis: np.ndarray) -> bool:
+    """Whether the unit `axis` (3,) is a lattice axis perpendicular to Y (to 12 decimals)."""
+    rep = _lattice(axis[None, :])[1][0]
+    return abs(axis[1]) < 1e-12 and bool(np.all(np.round(rep - axis, 12) == 0.0))
 
 
 def part_tops(tp: TestPoints, Q: np.ndarray) -> np.ndarray:
@@ -95,10 +129,11 @@ def axis_bins(axes: np.ndarray, Q: np.ndarray):
     order = np.argsort(bin_id, kind="stable")
     cuts = np.flatnonzero(np.diff(bin_id[order])) + 1
     out = []
+    kept = ~own & (np.abs(axes[:, 1]) < 1e-12)  # on the table's circle: the kept lattice grid
     for rows in np.split(order, cuts):
         if rows.size == 0:
             continue
-        if (group[rows] == group[rows[0]]).all():
+        if (group[rows] == group[rows[0]]).all() and not kept[rows[0]]:
             out.append((rows, axes[rows[0]], Q[rows[0]], None))
         else:
             Qb = tool_rotation(rep[rows[0]])

@@ -134,13 +134,15 @@ def coarse_bounds(grid: CellGrid, rot: np.ndarray, reg: np.ndarray, sz: tuple,
     return u, evals
 
 
-def warm_bounds(grid: CellGrid, rot: np.ndarray, starts: np.ndarray, sz: tuple,
+def warm_bounds(xyz: np.ndarray, rot: np.ndarray, starts: np.ndarray, sz: tuple,
                 knn: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per row (N,): an upper bound (mm, inf: none found) of the smallest size over all test
     points from the test points `starts (N, S)` (-1: none) and a descent along the sample
-    graph `knn`; and the kernel evaluations spent (arguments as `coarse_bounds`)."""
+    graph `knn`; and the kernel evaluations spent. `xyz (M, 3)` the test points by id in some
+    frame (a grid's), `rot (N, 3, 3)` each row's frame seen from that one; the other
+    arguments as `coarse_bounds`."""
     n = len(starts)
     u, evals = np.empty(n), np.empty(n, dtype=np.int64)
     kernel = _warm_ser if n < SERIAL_ROWS else _warm_par
-    kernel(grid.xyz, rot, sz, knn, np.ascontiguousarray(starts, dtype=np.int64), u, evals)
+    kernel(xyz, rot, sz, knn, np.ascontiguousarray(starts, dtype=np.int64), u, evals)
     return u, evals

@@ -107,7 +107,7 @@ class _Rows:
     def warm(self, rows: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Upper bounds of the rows' minima from start points `starts (N, S)` (bound.py) and
         the evaluations spent."""
-        return warm_bounds(self.grid, self.rot[rows], starts,
+        return warm_bounds(self.grid.xyz, self.rot[rows], starts,
                            size_args(self.cutter, self.frame, rows), self.knn)
 
 

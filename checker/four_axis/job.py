@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from checker.config import Config
+from checker.engine.bins import drop_table_grids
 from checker.four_axis.axes import (
     axis_for_b,
     b_for_axis,
@@ -19,6 +20,7 @@ from checker.four_axis.best_b import best_b
 from checker.four_axis.plan import (
     Orientations,
     allowable_over_b,
+    bound_over_b,
     coarse_config,
     plan_orientations,
 )
@@ -46,9 +48,12 @@ def plan_b(*, test_points, part, cutter, contacts, tips: np.ndarray, axes: np.nd
     b_original = b_for_axis(axes)
     step = np.r_[0.0, np.linalg.norm(np.diff(contacts.cc, axis=0), axis=1)]
     fn = allowable_over_b(test_points, part, cutter, contacts, cfg)
-    coarse = allowable_over_b(test_points, part, cutter, contacts, coarse_config(cfg))
+    coarse_cfg = coarse_config(cfg)
+    coarse = allowable_over_b(test_points, part, cutter, contacts, coarse_cfg)
+    bound = bound_over_b(test_points, part, cutter, contacts, coarse_cfg)
     orientations = plan_orientations(fn, coarse, b_original, step,
-                                     cutter.size + cfg.check.tolerance, cfg, (lo, hi))
+                                     cutter.size + cfg.check.tolerance, cfg, (lo, hi), bound,
+                                     searched=lambda: drop_table_grids(test_points))
     b_chosen = orientations.chosen.b
     return orientations, b_chosen, moved_tips(cutter, contacts, tips, b_original, b_chosen)
 

@@ -135,12 +135,22 @@ def _window_min(values, grid, width, direction):
     return out, arg
 
 
+@njit(cache=True, inline="always")
+def _unary(allowed, target, w_original, grid, i, k):
+    """Cost of point i at candidate k: w_original*|B - target| where allowed, else inf (computed
+    where needed: the (n, K) matrix would be the largest array of the job)."""
+    return w_original * np.abs(grid[k] - target[i]) if allowed[i, k] else np.inf
+
+
 @njit(cache=True)
-def _shortest_path(grid, unary, widths, w_change):
-    """Viterbi over the candidate grid; transition cost w_change*|dB|, |dB| <= widths[i]."""
-    n, k_count = unary.shape
+def _shortest_path(grid, allowed, target, w_original, widths, w_change):
+    """Viterbi over the candidate grid; transition cost w_change*|dB|, |dB| <= widths[i]; the
+    unary cost `_unary`."""
+    n, k_count = allowed.shape
     back = np.empty((n, k_count), dtype=np.int32)
-    cost = unary[0].copy()
+    cost = np.empty(k_count)
+    for k in range(k_count):
+        cost[k] = _unary(allowed, target, w_original, grid, 0, k)
     for i in range(1, n):
         left, left_arg = _window_min(cost - w_change * grid, grid, widths[i], 1)
         right, right_arg = _window_min(cost + w_change * grid, grid, widths[i], -1)
@@ -149,10 +159,10 @@ def _shortest_path(grid, unary, widths, w_change):
             a = left[k] + w_change * grid[k]
             b = right[k] - w_change * grid[k]
             if a <= b:
-                new[k] = a + unary[i, k]
+                new[k] = a + _unary(allowed, target, w_original, grid, i, k)
                 back[i, k] = left_arg[k]
             else:
-                new[k] = b + unary[i, k]
+                new[k] = b + _unary(allowed, target, w_original, grid, i, k)
                 back[i, k] = right_arg[k]
         cost = new
     path = np.empty(n, dtype=np.int64)
@@ -197,14 +207,14 @@ def shortest_path_orientation(
             allowed[i] = True
         for lo, hi in ivs:
             allowed[i] |= (grid >= lo - 1e-9) & (grid <= hi + 1e-9)
-    unary = np.where(allowed, w_original * np.abs(grid[None, :] - target[:, None]), np.inf)
     widths = np.full(n, np.inf)
     if max_db_per_mm is not None:
         widths = max_db_per_mm * np.asarray(path_length, dtype=float)
     method = "shortest-path"
-    path, final = _shortest_path(grid, unary, widths, float(w_change))
+    unary = (allowed, target, float(w_original))  # `_unary`, computed where needed
+    path, final = _shortest_path(grid, *unary, widths, float(w_change))
     if not np.isfinite(final):
-        path, final = _shortest_path(grid, unary, np.full(n, np.inf), float(w_change))
+        path, final = _shortest_path(grid, *unary, np.full(n, np.inf), float(w_change))
         method += "+relaxed"
     b = grid[path]
     return Orientation(b, total_rotation(b), feasible, method)

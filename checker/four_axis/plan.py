@@ -47,25 +47,52 @@ def coarse_config(cfg: Config) -> Config:
     return cfg.model_copy(update={"engine": engine})
 
 
-def allowable_over_b(test_points, part, cutter, contacts, cfg: Config):
-    """`fn(rows, b_deg) -> sizes` for the best-B search: the engine's allowable size of CC
-    point `rows` at table angle `b_deg`; 0 where the point faces away from that axis.
-    `contacts` has `cc`, `normal` (N, 3) and `surface`, `uv` (None when unknown)."""
-    from checker.engine import allowable
+def _over_b(contacts, sizes):
+    """`fn(rows, b_deg) -> (M,)` mm: `sizes(r, axes)` for the CC points `r` that face the tool
+    axes `axes (K, 3)` of their table angles (part frame), 0 for the others."""
 
     def fn(rows: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
         axes = axis_for_b(b_deg)
-        sizes = np.zeros(len(rows))
+        out = np.zeros(len(rows))
         facing = np.einsum("ij,ij->i", contacts.normal[rows], axes) > 1e-12
         if facing.any():
-            r = rows[facing]
-            res = allowable(test_points, part, cutter, contacts.cc[r], contacts.normal[r],
-                            axes[facing], cc_surface=_take(contacts.surface, r),
-                            cc_uv=_take(contacts.uv, r), config=cfg)
-            sizes[facing] = res.size
-        return sizes
+            out[facing] = sizes(rows[facing], axes[facing])
+        return out
 
     return fn
+
+
+def allowable_over_b(test_points, part, cutter, contacts, cfg: Config):
+    """`fn(rows, b_deg) -> sizes` for the best-B search: the engine's allowable size of CC
+    point `rows` at table angle `b_deg`; 0 where the point faces away from that axis.
+    `contacts` has `cc`, `normal` (N, 3) and `surface`, `uv` (None when unknown). Each point's
+    last size hints the engine's next evaluation of it (the search moves B in small steps;
+    only the time depends on the hint)."""
+    from checker.engine import allowable
+
+    last = np.full(len(contacts.cc), np.nan)
+
+    def sizes(r: np.ndarray, axes: np.ndarray) -> np.ndarray:
+        out = allowable(test_points, part, cutter, contacts.cc[r], contacts.normal[r], axes,
+                        cc_surface=_take(contacts.surface, r), cc_uv=_take(contacts.uv, r),
+                        config=cfg, hint=last[r]).size
+        last[r] = out
+        return out
+
+    return _over_b(contacts, sizes)
+
+
+def bound_over_b(test_points, part, cutter, contacts, cfg: Config):
+    """`fn(rows, b_deg) -> sizes`: upper bounds of `allowable_over_b`'s sizes with the same
+    arguments (`engine.api.upper_bounds`), for the best-B search to skip rows that cannot
+    matter."""
+    from checker.engine.api import upper_bounds
+
+    def sizes(r: np.ndarray, axes: np.ndarray) -> np.ndarray:
+        return upper_bounds(test_points, part, cutter, contacts.cc[r], contacts.normal[r], axes,
+                            cc_surface=_take(contacts.surface, r), config=cfg)
+
+    return _over_b(contacts, sizes)
 
 
 def plan_orientations(
@@ -76,16 +103,22 @@ def plan_orientations(
     required: float,
     cfg: Config,
     b_range: tuple[float, float],
+    bound_fn=None,
+    searched=None,
 ) -> Orientations:
     """Best B and feasible intervals of every CC point (`fn` exact, `coarse_fn` its cheaper
-    upper bound for the scan), then the shortest-path and greedy orientations inside them.
-    `b_original` (N,) the CAM's B (nan: none), `path_length` (N,) mm of the step arriving at
-    each point, `required` the size the real cutter needs (mm)."""
+    upper bound for the scan, `bound_fn` a still cheaper one of that: see `best_b`), then the
+    shortest-path and greedy orientations inside them. `b_original` (N,) the CAM's B (nan:
+    none), `path_length` (N,) mm of the step arriving at each point, `required` the size the
+    real cutter needs (mm). `searched()`, when given, is called once the best-B search is done
+    (before the shortest path's own memory is taken)."""
     fa = cfg.four_axis
     n = len(b_original)
     best = best_b(fn, n, b_min=b_range[0], b_max=b_range[1], coarse_step=fa.b_coarse_step,
                   tolerance=fa.b_tolerance, required=required, reference=b_original,
-                  coarse_fn=coarse_fn)
+                  coarse_fn=coarse_fn, bound_fn=bound_fn)
+    if searched is not None:
+        searched()
     optima = interval_optima(best.grid, best.samples, best.feasible)
     greedy, _ = greedy_smoothing(optima, best.b_best)
     extra = np.concatenate(optima) if any(len(o) for o in optima) else None
