@@ -61,8 +61,12 @@ class TerminalView:
         self._tasks.append(self._progress.add_task(name, total=total))
 
     def advance(self, amount: float) -> None:
+        """Move the innermost bar and draw it at once (advances come between compiled batches,
+        a few dozen per step: a short step shows its progress too, not only rich's 10 Hz
+        frames)."""
         if self._tasks and self._tasks[-1] is not None:
             self._progress.advance(self._tasks[-1], amount)
+            self._progress.refresh()
 
     def end(self, name: str, seconds: float) -> None:
         task = self._tasks.pop() if self._tasks else None
