@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The package as a user gets it: build the wheel, install it without extras into a new venv
 # outside the repository, and from another directory, with an empty kernel cache, run
-# `pathcheck info` on a sample, the demo job (check, post, report), and a STEP part (which
-# must say, in one line, which extra to install). Prints the venv size and the times.
+# `pathcheck info` on a sample, the demo job (check, post with --on-findings stop as `make demo`
+# does, report), and a STEP part (which must say, in one line, which extra to install). Prints
+# the venv size and the times.
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 work=$(mktemp -d "${TMPDIR:-/tmp}/pathcheck-wheel.XXXXXX")
@@ -23,11 +24,11 @@ unset NUMBA_CACHE_DIR
 seconds() { printf "%d.%d" $(($1 / 1000000000)) $(($1 % 1000000000 / 100000000)); }
 start=$(date +%s%N)
 status=0
-"$pc" "$job" -o job.nc --json job.json >check.log 2>&1 || status=$?
+"$pc" "$job" -o job.nc --json job.json --on-findings stop >check.log 2>&1 || status=$?
 cold=$(seconds $(($(date +%s%N) - start)))
 [ "$status" -eq 1 ] || { cat check.log; echo "wheel-check: demo exit $status, expected 1" >&2; exit 1; }
 start=$(date +%s%N)
-"$pc" "$job" -o job.nc --json job.json >/dev/null 2>&1 || status=$?
+"$pc" "$job" -o job.nc --json job.json --on-findings stop >/dev/null 2>&1 || status=$?
 warm=$(seconds $(($(date +%s%N) - start)))
 "$pc" report -o report.html >/dev/null
 for f in job.nc job.json report.html; do
