@@ -1,4 +1,4 @@
-"""The cutter model of MATH.md (flat, ball, bull-nose, general APT, tapered ball) and its parsers.
+"""The cutter model of docs/MATH.md §2 (flat, ball, bull-nose, APT, tapered ball) and its parsers.
 
 A `Cutter` is plain data (mm, radians) plus the family's closed forms: the imaginary-cutter size
 (compiled in `checker.kernels`), the tool tip from a contact, the profile radius and the signed

@@ -8,7 +8,8 @@ outside the core; inside it, minus r plus the depth inside the core; at a conica
 the grown core is rounded where the real tip is sharp, short of it by r (sec(psi) - 1) along
 the axis). Used by the contact search (`geometry.contact`), the cutter's own signed distance and
 the mesh checks' tool pieces (`checker.mesh.tool`). Points (N,3) in mm, in the part frame with
-the tool's tips and unit axes (N,3), or in the tool frame with tips 0 and axes +z."""
+the tool's tips and unit axes (N,3), or in the tool frame with tips 0 and axes +z.
+(docs/MATH.md §2)"""
 
 from __future__ import annotations
 

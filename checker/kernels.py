@@ -1,4 +1,4 @@
-"""Numba kernels: the size of the imaginary cutter through a test point (MATH.md, thesis ch. 2).
+"""Numba kernels: the size of the imaginary cutter through a test point (docs/MATH.md §3).
 
 All inputs are float64 arrays in the TOOL frame (tool axis +z, mm). For a pair (test point P,
 CC point Pcc with unit normal n out of the material) the kernels return the size, in the family's
@@ -9,15 +9,17 @@ point cannot be touched tangentially (n_z <= 0 or n_z < sin(theta)), inf when no
 family reaches P (below the tangent plane, beyond the R -> inf limiting surface, denominator <= 0).
 
 `tol` (mm, >= 0) is a depth tolerance: P counts as cut only when it lies at least `tol` inside the
-cutter (the profile offset inward by `tol`). `tol = 0` is the exact model of MATH.md.
+cutter (the profile offset inward by `tol`). `tol = 0` is the exact model (docs/MATH.md §3.6).
 
 Contact cases (APT family):
 - fillet contact (sin(theta) <= n_z <= cos(psi)): fillet centre O = Pcc + r n, axis through
-  O + R e, closed form R = (|d|^2 - k^2) / (2 (e.d + k)) with k from the band of dz (MATH.md);
+  O + R e, closed form R = (|d|^2 - k^2) / (2 (e.d + k)) with k from the band of dz
+  (docs/MATH.md §3.1, §3.2);
 - tip contact (psi > 0 and n_z > cos(psi), e.g. a drill on a floor): the cone vertex touches Pcc,
-  the axis passes through Pcc, R is the smallest size whose solid contains P;
+  the axis passes through Pcc, R is the smallest size whose solid contains P (§3.3);
 - vertical normal (|n_xy| < EPS_H) with psi = 0: e is taken from the caller's `e`; without it the
-  worst case over all directions e is returned, R = (|d| - k) / 2.
+  worst case over all directions e is returned, R = (|d| - k) / 2 (§3.4).
+Ball family: docs/MATH.md §3.5; the thesis's errata the kernels correct: §4.
 """
 
 from __future__ import annotations

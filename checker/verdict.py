@@ -10,7 +10,8 @@ pose penetrates the part by more than the job's tolerance:
 A penetration of at most the tolerance is `within_tolerance` (counted apart, never a finding).
 Where nothing penetrates, the pose is `ok`; `inaccessible` marks a cutting pose whose contact
 point the cutter cannot touch (advice, never a finding). The allowable cutter and the margin
-are advice about a pose and never decide a verdict."""
+are advice about a pose and never decide a verdict.
+(docs/MATH.md §8)"""
 
 from __future__ import annotations
 

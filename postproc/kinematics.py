@@ -341,7 +341,7 @@ class Chain:
         return length
 
 
-# -- the 4-axis B-table helpers (DESIGN.md), kept for callers of the older API -------------
+# -- the 4-axis B-table helpers (docs/MATH.md §1), kept for callers of the older API -------------
 def axis_from_rotation(theta: np.ndarray) -> np.ndarray:
     """Part-frame tool axis ``(N, 3)`` of a B table for part rotations ``theta (N,)`` radians:
     ``(-sin b, 0, cos b)``."""

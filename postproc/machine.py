@@ -246,7 +246,7 @@ class Program(_Model):
 
 
 class Kinematics(_Model):
-    """The 4-axis view of a machine (DESIGN.md): a point on the first table axis in the part
+    """The 4-axis view of a machine (docs/MATH.md §1): a point on the first table axis in the part
     frame, and +1 / -1 as that axis turns the part about +Y / -Y."""
 
     table_center: Vec3 = (0.0, 0.0, 0.0)
@@ -345,7 +345,7 @@ class Machine(_Model):
 
     @property
     def kinematics(self) -> Kinematics:
-        """The first table axis as the DESIGN.md B table: a point on it in the part frame and
+        """The first table axis as the docs/MATH.md §1 B table: a point on it in the part frame and
         the sign of its turn about +Y (1 unless it turns the part about -Y)."""
         axis = self.rotary
         rot = np.asarray(self.setup.rotation, dtype=float)

@@ -36,7 +36,7 @@ from postproc.writer import MM_PER_INCH, Rows, format_program, write_program
 class PostMoves:
     """What the post needs per move, all in the part frame: ``tip (N,3)`` mm, unit ``axis (N,3)``
     (tip -> spindle), ``b_deg (N,)`` the part rotation about +Y in degrees that gives the axis
-    (DESIGN.md b, before ``b_direction``; NaN where the axis is not of that form), ``rapid
+    (docs/MATH.md §1 b, before ``b_direction``; NaN where the axis is not of that form), ``rapid
     (N,)`` bool, ``feed (N,)`` mm/min (nan for rapids), ``spindle
     (N,)`` rpm in effect (+ CW/M3, - CCW/M4, 0 stopped, nan unknown), ``coolant (N,)`` in effect
     (0 off, 7 mist, 8 flood, -1 unknown), ``tool (N,)`` in effect (0 unknown), ``comment`` one

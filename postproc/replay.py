@@ -28,12 +28,13 @@ class PartMotions:
     """Tool positions in the part frame, one row per block end (arcs: per chord end; blocks
     turning a rotary axis: per step).
     ``tip (N,3)`` mm, ``axis (N,3)`` unit (tip -> spindle), ``b_deg (N,)`` the part rotation
-    about +Y that gives the axis (DESIGN.md b; meaningful for 4-axis B tables), ``joints (N,k)``
-    the machine's rotary positions (deg, continuous, ``names`` order), ``xyz (N,3)`` program
-    X Y Z (work frame mm), ``tcp (N,)`` those are work-frame tips, ``rapid (N,)``, ``feed (N,)``
-    tip speed relative to the part mm/min (nan: rapid or unknown), ``minutes (N,)`` block time
-    (nan unknown), ``line (N,)`` program line, ``tool (N,)``, ``known (N,)`` the position is
-    known (not after G28/G53 until the axes are programmed again, nor at unknown words)."""
+    about +Y that gives the axis (b of docs/MATH.md §1; meaningful for 4-axis B tables),
+    ``joints (N,k)`` the machine's rotary positions (deg, continuous, ``names`` order),
+    ``xyz (N,3)`` program X Y Z (work frame mm), ``tcp (N,)`` those are work-frame tips,
+    ``rapid (N,)``, ``feed (N,)`` tip speed relative to the part mm/min (nan: rapid or
+    unknown), ``minutes (N,)`` block time (nan unknown), ``line (N,)`` program line,
+    ``tool (N,)``, ``known (N,)`` the position is known (not after G28/G53 until the axes are
+    programmed again, nor at unknown words)."""
 
     tip: np.ndarray
     axis: np.ndarray

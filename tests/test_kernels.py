@@ -395,9 +395,9 @@ def test_parallel_kernels_equal_serial():
 
 
 def test_conical_band_uses_corrected_k():
-    """MATH.md erratum 3: in the conical band k = dz cot(psi) + r csc(psi); the thesis's printed
-    eq. 2.30 (dz / tan(psi) + 2 r sin(psi)) gives a different size, the root-find agrees with
-    the corrected one."""
+    """docs/MATH.md §4 erratum 3: in the conical band k = dz cot(psi) + r csc(psi); the
+    thesis's printed eq. 2.30 (dz / tan(psi) + 2 r sin(psi)) gives a different size, the
+    root-find agrees with the corrected one."""
     c = _cutter("apt")
     r, psi = c.r, c.psi
     n = np.array([[-0.3, 0.0, math.sqrt(1 - 0.09)]])

@@ -76,7 +76,7 @@ def test_part_to_machine_matches_rotation_about_y(direction):
     machine = _machine(tuple(center), direction)
     p = rng.uniform(-100, 100, (50, 3))
     words = rng.uniform(-400, 400, 50)
-    # DESIGN.md: a part point p sits at Ry(b) (p - c) + c, b = b_direction * word
+    # docs/MATH.md §1: a part point p sits at Ry(b) (p - c) + c, b = b_direction * word
     expected = (
         Rotation.from_euler("y", direction * words[:, None], degrees=True).apply(p - center)
         + center

@@ -14,7 +14,7 @@ Z = np.array([0.0, 0.0, 1.0])
 
 def axis_class(axis: np.ndarray, tol: float) -> str:
     """``"3-axis"`` when every unit axis (N, 3) is (0,0,1) within ``tol``; ``"4-axis-Y"`` when
-    every axis has |j| <= tol (rotary table about Y, DESIGN.md); else ``"multi-axis"``."""
+    every axis has |j| <= tol (rotary table about Y, docs/MATH.md §1); else ``"multi-axis"``."""
     if len(axis) == 0 or np.abs(axis - Z).max() <= tol:
         return "3-axis"
     if np.abs(axis[:, 1]).max() <= tol:

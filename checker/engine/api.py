@@ -1,5 +1,6 @@
 """`allowable(...)`: the allowable cutter size at many CC points (any tool axes): global scan with
-sound pruning over the test points, batched local refinement in (u, v), verdicts."""
+sound pruning over the test points, batched local refinement in (u, v), verdicts.
+(docs/MATH.md §3.7, §5, §6)"""
 
 from __future__ import annotations
 
@@ -444,7 +445,7 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.nd
     uv, half-widths) and the limits at the CC points themselves (rows, size, sid, uv): along
     the best direction the size is s0 + b rho + O(rho^2) (third-order contact); where b > 0 the
     infimum is s0, at the CC point, which no point reaches: extrapolated from rho and rho/2
-    (Richardson), the curvature limit for every cutter family."""
+    (Richardson), the curvature limit for every cutter family (docs/MATH.md §6.2, §6.3)."""
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
     dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
@@ -480,7 +481,8 @@ def _limit_at_cc(cutter, frame: RowFrame, Q: np.ndarray, part: Part, rows, sid, 
                  to_uv, angle: np.ndarray, radius: float):
     """(rows, size, sid, uv): the size's limit at the CC points (`_ring_starts`) along
     `angle`, 2 s(rho/2) - s(rho) with rho = `radius`; the opposite direction where that one
-    leaves the surface's domain (a CC point on its boundary; the curvature is the same)."""
+    leaves the surface's domain (a CC point on its boundary; the curvature is the same);
+    docs/MATH.md §6.3."""
     step = radius * to_uv(angle[:, None])[:, 0]
     out = (uv + step < lo) | (uv + step > hi)
     step = np.where(out.any(axis=1)[:, None], -step, step)

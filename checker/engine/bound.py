@@ -2,7 +2,8 @@
 minimum over all test points from above, so the scan's next pass needs only the points that can
 lie below it. Two ways in: the size at about one test point per grid cell of the row's trial
 region (`coarse_bounds`), or at given start points, e.g. the minima of nearby rows
-(`warm_bounds`); both then descend along the sample graph from the smallest."""
+(`warm_bounds`); both then descend along the sample graph from the smallest.
+(docs/MATH.md §5.2)"""
 
 from __future__ import annotations
 

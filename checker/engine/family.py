@@ -12,6 +12,7 @@ between `z0 - t s` and `z0 + H` (H the cutter length; the part top when the leng
 Tip contact (psi > 0, n_z > cos(psi)): the axis passes through Pcc, the disc is fixed (w = 0).
 Vertical normal without a direction e (worst case over e, R = (|d| - k) / 2): |d| <= 2 s + k,
 the disc about O_h with a = 2, w = 0.
+(docs/MATH.md §5.1)
 """
 
 from __future__ import annotations

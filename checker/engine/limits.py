@@ -11,7 +11,8 @@ k_n(t) = n.kappa = |n_h| (e.kappa), hence
 
 the infimum over the points of the contour next to Pcc, which no sample and no local step
 reaches (the points within the exclusion radius are the CC point). Everywhere else (balls,
-bull-noses) the rings of refinement starts around Pcc reach the curvature limit."""
+bull-noses) the rings of refinement starts around Pcc reach the curvature limit.
+(docs/MATH.md §3.7)"""
 
 from __future__ import annotations
 

@@ -20,7 +20,8 @@ start's best point (error O(h^3) for a step of length h, so the model becomes ex
 steps converge), in one compiled parallel kernel over all starts (`_steps`); only exact values
 are ever reported. The model's value (`_model_value`) is a called function, not inlined: its
 dozen call sites inlined took two minutes to compile; its arguments are few flat arrays
-(`trims.PackedTrims` is two), so that the call costs little."""
+(`trims.PackedTrims` is two), so that the call costs little.
+(docs/MATH.md §6)"""
 
 from __future__ import annotations
 

@@ -18,6 +18,7 @@ by `_EVAL_MARGIN_MM` alone, which holds every point of size <= L(u): that finds 
 row's result unless G(B) < L(B) or crossings are wanted, and G(B) != G(u); then a pass at
 G(B) and L(B) gives it. Rows without a bound take a pass at s_cap. Rows that no cutter of the
 family can touch (every size 0: no sound region) take the plain growing scan itself.
+(docs/MATH.md §5.2)
 """
 
 from __future__ import annotations

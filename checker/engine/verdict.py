@@ -1,4 +1,5 @@
-"""Verdicts of the real cutter at each CC point from the allowable size and the limiting point."""
+"""Verdicts of the real cutter at each CC point from the allowable size and the limiting point.
+(docs/MATH.md §8)"""
 
 from __future__ import annotations
 

@@ -1,10 +1,11 @@
-"""The 4-axis convention of DESIGN.md: a rotary table about machine +Y through `table_center`.
+"""The 4-axis convention (docs/MATH.md §1): a rotary table about machine +Y through
+`table_center`.
 
 Commanding B = b turns the part by b about +Y (right-hand rule): a part point p sits at machine
 position Ry(b) (p - c) + c. The tool axis seen in the part frame is (-sin b, 0, cos b), so a CL
 axis (i, 0, k) maps to b = atan2(-i, k). Machines that count B the other way set b_direction = -1
-(handled by the post-processor: B here is always the DESIGN.md angle). Angles in degrees at this
-module's boundary.
+(handled by the post-processor: B here is always the angle of docs/MATH.md §1). Angles in
+degrees at this module's boundary.
 """
 
 from __future__ import annotations

@@ -15,6 +15,7 @@ that the bisection of the ends replaces); a bisection probe whose bound is below
 on the infeasible side. Every answer is the one without the bound. (The golden section gains
 nothing from it: its probes lie near the top, where the bound is seldom below the point a
 probe is compared with; about 4 % of them on the compressor job.)
+(docs/MATH.md §7.1, §5.3)
 """
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
 """Feasible B sets as intervals, from the allowable size sampled over a B grid.
 
-The feasible set of a CC point for the real cutter is {B : allowable(B) >= size + tol} (MATH.md,
-4-axis). Given allowable sizes on a sorted B grid, the set is a union of intervals whose ends are
-found by linear interpolation of the crossing between two grid samples (or refined by the caller).
-Angles in degrees.
+The feasible set of a CC point for the real cutter is {B : allowable(B) >= size + tol}
+(docs/MATH.md §7.1). Given allowable sizes on a sorted B grid, the set is a union of intervals
+whose ends are found by linear interpolation of the crossing between two grid samples (or
+refined by the caller). Angles in degrees.
 """
 
 from __future__ import annotations

@@ -14,6 +14,7 @@ Two methods, reported side by side:
 A point with no feasible B is flagged (`feasible = False`) and never dropped: it keeps a B (its
 best B for the greedy pass; for the shortest path, any B, pulled towards its best B).
 Angles in degrees; path lengths in mm.
+(docs/MATH.md §7.2)
 """
 
 from __future__ import annotations

@@ -2,6 +2,7 @@
 the best B and the feasible B intervals for the real cutter; along the path the B chosen by the
 shortest path (and the seed-002 greedy smoothing beside it). The real tool along the program
 that is written is checked by `checker.verify`. Part frame, mm, degrees.
+(docs/MATH.md §7)
 """
 
 from __future__ import annotations

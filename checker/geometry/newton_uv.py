@@ -9,6 +9,7 @@ height brought to a level: H = a a^T) the least-norm step d = -H^+ g with H^+ = 
 A parameter on a bound of its domain whose step would leave it (and that does not wrap around,
 as on a closed surface's seam) is held, and the other takes its one-dimensional step -g_k / H_kk
 (an active-set step). Parameters in the surface's own units.
+(docs/MATH.md §6.1)
 """
 
 from __future__ import annotations
