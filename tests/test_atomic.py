@@ -12,6 +12,7 @@ import sys
 import textwrap
 
 import pytest
+from wall_jobs import wall_pass, write_wall_part
 
 from checker.atomic import current_umask, write_file
 from checker.errors import PathcheckError
@@ -92,10 +93,14 @@ def test_sigterm_mid_write_removes_the_temporary_file(tmp_path):
 
 
 def test_cli_outputs_have_the_umask_permissions(repo, tmp_path):
-    """`pathcheck JOB -o JOB.nc --json JOB.json` under umask 027: both files 0640."""
+    """`pathcheck JOB -o JOB.nc --json JOB.json` under umask 027: both files 0640 (a small job:
+    a ball along a floor into a wall, tests/wall_jobs.py)."""
+    write_wall_part(tmp_path / "wall.json")
+    job = tmp_path / "wall.apt"
+    job.write_text("\n".join(["UNITS/MM", *wall_pass("CUTTER/10,5", 1, 0.0, 5.0), "FINI"]))
     nc, js = tmp_path / "small.nc", tmp_path / "small.json"
     run = subprocess.run(
-        [sys.executable, "-m", "checker.cli", str(repo / "samples/compressor/compressor_small.apt"),
+        [sys.executable, "-m", "checker.cli", str(job),
          "-o", str(nc), "--json", str(js), "--on-findings", "comment"],
         capture_output=True, text=True, timeout=600, preexec_fn=lambda: os.umask(0o027),
         env=dict(os.environ, PATHCHECK_STORE=str(tmp_path / "results.sqlite")))

@@ -11,33 +11,19 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from engine_parts import geomdl_surface
-from geomdl import exchange, multi
+from wall_jobs import X_WALL, wall_pass, write_wall_part
 
 from checker.job import check_job
 from checker.results import ResultsDocument
 
 REPO = Path(__file__).resolve().parents[1]
-X_WALL = 8.0
-
-
-def _patch(corner, eu, ev):
-    c, a, b = (np.asarray(t, float) for t in (corner, eu, ev))
-    return geomdl_surface(np.array([[c, c + b], [c + a, c + a + b]]), np.ones((2, 2)), (1, 1),
-                          [0, 0, 1, 1], [0, 0, 1, 1])
 
 
 @pytest.fixture(scope="module")
 def wall_job(tmp_path_factory) -> Path:
     d = tmp_path_factory.mktemp("walljob")
-    floor = _patch([-30, -20, 0], [30 + X_WALL, 0, 0], [0, 40, 0])      # normal +z
-    wall = _patch([X_WALL, -20, 0], [0, 40, 0], [0, 0, 30])             # normal -x
-    exchange.export_json(multi.SurfaceContainer([floor, wall]), str(d / "wall.json"))
-    xs = np.arange(-10.0, 5.01, 0.5)
-    lines = ["PARTNO/WALL", "UNITS/MM", "CUTTER/10,5", "LOADTL/1", "RAPID",
-             "GOTO/-10.0,0.0,20.0", "FEDRAT/500,MMPM"]
-    lines += [f"GOTO/{x:.4f},0.0,0.0" for x in xs]
-    lines += ["RAPID", "GOTO/5.0,0.0,20.0", "FINI"]
+    write_wall_part(d / "wall.json")
+    lines = ["PARTNO/WALL", "UNITS/MM", *wall_pass("CUTTER/10,5", 1, 0.0, 5.0), "FINI"]
     (d / "wall.apt").write_text("\n".join(lines) + "\n")
     return d / "wall.apt"
 

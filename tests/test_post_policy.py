@@ -19,8 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from engine_parts import geomdl_surface
-from geomdl import exchange, multi
+from wall_jobs import wall_pass, write_wall_part
 
 from checker import __version__
 from checker.errors import PathcheckError
@@ -33,20 +32,7 @@ from postproc.machine import load_machine
 from postproc.reader import read_gcode_text
 
 REPO = Path(__file__).resolve().parents[1]
-X_WALL = 8.0
 _FLAG = re.compile(r"^\(PATHCHECK ([A-Z]+) CL LINE (\d+)")
-
-
-def _patch(corner, eu, ev):
-    c, a, b = (np.asarray(t, float) for t in (corner, eu, ev))
-    return geomdl_surface(np.array([[c, c + b], [c + a, c + a + b]]), np.ones((2, 2)), (1, 1),
-                          [0, 0, 1, 1], [0, 0, 1, 1])
-
-
-def _pass(cutter: str, tool: int, y: float, x_end: float) -> list[str]:
-    xs = np.arange(-10.0, x_end + 0.01, 0.5)
-    return [cutter, f"LOADTL/{tool}", "RAPID", f"GOTO/-10.0,{y},20.0", "FEDRAT/500,MMPM",
-            *(f"GOTO/{x:.4f},{y},0.0" for x in xs), "RAPID", f"GOTO/{x_end},{y},20.0"]
 
 
 @pytest.fixture(scope="module")
@@ -55,15 +41,13 @@ def jobs(tmp_path_factory) -> Path:
     line 35 on, the rapid out of the wall a crash); clean.apt: a ball D10 then a ball D6 (tools
     1 and 2) along the floor, clear of the wall. Each with its part beside it."""
     d = tmp_path_factory.mktemp("policy")
-    floor = _patch([-30, -20, 0], [30 + X_WALL, 0, 0], [0, 40, 0])
-    wall = _patch([X_WALL, -20, 0], [0, 40, 0], [0, 0, 30])
-    exchange.export_json(multi.SurfaceContainer([floor, wall]), str(d / "wall.json"))
+    write_wall_part(d / "wall.json")
     shutil.copy(d / "wall.json", d / "clean.json")
     head = ["PARTNO/POLICY", "UNITS/MM"]
     (d / "wall.apt").write_text("\n".join(
-        [*head, *_pass("CUTTER/10,5", 1, 0.0, 5.0), "FINI"]) + "\n")
+        [*head, *wall_pass("CUTTER/10,5", 1, 0.0, 5.0), "FINI"]) + "\n")
     (d / "clean.apt").write_text("\n".join(
-        [*head, *_pass("CUTTER/10,5", 1, 0.0, 0.0), *_pass("CUTTER/6,3", 2, 5.0, 1.0),
+        [*head, *wall_pass("CUTTER/10,5", 1, 0.0, 0.0), *wall_pass("CUTTER/6,3", 2, 5.0, 1.0),
          "FINI"]) + "\n")
     return d
 
