@@ -210,19 +210,13 @@ class PostedProgram:
 
 def _validate(moves: PostMoves, machine: Machine) -> None:
     n = len(moves)
-    for name in ("axis", "b_deg", "rapid", "feed", "spindle", "coolant", "tool", "line"):
-        if len(getattr(moves, name)) != n:
+    for name in ("axis", "b_deg", "rapid", "feed", "spindle", "coolant", "tool", "line",
+                 "comment", "stop"):
+        column = getattr(moves, name)
+        if column is not None and len(column) != n:
             raise PathcheckError(
-                f"PostMoves.{name} has {len(getattr(moves, name))} rows, expected {n}", code="post"
+                f"PostMoves.{name} has {len(column)} rows, expected {n}", code="post"
             )
-    if moves.stop is not None and len(moves.stop) != n:
-        raise PathcheckError(
-            f"PostMoves.stop has {len(moves.stop)} rows, expected {n}", code="post"
-        )
-    if len(moves.comment) != n:
-        raise PathcheckError(
-            f"PostMoves.comment has {len(moves.comment)} rows, expected {n}", code="post"
-        )
     if n == 0:
         raise PathcheckError("nothing to post: the tool path has no moves", code="post")
     finite = np.isfinite(moves.tip).all(axis=1) & np.isfinite(moves.axis).all(axis=1)

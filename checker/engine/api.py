@@ -93,6 +93,14 @@ def _cache_of(tp: TestPoints) -> dict:
     return tp.__dict__.setdefault("_engine_cache", {})
 
 
+def _rows(cc, normals, axes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The CC points (N, 3), unit normals and unit axes (N, 3; one (3,) axis broadcast) of a
+    call, checked (PathcheckError naming the argument)."""
+    cc = _rows3(cc, None, "cc")
+    return (cc, _unit(_rows3(normals, len(cc), "normals"), "normals"),
+            _unit(_rows3(axes, len(cc), "axes"), "axes"))
+
+
 def _tool_frames(tp: TestPoints, cutter, cc: np.ndarray, normals: np.ndarray, axes: np.ndarray,
                  toward: np.ndarray | None, cfg: Config):
     """The rows' tool frames (part frame in, unit `normals` and `axes` (N, 3)): (axes (N, 3),
@@ -130,10 +138,8 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
     cfg = config or default_config()
     if method not in ("exact", "pso"):
         raise PathcheckError(f"unknown method '{method}', expected 'exact' or 'pso'", code="input")
-    cc = _rows3(cc, None, "cc")
+    cc, normals, axes = _rows(cc, normals, axes)
     n_rows = len(cc)
-    normals = _unit(_rows3(normals, n_rows, "normals"), "normals")
-    axes = _unit(_rows3(axes, n_rows, "axes"), "axes")
     if part.mesh is not None:
         return _on_mesh(part, cutter, cc, normals, axes, cfg)
     tw = None if toward is None else _rows3(toward, n_rows, "toward")
@@ -181,11 +187,8 @@ def upper_bounds(test_points: TestPoints, part: Part, cutter, cc, normals, axes,
     size over all test points (the scan's exact minimum, which the refinement only lowers),
     where that is within `max_size`. A mesh part has none (inf)."""
     cfg = config or default_config()
-    cc = _rows3(cc, None, "cc")
-    n_rows = len(cc)
-    normals = _unit(_rows3(normals, n_rows, "normals"), "normals")
-    axes = _unit(_rows3(axes, n_rows, "axes"), "axes")
-    bound = np.full(n_rows, np.inf)
+    cc, normals, axes = _rows(cc, normals, axes)
+    bound = np.full(len(cc), np.inf)
     if part.mesh is not None:
         return bound
     tp = test_points
