@@ -83,9 +83,9 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
               on_findings: str = "refuse") -> ResultsDocument:
     """Check a job: `apt_path` the CL file; `part_path` the part (default: the file beside the
     job with the same stem); `cutter` a `Cutter` or "CUTTER/..." overriding the file's; `config`
-    a Config or a TOML path; `machine` a machine name or TOML file (default: the CL file's
-    `PPRINT/MACHINE`, else fanuc-hmc); `output` the G-code to write; `b_range` (degrees) the B
-    range searched for 4-axis operations; `reorient` plans B for 3-axis operations too;
+    a Config or a TOML path; `machine` a machine name, TOML file or `Machine` (default: the CL
+    file's `PPRINT/MACHINE`, else fanuc-hmc); `output` the G-code to write; `b_range` (degrees)
+    the B range searched for 4-axis operations; `reorient` plans B for 3-axis operations too;
     `part_transform` moves a part exported in another frame (`geometry.transform`);
     `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's);
     `on_findings` what posting does when the program as written has findings or points
@@ -197,7 +197,7 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
     if planned or output is not None:
         from postproc.post import machine_for_toolpath
 
-        mach = machine_for_toolpath(toolpath, None if machine is None else str(machine))
+        mach = machine_for_toolpath(toolpath, machine)
     with step("plan and check the program"):
         program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach)
     with step("advice at the cutting poses"):

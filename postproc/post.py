@@ -180,7 +180,7 @@ def moves_from_toolpath(
     )
 
 
-def machine_for_toolpath(toolpath, name: str | Machine | None = None) -> Machine:
+def machine_for_toolpath(toolpath, name: str | Path | Machine | None = None) -> Machine:
     """The machine to post ``toolpath`` for: ``name`` (a Machine, a machine name or .toml file)
     when given, else the CL file's ``PPRINT/MACHINE NAME``, else the default machine
     (fanuc-hmc)."""

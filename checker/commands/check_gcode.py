@@ -36,8 +36,7 @@ def assumed_units(moves, given: str | None, machine) -> None:
 
 @click.command()
 @click.argument("program", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--machine", "machine_name", default=None, metavar="NAME|FILE",
-              help="a shipped machine's name or a machine TOML file [default: fanuc-hmc]")
+@opt.machine_option(help="a shipped machine's name or a machine TOML file [default: fanuc-hmc]")
 @click.option(
     "--dialect", default=None,
     help="override the machine's dialect (fanuc, haas, linuxcnc, siemens, heidenhain, millplus)",
@@ -54,7 +53,7 @@ def assumed_units(moves, given: str | None, machine) -> None:
 @opt.json_option("the program's summary (with --part and --cutter: the results document)")
 @opt.store_option()
 @click.option("--no-store", is_flag=True, help="do not record this check in the results store")
-def check_gcode(program: Path, machine_name, dialect, units, part_path, cutter_text, tool_name,
+def check_gcode(program: Path, machine, dialect, units, part_path, cutter_text, tool_name,
                 tool_library, config_path, json_out, store_path, no_store) -> None:
     """Read PROGRAM (G-code) for a machine, bring its moves back into the part frame and, with
     --part and --cutter, check them like `pathcheck JOB.apt` (exit 1 on findings).
@@ -71,23 +70,23 @@ def check_gcode(program: Path, machine_name, dialect, units, part_path, cutter_t
     from postproc.reader import CYCLE, PROGRAMMED, read_gcode
     from postproc.replay import part_motions
 
-    machine = load_machine(machine_name)
+    mach = load_machine(machine)
     cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
     if part_path is not None and not part_path.is_file():
         raise PathcheckError(
             "part file not found: expected an existing file", path=part_path, code="part"
         )
     with step("read the program"):
-        moves = read_gcode(program, dialect or machine.dialect, units=units or machine.units)
-    assumed_units(moves, units, machine)
+        moves = read_gcode(program, dialect or mach.dialect, units=units or mach.units)
+    assumed_units(moves, units, mach)
     if isinstance(cutter, str):  # read in the program's units (G20/G21, else --units)
         cutter = parse_cutter_in(cutter, moves.units)
     if not np.isin(moves.kind, (PROGRAMMED, CYCLE)).any():
         raise PathcheckError(f"no motion: expected G0/G1/G2/G3 moves or drilling cycles, found "
                              f"none in {moves.blocks} blocks", path=program, code="gcode")
     with step("the moves in the part frame"):
-        motions = part_motions(moves, machine)
-        doc = describe_program(moves, motions, machine)
+        motions = part_motions(moves, mach)
+        doc = describe_program(moves, motions, mach)
     opt.say(format_program_summary(doc), json_out=json_out)
     if part_path is None or cutter is None:
         opt.say("give --part and --cutter to check the program for gouges and interference",
@@ -102,7 +101,7 @@ def check_gcode(program: Path, machine_name, dialect, units, part_path, cutter_t
     from postproc.replay import toolpath_of
 
     toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)
-    result = check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=machine_name,
+    result = check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=mach,
                             config=config_path)
     finish(result, json_out, store=not no_store, store_path=opt.store_of(store_path, config_path))
     if doc["machine_checks"]:
