@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from checker.apt import read_cl
+from checker.b_axis import axis_for_b
 from checker.cutter import parse_cutter
 from checker.engine import allowable
-from checker.four_axis.axes import axis_for_b
 from checker.geometry import load_part
 from checker.geometry.contact import cl_to_cc
 from checker.geometry.sampling import sample_part

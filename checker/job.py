@@ -4,8 +4,9 @@ operation is checked as programmed; a 4-axis operation gets the best and chosen 
 from the allowable-cutter engine, and keeps the CAM's angles where re-orientation does not
 remove its findings); then check the program that is written: the real tool at every pose and
 along every move (`checker.verify`), one verdict rule (`checker.verdict`); advice at the
-cutting poses (contact, allowable cutter, margin); summarise, and post that program. Part
-frame, mm, degrees."""
+cutting poses (contact, allowable cutter, margin); summarise (`check_program` stops here and
+returns what is to be written); and, when G-code is asked for, post that program (the posting
+stage, `checker.posting`). Part frame, mm, degrees."""
 
 from __future__ import annotations
 
@@ -15,55 +16,25 @@ from pathlib import Path
 
 import numpy as np
 
-from checker.config import Config, default_config, load_config
+from checker import written
+from checker.apt import read_cl
+from checker.b_axis import check_four_axis
+from checker.config import Config
+from checker.document import build_document
 from checker.errors import PathcheckError
+from checker.geometry import load_part
+from checker.geometry.sampling import sample_part
+from checker.geometry.tessellate import part_triangles
+from checker.geometry.transform import parse_transform, transform_part
+from checker.job_inputs import job_config, operation_cutters, part_file
+from checker.mesh.bvh import MeshIndex
+from checker.posting import post_checked
 from checker.progress import step
 from checker.results import ResultsDocument
+from checker.tolerance import operation_tolerances
+from postproc.post import machine_for_toolpath
 
 _AXIS_TOL = 1e-9  # axes equal to this are one axis (an indexed operation)
-
-
-def _config(config) -> Config:
-    if config is None:
-        return default_config()
-    return config if isinstance(config, Config) else load_config(config)
-
-
-def _part_path(apt_path: Path, part_path) -> Path:
-    from checker.geometry import BESIDE_SUFFIXES, find_part_beside
-
-    if part_path is not None:
-        return Path(part_path)
-    found = find_part_beside(apt_path)
-    if found is None:
-        raise PathcheckError(
-            f"no part given and none beside the job: expected --part PATH, a file "
-            f"{apt_path.stem}{{{','.join(BESIDE_SUFFIXES)}}} (any case), or --no-check to "
-            "post without checking", path=apt_path, code="part")
-    return found
-
-
-def _cutters(toolpath, ops: np.ndarray, cutter, apt_path: Path,
-             cutter_units: str | None = None) -> dict[int, object]:
-    """The real cutter of every operation index in `ops`; a `cutter` statement given as text
-    is read in `cutter_units` (default: the job's units)."""
-    from checker.cutter import Cutter, parse_cutter_in
-
-    if cutter is not None:
-        c = cutter if isinstance(cutter, Cutter) else parse_cutter_in(
-            str(cutter), cutter_units or toolpath.units)
-        return {int(o): c for o in np.unique(ops)}
-    out = {}
-    for o in np.unique(ops):
-        op = toolpath.operations[int(o)]
-        if op.cutter is None:
-            rec = toolpath.records[op.first_record] if op.end_record > op.first_record else None
-            raise PathcheckError(
-                f"operation '{op.name}' has no cutter: expected a CUTTER/ or TLDATA/ statement "
-                f"before its moves, or --cutter", path=apt_path,
-                line=None if rec is None else rec.line, code="cutter")
-        out[int(o)] = op.cutter
-    return out
 
 
 def operation_class(axes: np.ndarray, j_tol: float) -> str:
@@ -89,9 +60,7 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
     `part_transform` moves a part exported in another frame (`geometry.transform`);
     `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's);
     `on_findings` what posting does when the program as written has findings or points
-    without a feasible B (`written.post`: refuse raises `written.PostRefusedError`)."""
-    from checker.apt import read_cl
-
+    without a feasible B (`posting.post_checked`: refuse raises `posting.PostRefusedError`)."""
     t0 = time.perf_counter()
     with step("read the CL file"):
         toolpath = read_cl(Path(apt_path), require_cutter=cutter is None)
@@ -99,25 +68,6 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
                           config=config, output=output, b_range=b_range, reorient=reorient,
                           part_transform=part_transform, started=t0,
                           cutter_units=cutter_units, on_findings=on_findings)
-
-
-def post_unchecked(apt_path, output, cutter=None, machine=None, config=None,
-                   cutter_units: str | None = None) -> Path:
-    """Post a job without checking it (no part needed): the CL's own tool axes (the machine's
-    inverse kinematics finds the rotary words, B on a 4-axis table), every operation's cutter
-    (or `cutter`, a `Cutter` or "CUTTER/..." read in `cutter_units`, default the job's) in the
-    header, which says NOT CHECKED. Returns the path written."""
-    from checker.apt import read_cl
-    from postproc.post import post_toolpath
-
-    cfg = _config(config)
-    toolpath = read_cl(Path(apt_path), require_cutter=False)
-    ops = np.arange(len(toolpath.operations))
-    cutters = None if cutter is None else _cutters(toolpath, ops, cutter, Path(apt_path),
-                                                   cutter_units)
-    with step("post the G-code"):
-        return post_toolpath(toolpath, output, machine=machine, cutters=cutters,
-                             arc_chord_tol=cfg.check.arc_chord_tolerance)
 
 
 @dataclass
@@ -136,8 +86,6 @@ class _Job:
     def test_points(self):
         """The part's test points for the allowable-cutter engine (NURBS parts), made once."""
         if self.samples is None:
-            from checker.geometry.sampling import sample_part
-
             self.samples = sample_part(self.part, geometry=self.cfg.geometry)
         return self.samples
 
@@ -148,28 +96,36 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
                    started: float | None = None, cutter_units: str | None = None,
                    on_findings: str = "refuse") -> ResultsDocument:
     """`check_job` on a tool path already in memory (read from a CL file, or from a G-code
-    program by `pathcheck check-gcode`); `toolpath.path` names the job."""
-    from checker import written
-    from checker.document import build_document
-    from checker.geometry import load_part
-    from checker.geometry.tessellate import part_triangles
-    from checker.mesh.bvh import MeshIndex
-    from checker.tolerance import operation_tolerances
+    program by `pathcheck check-gcode`); `toolpath.path` names the job. With `output`, the
+    checked program is posted there (`posting.post_checked`)."""
+    checked = check_program(toolpath, part_path=part_path, cutter=cutter, machine=machine,
+                            config=config, b_range=b_range, reorient=reorient,
+                            part_transform=part_transform, started=started,
+                            cutter_units=cutter_units, to_post=output is not None)
+    if output is not None:
+        post_checked(checked, output, on_findings)
+    return checked.document
 
+
+def check_program(toolpath, part_path=None, cutter=None, machine=None, config=None, *,
+                  b_range: tuple[float, float] | None = None, reorient: bool = False,
+                  part_transform: str | None = None, started: float | None = None,
+                  cutter_units: str | None = None, to_post: bool = False) -> written.Checked:
+    """The check of `check_toolpath` without posting: the results document and what is to be
+    written (the program, its machine, cutters and finding counts). `to_post`: the program will
+    be posted, so its machine is resolved even when no operation is planned."""
     t0 = time.perf_counter() if started is None else started
-    cfg = _config(config)
+    cfg = job_config(config)
     apt_path = Path(toolpath.path)
     m = toolpath.motion_arrays(arc_chord_tol=cfg.check.arc_chord_tolerance)
     if not (~np.asarray(m.rapid, bool)).any():
         raise PathcheckError("no cutting moves: expected GOTO records after FEDRAT, found only "
                              "rapid moves or none", path=apt_path, code="parse")
-    ppath = _part_path(apt_path, part_path)
+    ppath = part_file(apt_path, part_path)
     with step("load the part"):
         part = load_part(ppath, geometry=cfg.geometry)
     transform = None
     if part_transform is not None:
-        from checker.geometry.transform import parse_transform, transform_part
-
         R, t = parse_transform(part_transform)
         part = transform_part(part, R, t)
         transform = np.column_stack([R, t]).ravel().tolist()
@@ -178,7 +134,7 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
         index = MeshIndex.build(tris.vertices, tris.triangles)
     job = _Job(toolpath, m, part, tris, index, cfg, apt_path)
     ops = np.unique(m.op)
-    cutters = _cutters(toolpath, ops, cutter, apt_path, cutter_units)
+    cutters = operation_cutters(toolpath, ops, cutter, apt_path, cutter_units)
     tol = operation_tolerances(toolpath, cfg.check.depth_tolerance, tris.typical,
                                cfg.check.arc_chord_tolerance)
     mach = None
@@ -187,30 +143,17 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
     asked = reorient or b_range is not None
     for o, cls in classes.items():
         if cls == "multi-axis" and asked:  # a B search for a path that is not 4-axis: say where
-            from checker.four_axis.axes import check_four_axis
-
             rows = np.flatnonzero(m.op == o)
             check_four_axis(m.axis[rows], m.line[rows], str(apt_path),
                             cfg.four_axis.axis_j_tolerance)
     planned = {o for o, cls in classes.items()
                if cls == "4-axis-Y" or (cls == "3-axis" and asked)}
-    if planned or output is not None:
-        from postproc.post import machine_for_toolpath
-
+    if planned or to_post:
         mach = machine_for_toolpath(toolpath, machine)
     with step("plan and check the program"):
         program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach)
     with step("advice at the cutting poses"):
         doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
-    if output is not None:
-        counts = written.written_counts(doc.summary.counts, program)
-        try:
-            with step("post the G-code"):
-                doc.gcode = str(written.post(job, program, output, mach, cutters, counts,
-                                             on_findings))
-        except (PathcheckError, written.PostRefusedError) as err:
-            err.document = doc  # the check ran: the caller may still record it (#18)
-            doc.summary.time_s = time.perf_counter() - t0
-            raise
     doc.summary.time_s = time.perf_counter() - t0
-    return doc
+    counts = written.written_counts(doc.summary.counts, program)
+    return written.Checked(doc, job, program, mach, cutters, counts, t0)

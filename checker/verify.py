@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.four_axis.axes import axis_for_b, b_for_axis, rotate_about_y
+from checker.b_axis import axis_for_b, b_for_axis, rotate_about_y
 from checker.moves import START, Moves
 from checker.progress import step
 

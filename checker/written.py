@@ -15,8 +15,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from checker import verdict as vd
+from checker.b_axis import axis_for_b, b_for_axis, rotate_about_y
 from checker.errors import PathcheckError
-from checker.four_axis.axes import b_for_axis, rotate_about_y
+from checker.four_axis.job import plan_b
+from checker.geometry.contact import cl_to_cc, contact_from_toolpath
+from checker.mesh.tool import tool_pieces
 from checker.moves import RAPID, START, Moves, machine_moves
 from checker.verify import Depths, MoveDepths, PoseProbe, along_moves
 
@@ -74,8 +77,6 @@ def verify(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray, cutters: dict,
            center: np.ndarray) -> Verified:
     """The real tool at every pose of the motions (tips, axes per motion row) and along every
     move; rows with a table angle `b` (not nan) move linearly in machine X Y Z B."""
-    from checker.mesh.tool import tool_pieces
-
     cfg = job.cfg
     moves = machine_moves(replace(job.m, tip=tip, axis=axis))
     n = len(moves)
@@ -178,9 +179,6 @@ def cutting_rows(job, rows: np.ndarray) -> np.ndarray:
 def _plan(job, o: int, cutter, b_range, mach) -> Plan | None:
     """The 4-axis plan of operation o (NURBS parts: the allowable-cutter engine), or None
     where there is nothing to plan (no cutting rows, or a mesh part)."""
-    from checker.four_axis.job import plan_b
-    from checker.geometry.contact import cl_to_cc, contact_from_toolpath
-
     m = job.m
     rows = cutting_rows(job, np.flatnonzero(m.op == o))
     if rows.size == 0 or not job.part.surfaces:
@@ -224,8 +222,6 @@ def cam_b(job) -> np.ndarray:
 
 def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, mach) -> Program:
     """The program to write and the real tool along it (see the module docstring)."""
-    from checker.four_axis.axes import axis_for_b
-
     m = job.m
     center = _center(mach)
     b_cam = cam_b(job)
@@ -266,18 +262,20 @@ def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, 
     return Program(tip, axis, b, new, cam, handling, plans)
 
 
-ON_FINDINGS = ("refuse", "stop", "comment")
+@dataclass
+class Checked:
+    """A checked job and what is to be written: its results `document`, the `job` (motions,
+    part, config), the `program` as written, the `machine` (None when neither planning nor
+    posting needed one), every operation's cutter, `counts` the findings of the program as
+    written (`written_counts`) and `started` when the check began (`time.perf_counter`, s)."""
 
-
-class PostRefusedError(Exception):
-    """The program was not written (``--on-findings refuse``): ``counts`` the findings of the
-    program as written (`written_counts`), ``document`` the check that ran."""
-
-    def __init__(self, counts: dict[str, int], document=None) -> None:
-        self.counts = counts
-        self.document = document
-        super().__init__("the program has " + ", ".join(f"{k} {n}" for k, n in counts.items()
-                                                        if n))
+    document: object
+    job: object
+    program: Program
+    machine: object
+    cutters: dict
+    counts: dict[str, int]
+    started: float
 
 
 def infeasible_rows(program: Program) -> np.ndarray:
@@ -317,30 +315,3 @@ def flags(job, program: Program) -> list[str]:
     for row, texts in at.items():
         out[row] = "PATHCHECK " + "; ".join(texts)
     return out
-
-
-def post(job, program: Program, output, mach, cutters: dict, counts: dict[str, int],
-         on_findings: str = "refuse"):
-    """Write the program (`postproc.post.post_toolpath`) with its header (every cutter of
-    ``cutters``, the verdict from ``counts``) and what is wrong before each offending move: a
-    comment (``comment``), a comment and an optional stop M01 (``stop``); ``refuse`` writes
-    nothing when any count is non-zero (PostRefusedError). A multi-axis program cannot be
-    posted for a B-table machine."""
-    from postproc.header import verdict_text
-    from postproc.post import post_toolpath
-
-    if np.isnan(program.b).any():
-        bad = int(job.m.line[np.flatnonzero(np.isnan(program.b))[0]])
-        raise PathcheckError("cannot post a multi-axis path for a 4-axis machine: expected tool "
-                             "axes perpendicular to Y (j = 0)", path=job.apt_path, line=bad,
-                             code="not-4-axis")
-    if on_findings not in ON_FINDINGS:
-        raise PathcheckError(f"on_findings '{on_findings}': expected one of "
-                             f"{', '.join(ON_FINDINGS)}", code="usage")
-    if on_findings == "refuse" and any(counts.values()):
-        raise PostRefusedError(counts)
-    comments = flags(job, program)
-    stops = np.array([bool(c) for c in comments]) if on_findings == "stop" else None
-    return post_toolpath(job.toolpath, output, machine=mach, b_deg=program.b, comments=comments,
-                         stops=stops, arc_chord_tol=job.cfg.check.arc_chord_tolerance,
-                         tip=program.tip, cutters=cutters, verdict=verdict_text(counts))

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from checker.b_axis import axis_for_b, b_for_axis, check_four_axis
 from checker.errors import PathcheckError
 from postproc.machine import Machine
 
@@ -345,16 +346,12 @@ class Chain:
 def axis_from_rotation(theta: np.ndarray) -> np.ndarray:
     """Part-frame tool axis ``(N, 3)`` of a B table for part rotations ``theta (N,)`` radians:
     ``(-sin b, 0, cos b)``."""
-    from checker.four_axis.axes import axis_for_b
-
     return axis_for_b(np.degrees(theta))
 
 
 def rotation_from_axis(axis, *, j_tolerance: float = 1e-6, lines=None, path=None) -> np.ndarray:
     """Part rotation ``b (N,)`` degrees about +Y that puts part-frame axes ``(N, 3)`` along the
     spindle: ``b = atan2(-i, k)``; ``|j| > j_tolerance`` is an error naming the line."""
-    from checker.four_axis.axes import b_for_axis, check_four_axis
-
     axis = np.asarray(axis, dtype=float)
     check_four_axis(axis, lines, path, j_tolerance)
     return b_for_axis(axis)

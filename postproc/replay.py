@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from checker.b_axis import b_for_axis
 from checker.errors import PathcheckError
 from checker.input_limits import MAX_PROGRAM_POINTS
 from checker.toolpath import MotionArrays, Operation, ToolPath
@@ -216,8 +217,6 @@ def part_motions(
     rapid = moves.motion[src] == 0
     ok = ~rapid & known & prev_known
     feed = np.where(ok & np.isfinite(speed), speed, np.nan)
-    from checker.four_axis.axes import b_for_axis
-
     return PartMotions(
         tip=tip,
         axis=axis,

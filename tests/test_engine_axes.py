@@ -8,12 +8,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from checker.b_axis import axis_for_b
 from checker.cutter import parse_cutter
 from checker.engine import allowable
 from checker.engine.bins import _BIN_DEG, _OWN_GRID_ROWS, axis_bins, part_tops
 from checker.engine.candidates import SERIAL_ROWS, build_grid, disc_candidates
 from checker.engine.frames import tool_rotation, tool_rotations
-from checker.four_axis.axes import axis_for_b
 
 SAMPLE = "samples/compressor/compressor"
 SAME = 1e-9  # mm

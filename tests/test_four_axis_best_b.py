@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from checker.b_axis import axis_for_b, b_for_axis, check_b_range, check_four_axis
 from checker.errors import PathcheckError
-from checker.four_axis.axes import axis_for_b, b_for_axis, check_b_range, check_four_axis
 from checker.four_axis.best_b import END_TOLERANCE, best_b
 
 

@@ -125,8 +125,8 @@ def test_a_plane_never_limits_a_ball_or_a_bull_nose(state):
 
 def test_best_b_is_at_least_the_size_at_every_b_of_the_scan(state, mould_rows):
     engine = _engine()
+    from checker.b_axis import axis_for_b
     from checker.cutter import parse_cutter
-    from checker.four_axis.axes import axis_for_b
 
     row = mould_rows[:1]
     base = default_config()  # a coarse refinement keeps the test short; the scan is the same

@@ -135,14 +135,15 @@ def test_call_reads_the_request_from_stdin_and_writes_out(server, tmp_path):
 
 
 def test_call_cc_csv_and_nested_fields(tmp_path):
-    from checker.commands.call import _field, _read_cc, _set
+    from checker.cc_csv import cc_rows
+    from checker.commands.call import _field, _set
 
     csv = tmp_path / "cc.csv"
     csv.write_text("x,y,z,nx,ny,nz\n1,2,3,0,0,1\n4.5,5,6,0,1,0\n")
-    assert _read_cc(csv) == [[1, 2, 3, 0, 0, 1], [4.5, 5, 6, 0, 1, 0]]
+    assert cc_rows(csv) == [[1, 2, 3, 0, 0, 1], [4.5, 5, 6, 0, 1, 0]]
     csv.write_text("x,y,z\n1,2,3\n")
-    with pytest.raises(PathcheckError, match="expected 6 columns x,y,z,nx,ny,nz, found 3"):
-        _read_cc(csv)
+    with pytest.raises(PathcheckError, match="expected the header x,y,z,nx,ny,nz"):
+        cc_rows(csv)
     message: dict = {}
     for item in ("part.path=a.json", "cc=[[0,0,0,0,0,1]]", "cutter=CUTTER/10,2", "post=true"):
         _set(message, *_field(item))

@@ -4,8 +4,6 @@
 from __future__ import annotations
 
 import json
-import re
-import time
 from pathlib import Path
 
 import click
@@ -13,66 +11,6 @@ import numpy as np
 
 from checker.commands import options as opt
 from checker.errors import PathcheckError
-
-CC_COLUMNS = ("x", "y", "z", "nx", "ny", "nz")
-# a decimal number as a CSV writes it (Python's float() also takes 1_0, nan, infinity: not these)
-_NUMBER = re.compile(r"\s*[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?\s*")
-
-
-def read_cc_csv(path: Path, *, lines_out: list[int] | None = None
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """CC points (N, 3) and unit normals (N, 3) from a CSV with the header x,y,z,nx,ny,nz;
-    `lines_out` receives each row's 1-based file line."""
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as err:
-        raise PathcheckError(f"cannot read CC file: {err}", path=path, code="input") from err
-    if not lines:
-        raise PathcheckError("empty CC file, expected a header x,y,z,nx,ny,nz", path=path, line=1)
-    head = [h.strip().lower() for h in lines[0].split(",")]
-    if head != list(CC_COLUMNS):
-        raise PathcheckError(f"expected the header x,y,z,nx,ny,nz, found {lines[0][:60]!r}",
-                             path=path, line=1)
-    rows = []
-    for no, text in enumerate(lines[1:], 2):
-        if not text.strip():
-            continue
-        cells = text.split(",")
-        if len(cells) != 6:
-            raise PathcheckError(f"expected 6 values, found {len(cells)}", path=path, line=no)
-        bad = [c.strip() for c in cells if not _NUMBER.fullmatch(c)]
-        if bad:
-            raise PathcheckError(f"expected 6 decimal numbers, found {bad[0][:30]!r} in "
-                                 f"{text.strip()[:60]!r}", path=path, line=no)
-        vals = [float(c) for c in cells]
-        if not np.isfinite(vals).all():
-            raise PathcheckError(f"expected finite numbers, found {text.strip()[:60]!r}",
-                                 path=path, line=no)
-        if np.linalg.norm(vals[3:]) < 1e-9:
-            raise PathcheckError("expected a non-zero normal (nx, ny, nz), found 0,0,0",
-                                 path=path, line=no)
-        rows.append(vals)
-        if lines_out is not None:
-            lines_out.append(no)
-    if not rows:
-        raise PathcheckError("expected at least one CC point after the header", path=path, line=2)
-    a = np.array(rows)
-    return a[:, :3], a[:, 3:] / np.linalg.norm(a[:, 3:], axis=1)[:, None]
-
-
-def check_reach(cc: np.ndarray, lines: list[int], bbox: np.ndarray, path: Path) -> None:
-    """CC points lie on the part: one farther from the part's box than the box's diagonal is
-    an error naming its line (the search near it would mean nothing)."""
-    lo, hi = np.asarray(bbox[0], float), np.asarray(bbox[1], float)
-    reach = max(float(np.linalg.norm(hi - lo)), 1.0)
-    outside = (np.maximum(lo - cc, 0.0) + np.maximum(cc - hi, 0.0)).max(axis=1)
-    far = np.flatnonzero(~(outside <= reach))
-    if len(far):
-        k = far[0]
-        raise PathcheckError(
-            f"CC point ({', '.join(f'{v:.6g}' for v in cc[k])}) lies {outside[k]:.6g} mm "
-            f"outside the part's box: expected points on the part (within {reach:.6g} mm)",
-            path=path, line=lines[k], code="input")
 
 
 def parse_axis(text: str) -> np.ndarray:
@@ -114,43 +52,34 @@ def allowable(part_path, cc_path, cutter_text, units, tool_name, tool_library, a
     pathcheck allowable --part mould.json --cc cc.csv --cutter "CUTTER/10,5"
     pathcheck allowable --part mould.json --cc cc.csv --cutter "CUTTER/10,2" --json out.json
     """
+    from checker.cc_csv import check_reach, read_cc_csv
+    from checker.commands.check import parse_b_range
     from checker.commands.terminal import text_console
     from checker.config import load_config
-    from checker.engine import allowable as run
-    from checker.engine.document import allowable_document, allowable_table
+    from checker.engine.document import allowable_table
     from checker.geometry import load_part
-    from checker.geometry.sampling import sample_part
-    from checker.progress import step
+    from checker.operations.allowable import allowable_at_points, check_b_request, sampled_part
 
     cutter = opt.cutter_family(cutter_text, tool_name, tool_library, units)
     config = load_config(config_path)
     axis = parse_axis(axis_text)
+    b = parse_b_range(b_range)
+    check_b_request(b, config)
     lines: list[int] = []
     cc, normals = read_cc_csv(cc_path, lines_out=lines)
-    t0 = time.perf_counter()
-    with step("load the part"):
-        part = load_part(part_path)
-    check_reach(cc, lines, part.bbox, cc_path)
-    t1 = time.perf_counter()
-    with step("sample the part"):
-        tp = sample_part(part)
-    t2 = time.perf_counter()
-    with step("allowable cutter search"):
-        res = run(tp, part, cutter, cc, normals, axis, method=method, seed=seed, config=config)
-    t3 = time.perf_counter()
-    doc = allowable_document(res, cc, normals, cutter, method,
-                             {"load_s": t1 - t0, "sample_s": t2 - t1, "search_s": t3 - t2})
-    if b_range is not None:
-        from checker.commands.check import parse_b_range
-        from checker.four_axis.job import best_b_points
 
-        lo, hi = parse_b_range(b_range)
-        t4 = time.perf_counter()
-        best_b_points(doc, tp, part, cutter, cc, normals, (lo, hi), config)
-        doc["timing"]["b_search_s"] = round(time.perf_counter() - t4, 6)
+    def load():  # the CC points must lie on the part: say so before sampling it
+        part = load_part(part_path, geometry=config.geometry)
+        check_reach(cc, lines, part.bbox, cc_path)
+        return part
+
+    part = sampled_part(load, config)
+    doc = allowable_at_points(part, cutter, cc, normals, axis, config, method=method, seed=seed,
+                              b_range=b)
+    t = doc["timing"]
     to_stderr = opt.json_to_stdout(json_out)
     text_console(stderr=to_stderr).print(allowable_table(doc))
-    opt.say(f"{len(cc)} CC points; load {t1 - t0:.3f} s, sample {t2 - t1:.3f} s, "
-            f"search {t3 - t2:.3f} s", json_out=json_out)
+    opt.say(f"{len(cc)} CC points; load {t['load_s']:.3f} s, sample {t['sample_s']:.3f} s, "
+            f"search {t['search_s']:.3f} s", json_out=json_out)
     if json_out is not None:
         opt.write_json(json_out, json.dumps(doc, indent=2), what="results JSON")

@@ -48,6 +48,7 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     pathcheck call allowable part.path=mould.json --cc cc.csv cutter=CUTTER/10,2
     pathcheck call check apt=@job.apt part.path=job.json post=true --gcode-out job.nc
     """
+    from checker.cc_csv import cc_rows
     from checker.client import Client, raise_for_error
     from checker.config import load_config
     from checker.progress import step
@@ -58,7 +59,7 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     for item in fields:
         _set(message, *_field(item))
     if cc_csv is not None:
-        message["cc"] = _read_cc(cc_csv)
+        message["cc"] = cc_rows(cc_csv)
     message["op"] = op
     if timeout_s is None:
         timeout_s = 10.0 if op in ("ping", "stats") else 600.0
@@ -118,18 +119,3 @@ def _set(message: dict, keys: list[str], value: Any) -> None:
         if not isinstance(message, dict):
             raise PathcheckError(f"field '{key}' is not an object", code="usage")
     message[keys[-1]] = value
-
-
-def _read_cc(path: Path) -> list[list[float]]:
-    """Rows x,y,z,nx,ny,nz of a CSV file with a header row."""
-    import numpy as np
-
-    try:
-        rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    except (OSError, ValueError) as err:
-        raise PathcheckError(f"expected a CSV of x,y,z,nx,ny,nz with a header row: {err}",
-                             path=path, code="usage") from err
-    if rows.shape[1] != 6:
-        raise PathcheckError(f"expected 6 columns x,y,z,nx,ny,nz, found {rows.shape[1]}",
-                             path=path, code="usage")
-    return rows.tolist()

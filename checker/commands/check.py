@@ -170,7 +170,7 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     if no_check:
         post_without_check(job, output, cutter, machine, config_path, part_path, json_out, units)
         return
-    from checker.written import PostRefusedError
+    from checker.posting import PostRefusedError
 
     store = None if no_store else opt.store_of(store_path, config_path)
     try:
@@ -198,7 +198,7 @@ def post_without_check(job: Path, output: Path | None, cutter, machine: str | No
                        json_out: Path | None, units: str | None) -> None:
     """`--no-check`: post JOB to -o without reading a part; nothing is recorded."""
     from checker.errors import PathcheckError
-    from checker.job import post_unchecked
+    from checker.posting import post_unchecked
 
     for given, name in ((output is None, "expected -o FILE"),
                         (part_path is not None, "no part is read: remove --part"),

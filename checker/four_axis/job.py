@@ -7,15 +7,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.config import Config
-from checker.engine.bins import drop_table_grids
-from checker.four_axis.axes import (
+from checker.b_axis import (
     axis_for_b,
     b_for_axis,
     check_b_range,
     check_four_axis,
     rotate_about_y,
 )
+from checker.config import Config
+from checker.engine.bins import drop_table_grids
 from checker.four_axis.best_b import best_b
 from checker.four_axis.plan import (
     Orientations,

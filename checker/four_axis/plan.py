@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from checker.b_axis import axis_for_b
 from checker.config import Config
-from checker.four_axis.axes import axis_for_b
 from checker.four_axis.best_b import BestB, best_b
 from checker.four_axis.orientation import (
     Orientation,

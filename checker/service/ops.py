@@ -1,10 +1,9 @@
 """One function per service op: `(request, state) -> result fields`. Thin: each calls library
-functions (imported lazily, so a worker that only answers `ping` stays light) and formats their
+functions (imported in each op, so a worker that only answers `ping` stays light) and formats their
 results as the protocol's reply fields. Bad input raises PathcheckError."""
 
 from __future__ import annotations
 
-import importlib
 import os
 import tempfile
 import time
@@ -63,36 +62,25 @@ def sleep(req: p.SleepRequest, state: WorkerState) -> dict:
 
 def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
     """Allowable cutter size at every CC row: the `pathcheck allowable --json` document
-    (`cutter`, `method`, `points`, `timing`), plus `part_hash` and `cached`."""
+    (`cutter`, `method`, `points`, `timing`; `operations.allowable`), plus `part_hash` and
+    `cached`."""
+    from checker.cutter import parse_cutter
+    from checker.operations.allowable import SampledPart, allowable_at_points, check_b_request
+
     rows = np.asarray(req.cc, dtype=np.float64).reshape(-1, 6)
     cc, normals = rows[:, :3], _unit_rows(rows[:, 3:], "cc", "normal")
     axis = np.asarray(req.axis, dtype=np.float64)
     files = _Files(state.roots)
     part_path = files.part(req.part)
-    parse_cutter = _library("checker.cutter", "parse_cutter", "allowable")
-    engine_allowable = _library("checker.engine", "allowable", "allowable")
-    document = _library("checker.engine.document", "allowable_document", "allowable")
     cutter = parse_cutter(req.cutter)
-    if req.b_range is not None:
-        check_b_range = _library("checker.four_axis.axes", "check_b_range", "allowable")
-        check_b_range(*req.b_range, state.config.four_axis.b_min, state.config.four_axis.b_max)
+    check_b_request(req.b_range, state.config)
     try:
         entry, cached, key = cached_part(req.part, state, part_path)
     except PathcheckError as err:
         raise files.shown(err) from None
-    t0 = time.perf_counter()
-    result = engine_allowable(entry.test_points, entry.part, cutter, cc, normals,
-                              axis / np.linalg.norm(axis), config=state.config)
-    timing = {"load_s": 0.0 if cached else entry.load_s,
-              "sample_s": 0.0 if cached else entry.sample_s,
-              "search_s": time.perf_counter() - t0}
-    doc = document(result, cc, normals, cutter, "exact", timing)
-    if req.b_range is not None:
-        best_b_points = _library("checker.four_axis.job", "best_b_points", "allowable")
-        t1 = time.perf_counter()
-        best_b_points(doc, entry.test_points, entry.part, cutter, cc, normals, req.b_range,
-                      state.config)
-        doc["timing"]["b_search_s"] = round(time.perf_counter() - t1, 6)
+    sampled = SampledPart(entry.part, entry.test_points, entry.load_s, entry.sample_s)
+    doc = allowable_at_points(sampled, cutter, cc, normals, axis / np.linalg.norm(axis),
+                              state.config, b_range=req.b_range, cached=cached)
     return {**doc, "part_hash": key, "cached": cached}
 
 
@@ -102,13 +90,14 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
     Inline CL text is named `NAME.apt` (`<apt>` without a name) in errors and in the document.
     Every file is read through the roots: the CL file, the part (given or beside the CL file)
     and a machine file (`machine`, else the CL file's `PPRINT/MACHINE`)."""
+    from checker.apt import read_cl
+    from checker.job import check_toolpath
+    from checker.posting import PostRefusedError
+
     files = _Files(state.roots)
     part_path = files.part(req.part)
     given_apt = files.get(req.apt_path, "apt_path", "a CL file", "input") if req.apt_path else None
     config = _with_options(state.config, req.options)
-    read_cl = _library("checker.apt", "read_cl", "check")
-    check_toolpath = _library("checker.job", "check_toolpath", "check")
-    refused_error = _library("checker.written", "PostRefusedError", "check")
     with tempfile.TemporaryDirectory(prefix="pathcheck-service-") as tmp:
         label = f"{req.name}.apt" if req.name else INLINE_APT
         apt_path = given_apt or Path(tmp) / f"{req.name or 'job'}.apt"
@@ -129,7 +118,7 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
                                  b_range=req.b_range, reorient=req.reorient,
                                  part_transform=req.part_transform, started=t0,
                                  on_findings=req.on_findings)
-        except refused_error as err:
+        except PostRefusedError as err:
             doc, refused = err.document, f"G-code not written: {err} (on_findings=refuse)"
         except PathcheckError as err:
             if req.apt is None or err.path != str(apt_path):
@@ -158,7 +147,9 @@ def _machine(name: str | None, toolpath: Any, files: _Files) -> str | None:
                 break
     if name is None:
         return None
-    shipped = _library("postproc.machine", "MACHINES_DIR", "check") / f"{name}.toml"
+    from postproc.machine import MACHINES_DIR
+
+    shipped = MACHINES_DIR / f"{name}.toml"
     if "/" not in name and shipped.is_file():
         return str(shipped)
     return str(files.get(name, field_name, "a shipped machine name or a machine TOML file",
@@ -211,9 +202,11 @@ def cached_part(spec: p.PartSpec, state: WorkerState,
     if isinstance(spec, p.PartPath):
         path = path or _Files(state.roots).get(spec.path, "part.path", "a part file", "part")
         key = file_key(path, salt)
-        load = _library("checker.geometry", "load_part", "allowable")
+        from checker.geometry import load_part
+
         entry, cached = state.cache.get(
-            key, lambda: _sampled(lambda: load(path, geometry=state.config.geometry), state.config))
+            key, lambda: _sampled(lambda: load_part(path, geometry=state.config.geometry),
+                                  state.config))
         return entry, cached, key
     key = json_key(spec.geomdl, salt)
     entry, cached = state.cache.get(key, lambda: _sampled(lambda: _inline(spec), state.config))
@@ -224,9 +217,9 @@ def _inline(spec: p.PartInline) -> Any:
     """A Part from inline geomdl exchange JSON (errors name the field `part.geomdl`)."""
     import json
 
+    from checker.geometry.geomdl_io import read_geomdl
     from checker.part import Part
 
-    read_geomdl = _library("checker.geometry.geomdl_io", "read_geomdl", "allowable")
     surfaces = read_geomdl(Path("part.geomdl"), json.dumps(spec.geomdl))
     if not surfaces:
         raise PathcheckError("field 'part.geomdl': no surface found", code="part")
@@ -234,14 +227,12 @@ def _inline(spec: p.PartInline) -> Any:
 
 
 def _sampled(load: Callable[[], Any], config: Config) -> CachedPart:
-    sample_part = _library("checker.geometry.sampling", "sample_part", "allowable")
-    t0 = time.perf_counter()
-    part = load()
-    t1 = time.perf_counter()
-    test_points = sample_part(part, config.geometry.sag_tolerance, geometry=config.geometry)
-    t2 = time.perf_counter()
-    nbytes = deep_nbytes(part) + deep_nbytes(test_points)
-    return CachedPart(part, test_points, nbytes, load_s=t1 - t0, sample_s=t2 - t1)
+    from checker.operations.allowable import sampled_part
+
+    sampled = sampled_part(load, config)
+    nbytes = deep_nbytes(sampled.part) + deep_nbytes(sampled.test_points)
+    return CachedPart(sampled.part, sampled.test_points, nbytes, load_s=sampled.load_s,
+                      sample_s=sampled.sample_s)
 
 
 def _part_file(spec: p.PartInline, folder: Path) -> Path:
@@ -274,7 +265,9 @@ class _Files:
     def beside(self, apt: Path) -> Path | None:
         """The part beside the CL file (same stem), checked against the roots like a given
         one; None when there is none (the job then reports it)."""
-        found = _library("checker.geometry", "find_part_beside", "check")(apt)
+        from checker.geometry import find_part_beside
+
+        found = find_part_beside(apt)
         return None if found is None else self.get(str(found), "part", "a part file", "part")
 
     def shown(self, err: PathcheckError) -> PathcheckError:
@@ -283,15 +276,6 @@ class _Files:
             return err
         err = redact(err, name)
         return PathcheckError(err.message, path=name, line=err.line, code=err.code)
-
-
-def _library(module: str, name: str, op: str) -> Any:
-    """`module.name`, imported now; a missing library module is an `unavailable` error."""
-    try:
-        return getattr(importlib.import_module(module), name)
-    except (ModuleNotFoundError, AttributeError) as err:
-        raise PathcheckError(f"op '{op}' is not available in this build: {err}",
-                             code="unavailable") from err
 
 
 # --- formatting ------------------------------------------------------------------------------

@@ -1,0 +1,77 @@
+"""CC points from a CSV file with the header x,y,z,nx,ny,nz (part frame, mm): the one reader of
+`pathcheck allowable --cc` and `pathcheck call --cc`; errors name the file and line."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from checker.errors import PathcheckError
+
+CC_COLUMNS = ("x", "y", "z", "nx", "ny", "nz")
+# a decimal number as a CSV writes it (Python's float() also takes 1_0, nan, infinity: not these)
+_NUMBER = re.compile(r"\s*[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?\s*")
+
+
+def read_cc_csv(path: Path, *, lines_out: list[int] | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """CC points (N, 3) and unit normals (N, 3) from a CSV with the header x,y,z,nx,ny,nz;
+    `lines_out` receives each row's 1-based file line."""
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as err:
+        raise PathcheckError(f"cannot read CC file: {err}", path=path, code="input") from err
+    if not lines:
+        raise PathcheckError("empty CC file, expected a header x,y,z,nx,ny,nz", path=path, line=1)
+    head = [h.strip().lower() for h in lines[0].split(",")]
+    if head != list(CC_COLUMNS):
+        raise PathcheckError(f"expected the header x,y,z,nx,ny,nz, found {lines[0][:60]!r}",
+                             path=path, line=1)
+    rows = []
+    for no, text in enumerate(lines[1:], 2):
+        if not text.strip():
+            continue
+        cells = text.split(",")
+        if len(cells) != 6:
+            raise PathcheckError(f"expected 6 values, found {len(cells)}", path=path, line=no)
+        bad = [c.strip() for c in cells if not _NUMBER.fullmatch(c)]
+        if bad:
+            raise PathcheckError(f"expected 6 decimal numbers, found {bad[0][:30]!r} in "
+                                 f"{text.strip()[:60]!r}", path=path, line=no)
+        vals = [float(c) for c in cells]
+        if not np.isfinite(vals).all():
+            raise PathcheckError(f"expected finite numbers, found {text.strip()[:60]!r}",
+                                 path=path, line=no)
+        if np.linalg.norm(vals[3:]) < 1e-9:
+            raise PathcheckError("expected a non-zero normal (nx, ny, nz), found 0,0,0",
+                                 path=path, line=no)
+        rows.append(vals)
+        if lines_out is not None:
+            lines_out.append(no)
+    if not rows:
+        raise PathcheckError("expected at least one CC point after the header", path=path, line=2)
+    a = np.array(rows)
+    return a[:, :3], a[:, 3:] / np.linalg.norm(a[:, 3:], axis=1)[:, None]
+
+
+def cc_rows(path: Path) -> list[list[float]]:
+    """The rows x,y,z,nx,ny,nz of `read_cc_csv` (normals unit), as the service's `cc` field."""
+    cc, normals = read_cc_csv(path)
+    return np.hstack([cc, normals]).tolist()
+
+
+def check_reach(cc: np.ndarray, lines: list[int], bbox: np.ndarray, path: Path) -> None:
+    """CC points lie on the part: one farther from the part's box than the box's diagonal is
+    an error naming its line (the search near it would mean nothing)."""
+    lo, hi = np.asarray(bbox[0], float), np.asarray(bbox[1], float)
+    reach = max(float(np.linalg.norm(hi - lo)), 1.0)
+    outside = (np.maximum(lo - cc, 0.0) + np.maximum(cc - hi, 0.0)).max(axis=1)
+    far = np.flatnonzero(~(outside <= reach))
+    if len(far):
+        k = far[0]
+        raise PathcheckError(
+            f"CC point ({', '.join(f'{v:.6g}' for v in cc[k])}) lies {outside[k]:.6g} mm "
+            f"outside the part's box: expected points on the part (within {reach:.6g} mm)",
+            path=path, line=lines[k], code="input")

@@ -1,0 +1,87 @@
+"""Posting, the stage after the check: the checked program written as G-code for its machine
+(`postproc.post.post_toolpath`) under a policy on findings, or a CL file posted without a check.
+The check (`checker.job`) hands over what is to be written (`written.Checked`); posting is
+done only when a caller asks for G-code. Part frame, mm, degrees."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from checker.apt import read_cl
+from checker.errors import PathcheckError
+from checker.job_inputs import job_config, operation_cutters
+from checker.progress import step
+from checker.written import Checked, flags
+from postproc.header import verdict_text
+from postproc.post import post_toolpath
+
+ON_FINDINGS = ("refuse", "stop", "comment")
+
+
+class PostRefusedError(Exception):
+    """The program was not written (``--on-findings refuse``): ``counts`` the findings of the
+    program as written (`written.written_counts`), ``document`` the check that ran."""
+
+    def __init__(self, counts: dict[str, int], document=None) -> None:
+        self.counts = counts
+        self.document = document
+        super().__init__("the program has " + ", ".join(f"{k} {n}" for k, n in counts.items()
+                                                        if n))
+
+
+def post_checked(checked: Checked, output, on_findings: str = "refuse") -> Path:
+    """Write the checked program to `output` (`doc.gcode` names it) with its header (every
+    cutter, the verdict from the counts) and what is wrong before each offending move: a comment
+    (``comment``), a comment and an optional stop M01 (``stop``); ``refuse`` writes nothing when
+    any count is non-zero (PostRefusedError). A multi-axis program cannot be posted for a B-table
+    machine. An error carries the check that ran (``err.document``, so that the caller may still
+    record it, #18); the document's time includes posting."""
+    doc = checked.document
+    try:
+        with step("post the G-code"):
+            doc.gcode = str(_post(checked, output, on_findings))
+    except (PathcheckError, PostRefusedError) as err:
+        err.document = doc
+        raise
+    finally:
+        doc.summary.time_s = time.perf_counter() - checked.started
+    return Path(doc.gcode)
+
+
+def _post(checked: Checked, output, on_findings: str):
+    job, program = checked.job, checked.program
+    if np.isnan(program.b).any():
+        bad = int(job.m.line[np.flatnonzero(np.isnan(program.b))[0]])
+        raise PathcheckError("cannot post a multi-axis path for a 4-axis machine: expected tool "
+                             "axes perpendicular to Y (j = 0)", path=job.apt_path, line=bad,
+                             code="not-4-axis")
+    if on_findings not in ON_FINDINGS:
+        raise PathcheckError(f"on_findings '{on_findings}': expected one of "
+                             f"{', '.join(ON_FINDINGS)}", code="usage")
+    if on_findings == "refuse" and any(checked.counts.values()):
+        raise PostRefusedError(checked.counts)
+    comments = flags(job, program)
+    stops = np.array([bool(c) for c in comments]) if on_findings == "stop" else None
+    return post_toolpath(job.toolpath, output, machine=checked.machine, b_deg=program.b,
+                         comments=comments, stops=stops,
+                         arc_chord_tol=job.cfg.check.arc_chord_tolerance, tip=program.tip,
+                         cutters=checked.cutters, verdict=verdict_text(checked.counts))
+
+
+def post_unchecked(apt_path, output, cutter=None, machine=None, config=None,
+                   cutter_units: str | None = None) -> Path:
+    """Post a job without checking it (no part needed): the CL's own tool axes (the machine's
+    inverse kinematics finds the rotary words, B on a 4-axis table), every operation's cutter
+    (or `cutter`, a `Cutter` or "CUTTER/..." read in `cutter_units`, default the job's) in the
+    header, which says NOT CHECKED. Returns the path written."""
+    cfg = job_config(config)
+    toolpath = read_cl(Path(apt_path), require_cutter=False)
+    ops = np.arange(len(toolpath.operations))
+    cutters = None if cutter is None else operation_cutters(toolpath, ops, cutter,
+                                                            Path(apt_path), cutter_units)
+    with step("post the G-code"):
+        return post_toolpath(toolpath, output, machine=machine, cutters=cutters,
+                             arc_chord_tol=cfg.check.arc_chord_tolerance)
