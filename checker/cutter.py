@@ -23,6 +23,7 @@ import numpy as np
 from checker.cutter_core import Core
 from checker.cutter_core import signed_distance as core_signed_distance
 from checker.errors import PathcheckError
+from checker.units import MM_PER_INCH
 
 KINDS = ("flat", "ball", "bullnose", "apt", "tapered_ball")
 BALL_FAMILY = ("ball", "tapered_ball")
@@ -457,8 +458,6 @@ def cutter_from_tldata(
 def parse_cutter_in(text: str, units: str) -> Cutter:
     """`parse_cutter` of a statement whose lengths are in `units` ("mm" or "inch"), as a CL
     file of those units states it: angles stay degrees, lengths come back in mm."""
-    from checker.apt.interpret import MM_PER_INCH
-
     cutter = parse_cutter(text)
     if units != "inch":
         return cutter

@@ -20,9 +20,9 @@ from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, ValidationErro
 from checker.cutter import BALL_FAMILY, Cutter, diameter_from
 from checker.errors import PathcheckError
 from checker.resources import resource
+from checker.units import mm_per_unit
 
 DEFAULT_TOOLS = resource("tools.toml")
-_INCH = 25.4
 
 
 class ToolSpec(BaseModel):
@@ -90,7 +90,7 @@ class ToolSpec(BaseModel):
 
     def to_cutter(self) -> Cutter:
         """The cutter in mm and radians."""
-        k = _INCH if self.units == "inch" else 1.0
+        k = mm_per_unit(self.units)
 
         def mm(v: float | None) -> float | None:
             return None if v is None else v * k
