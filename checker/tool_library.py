@@ -10,16 +10,16 @@ unit of every length of that tool). Inside everything is mm and radians.
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, model_validator
 
 from checker.cutter import BALL_FAMILY, Cutter, diameter_from
 from checker.errors import PathcheckError
 from checker.resources import resource
+from checker.toml_load import read_toml, validated
 from checker.units import mm_per_unit
 
 DEFAULT_TOOLS = resource("tools.toml")
@@ -172,12 +172,7 @@ def load_tool_library(path: str | Path | None = None) -> ToolLibrary:
     """Read and validate a tool library (default: the shipped one); a bad entry raises
     PathcheckError naming the tool and the field."""
     path = Path(path) if path is not None else DEFAULT_TOOLS
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise PathcheckError("tool library not found", path=path, code="tools") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-        raise PathcheckError(f"not valid TOML: {err}", path=path, code="tools") from None
+    data = read_toml(path, what="tool library", code="tools")
     extra = sorted(set(data) - {"tool"})
     if extra:
         raise PathcheckError(
@@ -190,16 +185,7 @@ def load_tool_library(path: str | Path | None = None) -> ToolLibrary:
     seen: set[str] = set()
     for i, raw in enumerate(entries, 1):
         label = raw.get("name", f"#{i}") if isinstance(raw, dict) else f"#{i}"
-        try:
-            spec = ToolSpec.model_validate(raw)
-        except ValidationError as err:
-            first = err.errors()[0]
-            if first["loc"]:
-                field = ".".join(str(x) for x in first["loc"])
-                what = f"field {field}: {first['msg']} (found {first.get('input')!r})"
-            else:
-                what = first["msg"].removeprefix("Value error, ")
-            raise PathcheckError(f"tool {label!r}: {what}", path=path, code="tools") from None
+        spec = validated(ToolSpec, raw, subject=f"tool {label!r}", code="tools", path=path)
         if spec.name in seen:
             raise PathcheckError(f"tool {spec.name!r} is defined twice", path=path, code="tools")
         seen.add(spec.name)

@@ -25,7 +25,6 @@ the first table axis (what the 4-axis planner asks).
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 from typing import Any, Literal
 
@@ -35,13 +34,13 @@ from pydantic import (
     ConfigDict,
     Field,
     PositiveFloat,
-    ValidationError,
     field_validator,
     model_validator,
 )
 
 from checker.errors import PathcheckError
 from checker.resources import resource
+from checker.toml_load import read_toml, validated
 
 MACHINES_DIR = resource("machines")
 DEFAULT_MACHINE = "fanuc-hmc"
@@ -381,40 +380,15 @@ class Machine(_Model):
                 data[key] = {**data[key], **value}
             else:
                 data[key] = value
-        try:
-            return Machine.model_validate(data)
-        except ValidationError as err:
-            raise PathcheckError(_validation_message(err), code="machine") from err
-
-
-def _validation_message(err: ValidationError) -> str:
-    first = err.errors()[0]
-    field = ".".join(str(p) for p in first["loc"]) or "(file)"
-    found = first.get("input")
-    shown = "" if isinstance(found, dict) else f", found {found!r}"
-    msg = first["msg"].removeprefix("Value error, ")
-    return f"machine field '{field}': {msg}{shown}"
+        return validated(Machine, data, subject="machine", code="machine")
 
 
 def load_machine_file(path: str | Path) -> Machine:
     """Read and validate one machine TOML file; an invalid field is named in the error."""
     path = Path(path)
-    try:
-        with path.open("rb") as fh:
-            data = tomllib.load(fh)
-    except OSError as err:
-        raise PathcheckError(
-            f"cannot read machine file: {err.strerror}", path=path, code="machine"
-        ) from err
-    except tomllib.TOMLDecodeError as err:
-        raise PathcheckError(
-            f"machine file is not valid TOML: {err}", path=path, code="machine"
-        ) from err
+    data = read_toml(path, what="machine file", code="machine")
     data.setdefault("name", path.stem)
-    try:
-        return Machine.model_validate(data)
-    except ValidationError as err:
-        raise PathcheckError(_validation_message(err), path=path, code="machine") from err
+    return validated(Machine, data, subject="machine", code="machine", path=path)
 
 
 def available_machines() -> list[str]:
