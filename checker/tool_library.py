@@ -148,24 +148,20 @@ class ToolLibrary:
     ) -> Cutter | None:
         """The largest cutter of `family(kind_family, r, theta=theta)` whose size (R, or r for
         balls; mm) is <= `size`; None when every one is larger."""
-        idx = self.pick_many(kind_family, np.array([size], dtype=float), r, theta=theta)[0]
-        return None if idx < 0 else self.family(kind_family, r, theta=theta)[idx]
-
-    def pick_many(
-        self,
-        kind_family: str,
-        sizes: np.ndarray,
-        r: float | None = None,
-        *,
-        theta: float | None = None,
-    ) -> np.ndarray:
-        """(N,) index into `family(kind_family, r, theta=theta)` of the largest cutter not
-        exceeding each allowable size (mm), -1 where none fits (NaN sizes: -1)."""
         fam = self.family(kind_family, r, theta=theta)
-        s = np.array([t.size for t in fam], dtype=float)
-        sizes = np.asarray(sizes, dtype=float)
-        idx = np.searchsorted(s, sizes * (1 + 1e-12) + 1e-12, side="right") - 1
-        return np.where(np.isnan(sizes), -1, idx)
+        idx = largest_fitting(np.array([t.size for t in fam]), np.array([size]))[0]
+        return None if idx < 0 else fam[idx]
+
+
+def largest_fitting(sizes: np.ndarray, allowable: np.ndarray) -> np.ndarray:
+    """The standard-cutter pick: (N,) index into the ascending standard sizes `sizes (K,)` (the
+    allowable variable, mm) of the largest size not exceeding each allowable size `allowable
+    (N,)` (mm; inf: unbounded, the largest fits; equal within 1e-12 relative and absolute
+    counts as not exceeding), -1 where none fits or the allowable size is NaN (no answer)."""
+    sizes = np.asarray(sizes, dtype=float)
+    allowable = np.asarray(allowable, dtype=float)
+    idx = np.searchsorted(sizes, allowable * (1 + 1e-12) + 1e-12, side="right") - 1
+    return np.where(np.isnan(allowable), -1, idx)
 
 
 def load_tool_library(path: str | Path | None = None) -> ToolLibrary:
