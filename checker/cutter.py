@@ -36,6 +36,12 @@ def _kernels():
     return importlib.import_module("checker.kernels")
 
 
+def size_symbol_of(kind: str) -> str:
+    """The name of the allowable variable of a cutter kind: 'r' for the ball family (ball,
+    tapered ball), 'R' for flat, bull-nose and APT."""
+    return "r" if kind in BALL_FAMILY else "R"
+
+
 def _consistency_tol(d: float) -> float:
     """Slack (mm) for redundant values written with 4-6 decimals (NX writes 1e-4 inch)."""
     return 5e-3 + 1e-4 * max(d, 1.0)
@@ -94,8 +100,8 @@ class Cutter:
 
     @property
     def size_symbol(self) -> str:
-        """'r' (ball family) or 'R' (flat, bull-nose, APT): the allowable variable's name."""
-        return "r" if self.ball_family else "R"
+        """The allowable variable's name (`size_symbol_of`)."""
+        return size_symbol_of(self.kind)
 
     @property
     def flat_bottomed(self) -> bool:

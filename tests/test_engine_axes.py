@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from checker.cutter import parse_cutter
 from checker.engine import allowable
@@ -14,6 +15,7 @@ from checker.engine.bins import _BIN_DEG, _OWN_GRID_ROWS, axis_bins, part_tops
 from checker.engine.candidates import SERIAL_ROWS, build_grid, disc_candidates
 from checker.engine.frames import tool_rotation, tool_rotations
 from checker.four_axis.axes import axis_for_b
+from checker.geometry.sampling import TestPoints
 
 SAMPLE = "samples/compressor/compressor"
 SAME = 1e-9  # mm
@@ -134,12 +136,13 @@ def test_part_tops_equal_the_highest_point(compressor):
 
 def test_part_tops_of_a_flat_point_set():
     """Coplanar test points have no 3-D hull: every point counts."""
-    from types import SimpleNamespace
-
     rng = np.random.default_rng(2)
     pts = np.column_stack([rng.uniform(-5, 5, (300, 2)), np.full(300, 1.5)])
     Q = tool_rotations(_tilted(rng, np.array([0, 0, 1.0]), 20, 30.0))
-    tops = part_tops(SimpleNamespace(points=pts), Q)
+    up = np.tile([0.0, 0.0, 1.0], (300, 1))
+    tp = TestPoints(pts, up, np.zeros(300, np.int32), np.zeros((300, 2)), np.ones(300),
+                    cKDTree(pts))
+    tops = part_tops(tp, Q)
     np.testing.assert_allclose(tops, (pts @ Q[:, 2].T).max(axis=0), atol=1e-12)
 
 

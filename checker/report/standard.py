@@ -37,7 +37,7 @@ def _library() -> ToolLibrary:
     return load_tool_library()
 
 
-def parsed_cutter(cutter: str | None):
+def _parsed_cutter(cutter: str | None):
     """The real cutter of a stored `CUTTER/...` statement, None when there is none or it does
     not parse (a store written by another version)."""
     if not cutter:
@@ -56,7 +56,7 @@ def standard_cutters(
     statement and its size, mm). Library family: same kind (and corner radius r for the R
     families, taper angle b for tapered balls); otherwise the config diameters D with size
     D/2 - (d/2 - size of the real cutter) > 0, i.e. the real cutter's corner kept."""
-    real = parsed_cutter(cutter)
+    real = _parsed_cutter(cutter)
     if kind and real is not None:
         theta = real.theta if real.ball_family and real.theta > 0.0 else None
         family = _library().family(kind, real.family_corner, theta=theta)
