@@ -181,35 +181,6 @@ class Cutter:
         ee, has_e = _e_arg(e, len(p))
         return _kernels().pair_sizes(p, cc, n, ee, has_e, self.family, self.kernel_params(tol))
 
-    def min_imaginary_size(
-        self,
-        p: np.ndarray,
-        cc: np.ndarray,
-        n: np.ndarray,
-        e: np.ndarray | None,
-        indptr: np.ndarray,
-        indices: np.ndarray,
-        *,
-        tol: float = 0.0,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Per CC point (N,) the minimum imaginary size over its candidate test points
-        p[indices[indptr[i]:indptr[i+1]]] (CSR, p (M,3)) and the index into p attaining it
-        (-1 when nothing limits: size inf). Tool frame, mm."""
-        p = _as_k3(p, "p")
-        cc, n = _as_k3(cc, "cc"), _as_k3(n, "n")
-        if len(cc) != len(n):
-            raise ValueError("cc and n must have the same length")
-        indptr = np.ascontiguousarray(indptr, dtype=np.int64)
-        indices = np.ascontiguousarray(indices, dtype=np.int64)
-        if indptr.shape != (len(cc) + 1,):
-            raise ValueError("indptr must have length N + 1")
-        if len(indices) and (indices.min() < 0 or indices.max() >= len(p)):
-            raise ValueError("candidate index out of range")
-        ee, has_e = _e_arg(e, len(cc))
-        return _kernels().min_sizes(
-            p, cc, n, ee, has_e, self.family, self.kernel_params(tol), indptr, indices
-        )
-
     def tip_from_contact(
         self, cc: np.ndarray, n: np.ndarray, axis: np.ndarray, e: np.ndarray | None = None,
         sizes: np.ndarray | None = None,
