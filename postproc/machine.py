@@ -47,7 +47,6 @@ DEFAULT_MACHINE = "fanuc-hmc"
 
 WrapMode = Literal["limited", "shortest", "0_360", "-180_180", "signed"]
 Vec3 = tuple[float, float, float]
-DIALECT_NAMES = ("fanuc", "linuxcnc", "siemens", "heidenhain", "haas", "millplus")
 
 
 class _Model(BaseModel):
