@@ -26,10 +26,11 @@ the first table axis (what the 4-axis planner asks).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import (
+    AfterValidator,
     BaseModel,
     ConfigDict,
     Field,
@@ -47,6 +48,15 @@ DEFAULT_MACHINE = "fanuc-hmc"
 
 WrapMode = Literal["limited", "shortest", "0_360", "-180_180", "signed"]
 Vec3 = tuple[float, float, float]
+
+
+def _ordered(value: tuple[float, float]) -> tuple[float, float]:
+    if value[1] <= value[0]:
+        raise ValueError(f"max ({value[1]}) must be greater than min ({value[0]})")
+    return value
+
+
+Range = Annotated[tuple[float, float], AfterValidator(_ordered)]  # (min, max), min < max
 
 
 class _Model(BaseModel):
@@ -71,7 +81,7 @@ class RotaryAxis(_Model):
     direction: Vec3
     point: Vec3 = (0.0, 0.0, 0.0)
     wrap: WrapMode = "limited"
-    limits: tuple[float, float] = (-360.0, 360.0)
+    limits: Range = (-360.0, 360.0)
     max_feed: PositiveFloat = 3600.0  # deg/min
     max_turn_in_cut: PositiveFloat = 45.0
 
@@ -82,13 +92,6 @@ class RotaryAxis(_Model):
         if not np.isfinite(norm) or norm < 1e-9:
             raise ValueError("expected a non-zero direction vector [x, y, z]")
         return tuple(float(v) / norm for v in value)  # type: ignore[return-value]
-
-    @field_validator("limits")
-    @classmethod
-    def _ordered(cls, value: tuple[float, float]) -> tuple[float, float]:
-        if value[1] <= value[0]:
-            raise ValueError(f"max ({value[1]}) must be greater than min ({value[0]})")
-        return value
 
     @property
     def b_min(self) -> float:
@@ -110,16 +113,9 @@ class RotaryAxis(_Model):
 class Travel(_Model):
     """The linear axes: travel of X, Y, Z in the work frame, mm (min, max)."""
 
-    x: tuple[float, float] = (-500.0, 500.0)
-    y: tuple[float, float] = (-500.0, 500.0)
-    z: tuple[float, float] = (-500.0, 500.0)
-
-    @field_validator("x", "y", "z")
-    @classmethod
-    def _ordered(cls, value: tuple[float, float]) -> tuple[float, float]:
-        if value[1] <= value[0]:
-            raise ValueError(f"max ({value[1]}) must be greater than min ({value[0]})")
-        return value
+    x: Range = (-500.0, 500.0)
+    y: Range = (-500.0, 500.0)
+    z: Range = (-500.0, 500.0)
 
 
 class Feeds(_Model):
