@@ -1,12 +1,9 @@
 """Imaginary-cutter kernel speed. Run: `python -m benchmarks.bench_kernels`.
 
-Pairs (test point, CC point) per second, for each cutter kind, through
-- `Cutter.imaginary_size` on K independent pairs (K,3 arrays; parallel kernel above 20,000 pairs),
-- `Cutter.min_imaginary_size` reducing each CC point's candidate test points (CSR) in one pass,
-  with candidates scattered over all test points ("random") and in runs of neighbouring test
-  points ("local", as from a spatial grid whose points are stored cell by cell),
-and the numba thread count used. Random CC points, normals and test points around them (mm);
-compile time excluded (one warm-up call), best of 3 runs.
+Pairs (test point, CC point) per second, for each cutter kind, through `Cutter.imaginary_size`
+on K independent pairs (K,3 arrays; parallel kernel above 20,000 pairs), and the numba thread
+count used. Random CC points, normals and test points around them (mm); compile time excluded
+(one warm-up call), best of 3 runs.
 """
 
 from __future__ import annotations
@@ -26,7 +23,6 @@ CUTTERS = {
     "tapered_ball": "CUTTER/9.1633,5,0,5,0,5,60",
 }
 K = 2_000_000  # independent pairs
-M, N, PER = 200_000, 20_000, 100  # test points, CC points, candidates per CC point
 
 
 def _normals(rng, m: int) -> np.ndarray:
@@ -51,25 +47,12 @@ def main() -> None:
     p = rng.uniform(-15, 15, (K, 3))
     cc = rng.uniform(-1, 1, (K, 3))
     n = _normals(rng, K)
-    pts = rng.uniform(-50, 50, (M, 3))
-    ccs = rng.uniform(-50, 50, (N, 3))
-    ns = _normals(rng, N)
-    indptr = np.arange(N + 1, dtype=np.int64) * PER
-    scattered = rng.integers(0, M, N * PER)
-    local = (np.repeat(rng.integers(0, M, N), PER) + np.tile(np.arange(PER), N)) % M
-    print(
-        f"numba threads: {numba.get_num_threads()}  pairs: {K:,} independent, "
-        f"{N * PER:,} as {N:,} CC x {PER} candidates"
-    )
-    print(f"{'cutter':<14}{'pairs':>12}{'CSR random':>14}{'CSR local':>14}   (pairs per second)")
+    print(f"numba threads: {numba.get_num_threads()}  pairs: {K:,} independent")
+    print(f"{'cutter':<14}{'pairs':>12}   (pairs per second)")
     for kind, text in CUTTERS.items():
         c = parse_cutter(text)
         t_pairs = _best(lambda c=c: c.imaginary_size(p, cc, n))
-        rates = [K / t_pairs]
-        for idx in (scattered, local):
-            t = _best(lambda c=c, idx=idx: c.min_imaginary_size(pts, ccs, ns, None, indptr, idx))
-            rates.append(N * PER / t)
-        print(f"{kind:<14}" + "".join(f"{x / 1e6:>12.1f} M" for x in rates))
+        print(f"{kind:<14}{K / t_pairs / 1e6:>12.1f} M")
 
 
 if __name__ == "__main__":

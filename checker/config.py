@@ -5,14 +5,13 @@ PATHCHECK_STORE."""
 from __future__ import annotations
 
 import os
-import tomllib
 from functools import lru_cache
 from pathlib import Path
 
-from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, PositiveInt, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, PositiveInt
 
-from checker.errors import PathcheckError
 from checker.resources import resource
+from checker.toml_load import read_toml, validated
 
 DEFAULTS_FILE = resource("defaults.toml")
 
@@ -106,17 +105,6 @@ class Config(_Section):
     report: ReportConfig = ReportConfig()
 
 
-def _read_toml(path: Path) -> dict:
-    try:
-        with path.open("rb") as fh:
-            return tomllib.load(fh)
-    except OSError as err:
-        raise PathcheckError(f"cannot read config: {err.strerror}", path=path,
-                             code="config") from err
-    except tomllib.TOMLDecodeError as err:
-        raise PathcheckError(f"not valid TOML: {err}", path=path, code="config") from err
-
-
 def _merge(base: dict, over: dict) -> dict:
     out = dict(base)
     for key, value in over.items():
@@ -127,18 +115,12 @@ def _merge(base: dict, over: dict) -> dict:
 
 def load_config(user_file: str | Path | None = None) -> Config:
     """Defaults merged with an optional user TOML file; invalid fields name the field."""
-    data = _read_toml(DEFAULTS_FILE)
+    data = read_toml(DEFAULTS_FILE, what="config file", code="config")
     source = DEFAULTS_FILE
     if user_file is not None:
         source = Path(user_file)
-        data = _merge(data, _read_toml(source))
-    try:
-        return Config.model_validate(data)
-    except ValidationError as err:
-        first = err.errors()[0]
-        field = ".".join(str(p) for p in first["loc"])
-        raise PathcheckError(f"config field '{field}': {first['msg']}", path=source,
-                             code="config") from err
+        data = _merge(data, read_toml(source, what="config file", code="config"))
+    return validated(Config, data, subject="config", code="config", path=source)
 
 
 @lru_cache(maxsize=1)

@@ -23,6 +23,7 @@ import numpy as np
 from checker.cutter_core import Core
 from checker.cutter_core import signed_distance as core_signed_distance
 from checker.errors import PathcheckError
+from checker.units import MM_PER_INCH
 
 KINDS = ("flat", "ball", "bullnose", "apt", "tapered_ball")
 BALL_FAMILY = ("ball", "tapered_ball")
@@ -33,6 +34,12 @@ def _kernels():
     """`checker.kernels`, imported on first use so that reading a CL file does not pay for
     numba."""
     return importlib.import_module("checker.kernels")
+
+
+def size_symbol_of(kind: str) -> str:
+    """The name of the allowable variable of a cutter kind: 'r' for the ball family (ball,
+    tapered ball), 'R' for flat, bull-nose and APT."""
+    return "r" if kind in BALL_FAMILY else "R"
 
 
 def _consistency_tol(d: float) -> float:
@@ -93,8 +100,8 @@ class Cutter:
 
     @property
     def size_symbol(self) -> str:
-        """'r' (ball family) or 'R' (flat, bull-nose, APT): the allowable variable's name."""
-        return "r" if self.ball_family else "R"
+        """The allowable variable's name (`size_symbol_of`)."""
+        return size_symbol_of(self.kind)
 
     @property
     def flat_bottomed(self) -> bool:
@@ -173,35 +180,6 @@ class Cutter:
             raise ValueError("p, cc and n must have the same length")
         ee, has_e = _e_arg(e, len(p))
         return _kernels().pair_sizes(p, cc, n, ee, has_e, self.family, self.kernel_params(tol))
-
-    def min_imaginary_size(
-        self,
-        p: np.ndarray,
-        cc: np.ndarray,
-        n: np.ndarray,
-        e: np.ndarray | None,
-        indptr: np.ndarray,
-        indices: np.ndarray,
-        *,
-        tol: float = 0.0,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Per CC point (N,) the minimum imaginary size over its candidate test points
-        p[indices[indptr[i]:indptr[i+1]]] (CSR, p (M,3)) and the index into p attaining it
-        (-1 when nothing limits: size inf). Tool frame, mm."""
-        p = _as_k3(p, "p")
-        cc, n = _as_k3(cc, "cc"), _as_k3(n, "n")
-        if len(cc) != len(n):
-            raise ValueError("cc and n must have the same length")
-        indptr = np.ascontiguousarray(indptr, dtype=np.int64)
-        indices = np.ascontiguousarray(indices, dtype=np.int64)
-        if indptr.shape != (len(cc) + 1,):
-            raise ValueError("indptr must have length N + 1")
-        if len(indices) and (indices.min() < 0 or indices.max() >= len(p)):
-            raise ValueError("candidate index out of range")
-        ee, has_e = _e_arg(e, len(cc))
-        return _kernels().min_sizes(
-            p, cc, n, ee, has_e, self.family, self.kernel_params(tol), indptr, indices
-        )
 
     def tip_from_contact(
         self, cc: np.ndarray, n: np.ndarray, axis: np.ndarray, e: np.ndarray | None = None,
@@ -457,8 +435,6 @@ def cutter_from_tldata(
 def parse_cutter_in(text: str, units: str) -> Cutter:
     """`parse_cutter` of a statement whose lengths are in `units` ("mm" or "inch"), as a CL
     file of those units states it: angles stay degrees, lengths come back in mm."""
-    from checker.apt.interpret import MM_PER_INCH
-
     cutter = parse_cutter(text)
     if units != "inch":
         return cutter

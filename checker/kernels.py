@@ -210,11 +210,11 @@ def ball_size(qx, qy, qz, nx, ny, nz, prm):
 
 
 @njit(cache=True)
-def _one(p, cc, n, e, has_e, family, prm, i, j):
-    """Size for test point p[j] against CC point cc[i] (normal n[i], direction e[i])."""
-    qx = p[j, 0] - cc[i, 0]
-    qy = p[j, 1] - cc[i, 1]
-    qz = p[j, 2] - cc[i, 2]
+def _one(p, cc, n, e, has_e, family, prm, i):
+    """Size of pair i: test point p[i] against CC point cc[i] (normal n[i], direction e[i])."""
+    qx = p[i, 0] - cc[i, 0]
+    qy = p[i, 1] - cc[i, 1]
+    qz = p[i, 2] - cc[i, 2]
     if family == FAMILY_BALL:
         return ball_size(qx, qy, qz, n[i, 0], n[i, 1], n[i, 2], prm)
     ex = e[i, 0] if has_e else 0.0
@@ -229,7 +229,7 @@ PARALLEL_MIN = 20_000  # below this many pairs the serial kernels win (no thread
 def _pair_sizes_par(p, cc, n, e, has_e, family, prm):
     out = np.empty(p.shape[0])
     for i in prange(p.shape[0]):
-        out[i] = _one(p, cc, n, e, has_e, family, prm, i, i)
+        out[i] = _one(p, cc, n, e, has_e, family, prm, i)
     return out
 
 
@@ -237,7 +237,7 @@ def _pair_sizes_par(p, cc, n, e, has_e, family, prm):
 def _pair_sizes_ser(p, cc, n, e, has_e, family, prm):
     out = np.empty(p.shape[0])
     for i in range(p.shape[0]):
-        out[i] = _one(p, cc, n, e, has_e, family, prm, i, i)
+        out[i] = _one(p, cc, n, e, has_e, family, prm, i)
     return out
 
 
@@ -246,71 +246,3 @@ def pair_sizes(p, cc, n, e, has_e, family, prm):
     if p.shape[0] >= PARALLEL_MIN:
         return _pair_sizes_par(p, cc, n, e, has_e, family, prm)
     return _pair_sizes_ser(p, cc, n, e, has_e, family, prm)
-
-
-@njit(cache=True)
-def _min_row(p, cc, n, e, has_e, family, prm, indptr, indices, i):
-    """(min size, index into p) over CC point i's candidates; row constants computed once."""
-    lo = indptr[i]
-    hi = indptr[i + 1]
-    if hi == lo:
-        return INF, -1
-    nx, ny, nz = n[i, 0], n[i, 1], n[i, 2]
-    if nz <= 0.0 or nz < prm[_SIN_T] - EPS_N:
-        return 0.0, indices[lo]  # the CC point cannot be touched: every pair gives 0
-    b = INF
-    a = -1
-    r, tol = prm[_R], prm[_TOL]
-    cx, cy, cz = cc[i, 0], cc[i, 1], cc[i, 2]
-    rx, ry, rz = r * nx, r * ny, r * nz
-    ex = e[i, 0] if has_e else 0.0
-    ey = e[i, 1] if has_e else 0.0
-    ux, uy, worst = _axis_dir(nx, ny, ex, ey, has_e)
-    tip = family != FAMILY_BALL and prm[_FLAT] < 0.5 and nz > prm[_COS_P]
-    for t in range(lo, hi):
-        j = indices[t]
-        qx, qy, qz = p[j, 0] - cx, p[j, 1] - cy, p[j, 2] - cz
-        if qx * nx + qy * ny + qz * nz <= tol:
-            continue  # below the tangent plane: inf
-        if family == FAMILY_BALL:
-            s = ball_size(qx, qy, qz, nx, ny, nz, prm)
-        elif tip:
-            s = _apt_tip_contact(qx, qy, qz, prm)
-        else:
-            s = _fillet_size(qx - rx, qy - ry, qz - rz, ux, uy, worst, prm)
-        if s < b:
-            b = s
-            a = j
-            if b == 0.0:
-                break
-    return b, a
-
-
-@njit(cache=True, parallel=True)
-def _min_sizes_par(p, cc, n, e, has_e, family, prm, indptr, indices):
-    m = cc.shape[0]
-    best = np.empty(m)
-    arg = np.empty(m, dtype=np.int64)
-    for i in prange(m):
-        best[i], arg[i] = _min_row(p, cc, n, e, has_e, family, prm, indptr, indices, i)
-    return best, arg
-
-
-@njit(cache=True)
-def _min_sizes_ser(p, cc, n, e, has_e, family, prm, indptr, indices):
-    m = cc.shape[0]
-    best = np.empty(m)
-    arg = np.empty(m, dtype=np.int64)
-    for i in range(m):
-        best[i], arg[i] = _min_row(p, cc, n, e, has_e, family, prm, indptr, indices, i)
-    return best, arg
-
-
-def min_sizes(p, cc, n, e, has_e, family, prm, indptr, indices):
-    """For each CC point i the minimum size over its candidate test points
-    p[indices[indptr[i]:indptr[i+1]]] and the index (into p) attaining it; inf and -1 when no
-    candidate limits the size."""
-    args = (p, cc, n, e, has_e, family, prm, indptr, indices)
-    if len(indices) >= PARALLEL_MIN:
-        return _min_sizes_par(*args)
-    return _min_sizes_ser(*args)

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.toolpath import ToolPath
+from checker.units import mm_per_unit
 
 _WORDS = frozenset({"INTOL", "TOLER", "THICK"})
 
@@ -38,7 +39,7 @@ def operation_tolerances(toolpath: ToolPath, default: float, part_deviation: flo
                          arc_chord: float) -> Tolerances:
     """The tolerance of every operation of `toolpath` (see the module docstring): the words
     written before an operation's first motion apply to all of it."""
-    scale = 25.4 if toolpath.units == "inch" else 1.0
+    scale = mm_per_unit(toolpath.units)
     words = [(rec.line, rec.word, _number(rec)) for rec in toolpath.records
              if rec.word in _WORDS and _number(rec) is not None]
     lines = toolpath.motions.line

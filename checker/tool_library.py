@@ -10,19 +10,19 @@ unit of every length of that tool). Inside everything is mm and radians.
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, model_validator
 
 from checker.cutter import BALL_FAMILY, Cutter, diameter_from
 from checker.errors import PathcheckError
 from checker.resources import resource
+from checker.toml_load import read_toml, validated
+from checker.units import mm_per_unit
 
 DEFAULT_TOOLS = resource("tools.toml")
-_INCH = 25.4
 
 
 class ToolSpec(BaseModel):
@@ -90,7 +90,7 @@ class ToolSpec(BaseModel):
 
     def to_cutter(self) -> Cutter:
         """The cutter in mm and radians."""
-        k = _INCH if self.units == "inch" else 1.0
+        k = mm_per_unit(self.units)
 
         def mm(v: float | None) -> float | None:
             return None if v is None else v * k
@@ -148,36 +148,27 @@ class ToolLibrary:
     ) -> Cutter | None:
         """The largest cutter of `family(kind_family, r, theta=theta)` whose size (R, or r for
         balls; mm) is <= `size`; None when every one is larger."""
-        idx = self.pick_many(kind_family, np.array([size], dtype=float), r, theta=theta)[0]
-        return None if idx < 0 else self.family(kind_family, r, theta=theta)[idx]
-
-    def pick_many(
-        self,
-        kind_family: str,
-        sizes: np.ndarray,
-        r: float | None = None,
-        *,
-        theta: float | None = None,
-    ) -> np.ndarray:
-        """(N,) index into `family(kind_family, r, theta=theta)` of the largest cutter not
-        exceeding each allowable size (mm), -1 where none fits (NaN sizes: -1)."""
         fam = self.family(kind_family, r, theta=theta)
-        s = np.array([t.size for t in fam], dtype=float)
-        sizes = np.asarray(sizes, dtype=float)
-        idx = np.searchsorted(s, sizes * (1 + 1e-12) + 1e-12, side="right") - 1
-        return np.where(np.isnan(sizes), -1, idx)
+        idx = largest_fitting(np.array([t.size for t in fam]), np.array([size]))[0]
+        return None if idx < 0 else fam[idx]
+
+
+def largest_fitting(sizes: np.ndarray, allowable: np.ndarray) -> np.ndarray:
+    """The standard-cutter pick: (N,) index into the ascending standard sizes `sizes (K,)` (the
+    allowable variable, mm) of the largest size not exceeding each allowable size `allowable
+    (N,)` (mm; inf: unbounded, the largest fits; equal within 1e-12 relative and absolute
+    counts as not exceeding), -1 where none fits or the allowable size is NaN (no answer)."""
+    sizes = np.asarray(sizes, dtype=float)
+    allowable = np.asarray(allowable, dtype=float)
+    idx = np.searchsorted(sizes, allowable * (1 + 1e-12) + 1e-12, side="right") - 1
+    return np.where(np.isnan(allowable), -1, idx)
 
 
 def load_tool_library(path: str | Path | None = None) -> ToolLibrary:
     """Read and validate a tool library (default: the shipped one); a bad entry raises
     PathcheckError naming the tool and the field."""
     path = Path(path) if path is not None else DEFAULT_TOOLS
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise PathcheckError("tool library not found", path=path, code="tools") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-        raise PathcheckError(f"not valid TOML: {err}", path=path, code="tools") from None
+    data = read_toml(path, what="tool library", code="tools")
     extra = sorted(set(data) - {"tool"})
     if extra:
         raise PathcheckError(
@@ -190,16 +181,7 @@ def load_tool_library(path: str | Path | None = None) -> ToolLibrary:
     seen: set[str] = set()
     for i, raw in enumerate(entries, 1):
         label = raw.get("name", f"#{i}") if isinstance(raw, dict) else f"#{i}"
-        try:
-            spec = ToolSpec.model_validate(raw)
-        except ValidationError as err:
-            first = err.errors()[0]
-            if first["loc"]:
-                field = ".".join(str(x) for x in first["loc"])
-                what = f"field {field}: {first['msg']} (found {first.get('input')!r})"
-            else:
-                what = first["msg"].removeprefix("Value error, ")
-            raise PathcheckError(f"tool {label!r}: {what}", path=path, code="tools") from None
+        spec = validated(ToolSpec, raw, subject=f"tool {label!r}", code="tools", path=path)
         if spec.name in seen:
             raise PathcheckError(f"tool {spec.name!r} is defined twice", path=path, code="tools")
         seen.add(spec.name)

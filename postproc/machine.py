@@ -25,30 +25,38 @@ the first table axis (what the 4-axis planner asks).
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import (
+    AfterValidator,
     BaseModel,
     ConfigDict,
     Field,
     PositiveFloat,
-    ValidationError,
     field_validator,
     model_validator,
 )
 
 from checker.errors import PathcheckError
 from checker.resources import resource
+from checker.toml_load import read_toml, validated
 
 MACHINES_DIR = resource("machines")
 DEFAULT_MACHINE = "fanuc-hmc"
 
 WrapMode = Literal["limited", "shortest", "0_360", "-180_180", "signed"]
 Vec3 = tuple[float, float, float]
-DIALECT_NAMES = ("fanuc", "linuxcnc", "siemens", "heidenhain", "haas", "millplus")
+
+
+def _ordered(value: tuple[float, float]) -> tuple[float, float]:
+    if value[1] <= value[0]:
+        raise ValueError(f"max ({value[1]}) must be greater than min ({value[0]})")
+    return value
+
+
+Range = Annotated[tuple[float, float], AfterValidator(_ordered)]  # (min, max), min < max
 
 
 class _Model(BaseModel):
@@ -73,7 +81,7 @@ class RotaryAxis(_Model):
     direction: Vec3
     point: Vec3 = (0.0, 0.0, 0.0)
     wrap: WrapMode = "limited"
-    limits: tuple[float, float] = (-360.0, 360.0)
+    limits: Range = (-360.0, 360.0)
     max_feed: PositiveFloat = 3600.0  # deg/min
     max_turn_in_cut: PositiveFloat = 45.0
 
@@ -84,13 +92,6 @@ class RotaryAxis(_Model):
         if not np.isfinite(norm) or norm < 1e-9:
             raise ValueError("expected a non-zero direction vector [x, y, z]")
         return tuple(float(v) / norm for v in value)  # type: ignore[return-value]
-
-    @field_validator("limits")
-    @classmethod
-    def _ordered(cls, value: tuple[float, float]) -> tuple[float, float]:
-        if value[1] <= value[0]:
-            raise ValueError(f"max ({value[1]}) must be greater than min ({value[0]})")
-        return value
 
     @property
     def b_min(self) -> float:
@@ -112,16 +113,9 @@ class RotaryAxis(_Model):
 class Travel(_Model):
     """The linear axes: travel of X, Y, Z in the work frame, mm (min, max)."""
 
-    x: tuple[float, float] = (-500.0, 500.0)
-    y: tuple[float, float] = (-500.0, 500.0)
-    z: tuple[float, float] = (-500.0, 500.0)
-
-    @field_validator("x", "y", "z")
-    @classmethod
-    def _ordered(cls, value: tuple[float, float]) -> tuple[float, float]:
-        if value[1] <= value[0]:
-            raise ValueError(f"max ({value[1]}) must be greater than min ({value[0]})")
-        return value
+    x: Range = (-500.0, 500.0)
+    y: Range = (-500.0, 500.0)
+    z: Range = (-500.0, 500.0)
 
 
 class Feeds(_Model):
@@ -381,40 +375,15 @@ class Machine(_Model):
                 data[key] = {**data[key], **value}
             else:
                 data[key] = value
-        try:
-            return Machine.model_validate(data)
-        except ValidationError as err:
-            raise PathcheckError(_validation_message(err), code="machine") from err
-
-
-def _validation_message(err: ValidationError) -> str:
-    first = err.errors()[0]
-    field = ".".join(str(p) for p in first["loc"]) or "(file)"
-    found = first.get("input")
-    shown = "" if isinstance(found, dict) else f", found {found!r}"
-    msg = first["msg"].removeprefix("Value error, ")
-    return f"machine field '{field}': {msg}{shown}"
+        return validated(Machine, data, subject="machine", code="machine")
 
 
 def load_machine_file(path: str | Path) -> Machine:
     """Read and validate one machine TOML file; an invalid field is named in the error."""
     path = Path(path)
-    try:
-        with path.open("rb") as fh:
-            data = tomllib.load(fh)
-    except OSError as err:
-        raise PathcheckError(
-            f"cannot read machine file: {err.strerror}", path=path, code="machine"
-        ) from err
-    except tomllib.TOMLDecodeError as err:
-        raise PathcheckError(
-            f"machine file is not valid TOML: {err}", path=path, code="machine"
-        ) from err
+    data = read_toml(path, what="machine file", code="machine")
     data.setdefault("name", path.stem)
-    try:
-        return Machine.model_validate(data)
-    except ValidationError as err:
-        raise PathcheckError(_validation_message(err), path=path, code="machine") from err
+    return validated(Machine, data, subject="machine", code="machine", path=path)
 
 
 def available_machines() -> list[str]:

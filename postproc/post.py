@@ -18,6 +18,7 @@ import numpy as np
 
 from checker.config import default_config
 from checker.errors import PathcheckError
+from checker.units import mm_per_unit
 from postproc.dialects import get_dialect
 from postproc.header import NOT_CHECKED, header_lines
 from postproc.kinematics import (
@@ -29,7 +30,7 @@ from postproc.kinematics import (
 )
 from postproc.machine import Machine, load_machine
 from postproc.wrap import MAX_STEP, range_branches, rollover_words
-from postproc.writer import MM_PER_INCH, Rows, format_program, write_program
+from postproc.writer import Rows, format_program, write_program
 
 
 @dataclass(frozen=True)
@@ -414,7 +415,7 @@ def _on_increments(rows: dict[str, np.ndarray], machine: Machine) -> dict[str, n
     units) and the rotary words and positions rounded to the machine's increments, so that the
     feed words and the checks are those of the program as written."""
     fmt = machine.format
-    scale = MM_PER_INCH if machine.units == "inch" else 1.0
+    scale = mm_per_unit(machine.units)
     linear, rotary = fmt.linear_decimals(machine.units), fmt.rotary_decimals
     return {**rows, "xyz": np.round(rows["xyz"] / scale, linear) * scale,
             "word": np.round(rows["word"], rotary), "turn": np.round(rows["turn"], rotary)}
@@ -480,7 +481,7 @@ def _feed_words(rows: dict[str, np.ndarray], moves: PostMoves, machine: Machine)
     length = chain.tip_path_length(xyz0, xyz1, turn0, turn1, tcp)
     dxyz = xyz1 - xyz0
     dturn = turn1 - turn0
-    scale = 1.0 / MM_PER_INCH if machine.units == "inch" else 1.0
+    scale = 1.0 / mm_per_unit(machine.units)
     max_rot = np.array([a.max_feed for a in machine.rotary_axes]).reshape(1, -1)
     limits = [
         length / moves.feed[rows["src"][i]],

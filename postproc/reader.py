@@ -27,10 +27,10 @@ import numpy as np
 
 from checker.errors import PathcheckError
 from checker.input_limits import MAX_COORDINATE_MM, MAX_ROTARY_DEG
+from checker.units import mm_per_unit
 from postproc.dialects import CANNED_CYCLES, Dialect, get_dialect
 from postproc.gcode_lex import Block, lex_block
 
-MM_PER_INCH = 25.4
 _NO_CENTER = (math.nan, math.nan, math.nan)
 _NOT_TEXT = re.compile(r"[^\t\n\r\x0b\x0c\x20-\x7e]")
 #: row kinds
@@ -112,7 +112,7 @@ class _Program:
 
     def __init__(self, dialect: Dialect, path: str, units: str):
         self.dialect, self.path = dialect, path
-        scale = MM_PER_INCH if units == "inch" else 1.0
+        scale = mm_per_unit(units)
         self.st = _State(
             scale=scale, units=units, pos=[math.nan] * 6, motion=dialect.initial_motion
         )
@@ -327,7 +327,7 @@ class _Program:
     def set_units(self, units: str) -> None:
         st = self.st
         st.units = units
-        st.scale = MM_PER_INCH if units == "inch" else 1.0
+        st.scale = mm_per_unit(units)
         self.units_seen = self.units_seen or units
 
     def _frames(self, g, words, assigned, keywords, line) -> bool:

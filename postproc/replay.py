@@ -15,10 +15,11 @@ from checker.b_axis import b_for_axis
 from checker.errors import PathcheckError
 from checker.input_limits import MAX_PROGRAM_POINTS
 from checker.toolpath import MotionArrays, Operation, ToolPath
+from checker.units import mm_per_unit
 from postproc.dialects import get_dialect
 from postproc.kinematics import Chain
 from postproc.machine import Machine
-from postproc.reader import CYCLE, MM_PER_INCH, PROGRAMMED, GcodeMoves
+from postproc.reader import CYCLE, PROGRAMMED, GcodeMoves
 from postproc.wrap import unroll_rollover
 
 _LETTERS = "ABC"
@@ -203,7 +204,7 @@ def part_motions(
                                                 turn0[turning], turns[turning])
     f = moves.feed[src]
     mode = moves.feed_mode[src]
-    scale = MM_PER_INCH if moves.units == "inch" else 1.0
+    scale = mm_per_unit(moves.units)
     rule = get_dialect(moves.dialect).feed_distance
     dxyz, dturn = (xyz - xyz0) / scale, turns - turn0
     dist = np.where(tcp_rows, rule(dxyz, dturn, True), rule(dxyz, dturn, False))

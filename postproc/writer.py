@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from checker.atomic import write_file
+from checker.units import mm_per_unit
 from postproc.dialects import Dialect
 from postproc.machine import Machine
 
-MM_PER_INCH = 25.4
 _TRAILING_ZEROS = re.compile(r"0+$", re.M)
 _DOT_END = re.compile(r"\.$", re.M)
 _NO_DOT = re.compile(r"$", re.M)
@@ -91,7 +91,7 @@ def format_program(
     program start, ``pre[i]`` are blocks written before row ``i`` (comments start with '(' or
     ';'). Block numbers wrap at the machine's ``block_max``. Fills ``rows.line``."""
     fmt = machine.format
-    scale = 1.0 / MM_PER_INCH if machine.units == "inch" else 1.0
+    scale = 1.0 / mm_per_unit(machine.units)
     code = dialect.format_code
     m = len(rows.word)
     force = rows.force.astype(bool)

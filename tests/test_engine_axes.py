@@ -1,19 +1,20 @@
-"""Rows with their own tool axes (engine bins, checker/engine/bins.py): candidates found through a
-grid built for a nearby axis equal a brute-force filter in each row's own frame, and allowable
-sizes of many distinct axes at once equal those of one axis at a time (a grid for each row's own
-axis), also for 4-axis rows close in B that fall into different bins."""
+"""Rows with their own tool axes (engine bins, checker/engine/bins.py): allowable sizes of many
+distinct axes at once (candidates found through a grid built for a nearby axis) equal those of one
+axis at a time (a grid for each row's own axis), also for 4-axis rows close in B that fall into
+different bins."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from checker.b_axis import axis_for_b
 from checker.cutter import parse_cutter
 from checker.engine import allowable
 from checker.engine.bins import _BIN_DEG, _OWN_GRID_ROWS, axis_bins, part_tops
-from checker.engine.candidates import SERIAL_ROWS, build_grid, disc_candidates
 from checker.engine.frames import tool_rotation, tool_rotations
+from checker.geometry.sampling import TestPoints
 
 SAMPLE = "samples/compressor/compressor"
 SAME = 1e-9  # mm
@@ -37,45 +38,6 @@ def test_tool_rotations_are_the_rows_of_tool_rotation():
     assert np.abs(Q - single).max() < 1e-15
     assert np.abs(np.einsum("nij,nj->ni", Q, a) - [0, 0, 1.0]).max() < 1e-14
     assert np.abs(Q @ Q.transpose(0, 2, 1) - np.eye(3)).max() < 1e-14
-
-
-@pytest.mark.parametrize("n_rows", [SERIAL_ROWS // 2, 3 * SERIAL_ROWS])  # serial and parallel
-def test_candidates_through_a_tilted_grid_equal_brute_force(n_rows):
-    """Points 70-120 mm above the origin (like the compressor), rows up to 3 degrees off the
-    grid's axis: the CSR lists equal a numpy filter of all points in each row's own frame."""
-    rng = np.random.default_rng(7)
-    pts = rng.uniform([-50, -30, 70], [50, 30, 120], (20000, 3))
-    axis_b = np.array([np.sin(0.3), 0.0, np.cos(0.3)])
-    Qb = tool_rotation(axis_b)
-    grid = build_grid(pts @ Qb.T)
-    Qr = tool_rotations(_tilted(rng, axis_b, n_rows, 3.0))
-    D = Qr @ Qb.T
-    row_pts = np.einsum("nij,mj->nmi", Qr, pts)  # every point in every row's frame
-    pick = rng.integers(0, len(pts), n_rows)
-    anchor = row_pts[np.arange(n_rows), pick]
-    centre = anchor[:, :2] + rng.uniform(-2, 2, (n_rows, 2))
-    radius = rng.uniform(2.0, 9.0, n_rows)
-    zlo = anchor[:, 2] - rng.uniform(0.0, 5.0, n_rows)
-    zhi = anchor[:, 2] + rng.uniform(5.0, 60.0, n_rows)
-    sphere = np.column_stack([anchor + [0, 0, 4.0], np.full(n_rows, 6.0)])
-    zeq = np.where(rng.random(n_rows) < 0.5, anchor[:, 2] + 4.0, -np.inf)
-    nrm = _tilted(rng, np.array([0, 0, 1.0]), n_rows, 40.0)
-    plane = np.column_stack([nrm, np.einsum("ij,ij->i", nrm, anchor) - 0.5])
-    indptr, idx = disc_candidates(grid, centre, radius, zlo, zhi, sphere, zeq, plane, D)
-    widened = 0
-    for i in range(n_rows):
-        p = row_pts[i]
-        ok = ((np.hypot(p[:, 0] - centre[i, 0], p[:, 1] - centre[i, 1]) <= radius[i])
-              & (p[:, 2] >= zlo[i]) & (p[:, 2] <= zhi[i]) & (p @ plane[i, :3] >= plane[i, 3])
-              & ((p[:, 2] >= zeq[i]) | (np.linalg.norm(p - sphere[i, :3], axis=1)
-                                         <= sphere[i, 3])))
-        got = np.sort(idx[indptr[i]:indptr[i + 1]])
-        np.testing.assert_array_equal(got, np.flatnonzero(ok))
-        # candidates outside the row's disc seen from the grid: the widening was needed
-        c_b = Qb @ (Qr[i].T @ [centre[i, 0], centre[i, 1], 0.5 * (zlo[i] + zhi[i])])
-        gp = grid.xyz[got]
-        widened += int((np.hypot(gp[:, 0] - c_b[0], gp[:, 1] - c_b[1]) > radius[i]).sum())
-    assert indptr[-1] > 20 * n_rows and widened > 0
 
 
 def test_axis_bins_cover_rows_within_the_lattice_step():
@@ -134,12 +96,13 @@ def test_part_tops_equal_the_highest_point(compressor):
 
 def test_part_tops_of_a_flat_point_set():
     """Coplanar test points have no 3-D hull: every point counts."""
-    from types import SimpleNamespace
-
     rng = np.random.default_rng(2)
     pts = np.column_stack([rng.uniform(-5, 5, (300, 2)), np.full(300, 1.5)])
     Q = tool_rotations(_tilted(rng, np.array([0, 0, 1.0]), 20, 30.0))
-    tops = part_tops(SimpleNamespace(points=pts), Q)
+    up = np.tile([0.0, 0.0, 1.0], (300, 1))
+    tp = TestPoints(pts, up, np.zeros(300, np.int32), np.zeros((300, 2)), np.ones(300),
+                    cKDTree(pts))
+    tops = part_tops(tp, Q)
     np.testing.assert_allclose(tops, (pts @ Q[:, 2].T).max(axis=0), atol=1e-12)
 
 

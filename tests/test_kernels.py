@@ -291,39 +291,6 @@ def test_random_inputs_never_nan(v, name, tol):
     assert not np.isnan(out).any() and out[0] >= 0.0
 
 
-@pytest.mark.parametrize("name", ["flat", "bullnose", "apt", "ball", "tapered_ball"])
-@pytest.mark.parametrize("with_e", [False, True])
-def test_min_imaginary_size_matches_pairs(name, with_e):
-    """The CSR reduction equals the min over the pair kernel (bit for bit, first argmin), for
-    fillet and tip contact, vertical normals with and without e, and untouchable CC points."""
-    c = _cutter(name)
-    rng = np.random.default_rng(4)
-    m = 60
-    pts = rng.uniform(-10, 10, (400, 3))
-    cc = rng.uniform(-2, 2, (m, 3))
-    n = random_normals(rng, m, 0.3, 1.0)
-    n[:6] = [0.0, 0.0, 1.0]  # vertical normals
-    n[6:9] = [[0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, 0.6, -0.8]]  # cannot be touched
-    ang = rng.uniform(0, 2 * math.pi, m)
-    e = np.column_stack([np.cos(ang), np.sin(ang), np.zeros(m)]) if with_e else None
-    counts = rng.integers(0, 40, m)
-    counts[:9] = [0, 1, 25, 10, 10, 10, 5, 5, 5]
-    indptr = np.concatenate([[0], np.cumsum(counts)])
-    indices = rng.integers(0, 400, indptr[-1])
-    best, arg = c.min_imaginary_size(pts, cc, n, e, indptr, indices)
-    rows = np.repeat(np.arange(m), counts)
-    s_all = c.imaginary_size(pts[indices], cc[rows], n[rows], None if e is None else e[rows])
-    for i in range(m):
-        cand = indices[indptr[i] : indptr[i + 1]]
-        s = s_all[indptr[i] : indptr[i + 1]]
-        if len(cand) == 0 or not np.isfinite(s.min()):
-            assert np.isinf(best[i]) and arg[i] == -1
-            continue
-        assert best[i] == s.min()
-        assert arg[i] == cand[np.argmin(s)]
-    assert np.isfinite(best).sum() > 20 and (best == 0).sum() >= 3
-
-
 @settings(max_examples=30, deadline=None)
 @given(
     st.floats(0.0, 4.0),
@@ -385,13 +352,7 @@ def test_parallel_kernels_equal_serial():
     e = np.zeros((1, 3))
     got = c.imaginary_size(p, cc, n)
     np.testing.assert_array_equal(got, kernels._pair_sizes_ser(p, cc, n, e, False, 0, prm))
-    indptr = np.linspace(0, k, 501).astype(np.int64)
-    idx = rng.integers(0, k, k)
-    best, arg = c.min_imaginary_size(p, cc[:500], n[:500], None, indptr, idx)
-    b2, a2 = kernels._min_sizes_ser(p, cc[:500], n[:500], e, False, 0, prm, indptr, idx)
-    np.testing.assert_array_equal(best, b2)
-    np.testing.assert_array_equal(arg, a2)
-    assert np.isfinite(best).sum() > 100
+    assert np.isfinite(got).sum() > 1000 and (got > 0).sum() > 1000
 
 
 def test_conical_band_uses_corrected_k():

@@ -26,7 +26,6 @@ def test_shipped_machines_load():
         ('[rotary]\nwrap = "spiral"\n', "rotary_axes.0.wrap"),
         ("[rotary]\nb_min = 10.0\nb_max = -10.0\n", "rotary_axes.0.limits"),
         ("[travel]\nx = [5.0, -5.0]\n", "travel.x"),
-        ("[kinematics]\nb_direction = 2\n", "(file)': kinematics.b_direction must be 1 or -1"),
         ('[[rotary_axes]]\nname = "D"\ndirection = [0, 1, 0]\n', "rotary_axes.0.name"),
         ('[[rotary_axes]]\nname = "A"\ndirection = [0, 0, 0]\n', "rotary_axes.0.direction"),
         ('[[rotary_axes]]\nname = "A"\non = "spindle"\ndirection = [1, 0, 0]\n',
@@ -61,6 +60,13 @@ def test_machine_file_errors(tmp_path):
     unsafe.write_text("[program]\nsafe_z = 900.0\n")
     with pytest.raises(PathcheckError, match="safe_z"):
         load_machine(unsafe)
+    legacy = tmp_path / "legacy.toml"
+    legacy.write_text("[kinematics]\nb_direction = 2\n")
+    with pytest.raises(PathcheckError) as err:  # an error of the whole file: no field named
+        load_machine(legacy)
+    assert str(err.value) == f"{legacy}: machine: kinematics.b_direction must be 1 or -1, found 2"
+    with pytest.raises(PathcheckError, match="machine file not found"):
+        load_machine(tmp_path / "none.toml")
 
 
 def _machine(center=(0.0, 0.0, 0.0), direction=1):

@@ -180,11 +180,13 @@ def test_standard_cutters_against_brute_force():
     for sid, name in regions.items():
         least = arrays["allowable"][arrays["surface"] == sid].min()
         assert name == std.names[std.largest(np.array([least]))[0]]
-    # a family the tool library lacks: config diameters, corner radius kept (R = D/2 - r)
+    # a family the tool library lacks: config diameters, corner radius kept (R = D/2 - r);
+    # D3 has no cutter with the corner r = 2 (R = 1.5 - 2 < 0)
     apt = standard_cutters("apt", "CUTTER/10,2", 3.0, (3.0, 6.0, 12.0))
-    assert apt.names == ("D3", "D6", "D12")
-    np.testing.assert_allclose(apt.sizes, [-0.5, 1.0, 4.0])
-    assert list(apt.largest(np.array([0.2, 1.0, 3.9, np.nan]))) == [-1, 1, 1, 2]
+    assert apt.names == ("D6", "D12")
+    np.testing.assert_allclose(apt.sizes, [1.0, 4.0])
+    picked = apt.largest(np.array([0.2, 1.0, 3.9, np.nan]))
+    assert [apt.name_of(k) for k in picked] == ["none", "D6", "D6", "D12"]
 
 
 def test_paint_map_puts_points_where_they_are():

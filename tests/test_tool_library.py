@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from checker.errors import PathcheckError
-from checker.tool_library import load_tool_library
+from checker.tool_library import largest_fitting, load_tool_library
 
 
 @pytest.fixture(scope="module")
@@ -46,8 +46,8 @@ def test_largest_not_exceeding_matches_brute_force(lib):
         cands = [t for t in lib.tools if t.kind == fam and (r is None or t.r == r)]
         sizes = rng.uniform(0, 16, 200)
         sizes[:3] = [0.0, cands[0].size, np.inf]
-        idx = lib.pick_many(fam, sizes, r)
         fam_sorted = lib.family(fam, r)
+        idx = largest_fitting([t.size for t in fam_sorted], sizes)
         for s, i in zip(sizes, idx, strict=True):
             fit = [t.size for t in cands if t.size <= s]
             got = lib.largest_not_exceeding(fam, s, r)
@@ -58,7 +58,10 @@ def test_largest_not_exceeding_matches_brute_force(lib):
     assert lib.largest_not_exceeding("ball", 3.3).name == "BALL-1/4IN"  # r 3.175 > 3.0 (D6)
     assert lib.largest_not_exceeding("ball", 0.1) is None
     assert lib.largest_not_exceeding("bullnose", 4.0, r=2.0).name == "BULL-D12-R2"
-    assert lib.pick_many("ball", np.array([np.nan]))[0] == -1
+    balls = [t.size for t in lib.family("ball")]
+    assert list(largest_fitting(balls, [np.nan, np.inf, balls[1] * (1 - 1e-13)])) == [
+        -1, len(balls) - 1, 1]  # no answer, unbounded, equal to the last digits
+    assert list(largest_fitting([], [1.0, np.inf])) == [-1, -1]
     t3 = lib.largest_not_exceeding("tapered_ball", 2.0, theta=math.radians(3))
     assert t3.name == "TBALL-R1.5-T3"
     assert lib.largest_not_exceeding("tapered_ball", 2.0, theta=math.radians(5)) is None
@@ -79,14 +82,16 @@ def _write(tmp_path, body: str):
         ),
         (
             '[[tool]]\nname="F"\nkind="flat"\nd=10\n',
-            r"tool 'F': field flute_length: Field required",
+            r"tool 'F' field 'flute_length': Field required",
         ),
         (
             '[[tool]]\nname="F"\nkind="flat"\nd=-1\nflute_length=3\n',
-            r"tool 'F': field d: .*greater than 0.*-1",
+            r"tool 'F' field 'd': .*greater than 0, found -1",
         ),
-        ('[[tool]]\nname="F"\nkind="drill"\nd=3\nflute_length=3\n', r"tool 'F': field kind"),
-        ('[[tool]]\nname="F"\nkind="flat"\nd=3\nflute_length=3\ncolour="red"\n', r"field colour"),
+        ('[[tool]]\nname="F"\nkind="drill"\nd=3\nflute_length=3\n',
+         r"tool 'F' field 'kind': .*found 'drill'"),
+        ('[[tool]]\nname="F"\nkind="flat"\nd=3\nflute_length=3\ncolour="red"\n',
+         r"field 'colour': Extra inputs are not permitted, found 'red'"),
         ('[[tool]]\nname="F"\nkind="flat"\nd=3\nr=1\nflute_length=3\n', r"flat end-mill has r = 0"),
         ('[[tool]]\nname="F"\nkind="ball"\nd=3\nr=1\nflute_length=3\n', r"d=3 disagrees with r=1"),
         ('[[tool]]\nname="F"\nkind="flat"\nd=3\nflute_length=3\n' * 2, r"'F' is defined twice"),

@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from checker.toolpath import ToolPath
+from checker.units import mm_per_unit
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -62,7 +63,7 @@ def describe_toolpath(tp: ToolPath, axis_tol: float | None = None) -> dict:
 
         axis_tol = default_config().four_axis.axis_j_tolerance
     m = tp.motions
-    scale = 25.4 if tp.units == "inch" else 1.0
+    scale = mm_per_unit(tp.units)
     words = np.array([r.word for r in tp.records], dtype=object)
     is_goto = words == "GOTO"
     with_axis = is_goto & np.array([len(r.args) == 6 for r in tp.records])

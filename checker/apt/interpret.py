@@ -21,8 +21,8 @@ from checker.toolpath import (
     ToolChange,
     ToolPath,
 )
+from checker.units import MM_PER_INCH, mm_per_unit
 
-MM_PER_INCH = 25.4
 LENGTH_UNITS = {
     "INCH": "inch",
     "INCHES": "inch",
@@ -163,7 +163,7 @@ class _Reader:
         self.path = path
         self.dialect = dialect
         self.units = units
-        self.scale = MM_PER_INCH if units == "inch" else 1.0
+        self.scale = mm_per_unit(units)
         self.require_cutter = require_cutter
         # motion columns (file units, file frame); feed, spindle, frame, operation and cycle
         # change seldom: each motion points to a row of `states`, pushed when one changes

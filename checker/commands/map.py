@@ -68,7 +68,7 @@ def map_command(part_path, cutter_text, units, tool_name, tool_library, grid_tex
     write_file(output / "map.json", json.dumps(doc, indent=1), what="map JSON")
     sizes = np.concatenate([m.size[m.kept] for m in maps])
     fin = sizes[np.isfinite(sizes)]
-    name = "r" if r is None else "R"
+    name = cutter.size_symbol
     if not sizes.size:
         smallest = "none: no grid point lies inside the trimmed faces (try a finer --grid)"
     elif fin.size:

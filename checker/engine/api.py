@@ -76,7 +76,7 @@ def _neighbours(tp: TestPoints) -> np.ndarray:
     """(M, 8) nearest other test points of every test point on the same surface (-1 where the
     neighbour is on another surface; cached): the sample graph in which the scan looks for
     local minima, so that every surface gets its own seeds."""
-    cache = _cache_of(tp)
+    cache = tp.cache("engine.api")
     hit = cache.get("knn")
     if hit is None:
         k = min(_GRAPH_K + 1, len(tp.points))
@@ -86,11 +86,6 @@ def _neighbours(tp: TestPoints) -> np.ndarray:
         hit = np.ascontiguousarray(np.where(other, -1, nb), dtype=np.int64)
         cache["knn"] = hit
     return hit
-
-
-def _cache_of(tp: TestPoints) -> dict:
-    """Per-TestPoints cache (lives and dies with the object)."""
-    return tp.__dict__.setdefault("_engine_cache", {})
 
 
 def _rows(cc, normals, axes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

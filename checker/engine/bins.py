@@ -45,16 +45,11 @@ _GRIDS_MAX = 32  # cached grids per set of test points, besides the table lattic
 _TOP_CHUNK = 1 << 21  # (row, hull vertex) products per block in `part_tops`
 
 
-def _cache_of(tp: TestPoints) -> dict:
-    """Per-TestPoints cache of this module (lives and dies with the object)."""
-    return tp.__dict__.setdefault("_engine_bins_cache", {})
-
-
 def tool_grid(tp: TestPoints, axis: np.ndarray, Q: np.ndarray | None = None) -> CellGrid:
     """Cell grid of the test points rotated by `Q` (default `tool_rotation(axis)`) into the tool
     frame of the unit `axis` (part frame); cached per axis: kept for the part on the table
     lattice (module docstring), else one of the last `_GRIDS_MAX`."""
-    cache = _cache_of(tp)
+    cache = tp.cache("engine.bins")
     key = tuple(np.round(axis, 12).tolist())
     table = cache.setdefault("table", {})
     grids = cache.setdefault("grids", {})
@@ -73,7 +68,7 @@ def tool_grid(tp: TestPoints, axis: np.ndarray, Q: np.ndarray | None = None) -> 
 
 def drop_table_grids(tp: TestPoints) -> None:
     """Free the table lattice's grids of `tp` (after a best-B search: the memory goes back)."""
-    _cache_of(tp).pop("table", None)
+    tp.cache("engine.bins").pop("table", None)
 
 
 def _on_table_lattice(axis: np.ndarray) -> bool:
@@ -86,7 +81,7 @@ def part_tops(tp: TestPoints, Q: np.ndarray) -> np.ndarray:
     """(N,) height of the highest test point in each row's tool frame `Q (N, 3, 3)`, mm: the
     maximum over the vertices of the points' convex hull (cached; all points when the hull is
     flat)."""
-    cache = _cache_of(tp)
+    cache = tp.cache("engine.bins")
     ext = cache.get("extreme")
     if ext is None:
         try:

@@ -3,7 +3,7 @@ frame), above a plane and, below an equator, inside a ball, found through a unif
 A row's trial region is one row of a region array (`regions`, `region_rows`). The numba pieces
 every traversal shares: `cell_range` and `column_span` (the cells under the region's grid-frame
 disc), `cell_misses` (a cell whose bounding box misses the region is passed over) and `inside`
-(the exact test of a point); `disc_candidates` returns the plain CSR lists."""
+(the exact test of a point)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,6 @@ import numba as nb
 import numpy as np
 
 from checker.engine.family import FamilyBounds
-from checker.engine.frames import identity_rows, rotated
 
 SERIAL_ROWS = 64  # below this many rows a kernel runs serially (thread start-up costs more)
 _EPS_MM = 1e-9  # mm added to a tilted search disc against rounding
@@ -204,43 +203,6 @@ def cell_misses(reg, i, view, grid, c):
     return False
 
 
-@nb.njit(cache=True)
-def _collect_row(i, grid, rot, reg, indptr, out, fill):
-    """Candidates of row i: the points of the cells under its grid-frame disc whose boxes can
-    meet its region, each tested in the row's own frame (`rot[i]` @ grid point). Counts into
-    `out[i]`, or (fill) writes the point ids from `out[indptr[i]]`."""
-    xyz, order, start, ny = grid.xyz_cells, grid.order, grid.start, grid.ny
-    i0, i1, j0, j1 = cell_range(reg, i, grid)
-    view = grid_view(reg, i, rot)
-    k = indptr[i]
-    cnt = 0
-    for a in range(i0, i1 + 1):
-        ja, jb = column_span(reg, i, grid, a, j0, j1)
-        for c in range(a * ny + ja, a * ny + jb + 1):
-            if start[c] == start[c + 1] or cell_misses(reg, i, view, grid, c):
-                continue
-            for t in range(start[c], start[c + 1]):
-                x, y, z = rotated(rot, i, xyz, t)
-                if inside(reg, i, x, y, z):
-                    if fill:
-                        out[k + cnt] = order[t]
-                    cnt += 1
-    if not fill:
-        out[i] = cnt
-
-
-@nb.njit(cache=True, parallel=True)
-def _collect_par(grid, rot, reg, indptr, out, fill):
-    for i in nb.prange(reg.shape[0]):
-        _collect_row(i, grid, rot, reg, indptr, out, fill)
-
-
-@nb.njit(cache=True)
-def _collect_ser(grid, rot, reg, indptr, out, fill):
-    for i in range(reg.shape[0]):
-        _collect_row(i, grid, rot, reg, indptr, out, fill)
-
-
 def _search_disc(grid: CellGrid, rot: np.ndarray, centre: np.ndarray, rad: np.ndarray,
                  zlo: np.ndarray, zhi: np.ndarray):
     """Grid-frame discs (centre x, y, radius (N,)) holding every grid point whose row-frame
@@ -265,8 +227,11 @@ def _search_disc(grid: CellGrid, rot: np.ndarray, centre: np.ndarray, rad: np.nd
 def regions(grid: CellGrid, centre: np.ndarray, radius: np.ndarray, zlo: np.ndarray,
             zhi: np.ndarray, sphere: np.ndarray, zeq: np.ndarray, plane: np.ndarray,
             rot: np.ndarray) -> np.ndarray:
-    """Region array (N, REGION_COLS) of the rows' tests (see `disc_candidates`) with the
-    grid-frame discs that hold them (`rot (N, 3, 3)`: each row's frame seen from the grid's)."""
+    """Region array (N, REGION_COLS) of the rows' tests, each in the row's own tool frame (mm):
+    within `radius` (N,) of `centre` (N, 2) horizontally and zlo <= z <= zhi; below `zeq (N,)`
+    also inside the ball `sphere (N, 4)` (centre x, y, z, radius); `plane[:, :3] . p >=
+    plane[:, 3]`. With the grid-frame discs that hold them: `rot (N, 3, 3)` is each row's tool
+    frame seen from the grid's (a grid point p is `rot[i] @ p` in row i's frame)."""
     rad = np.where(np.isfinite(radius), radius, 1e300)
     reg = np.empty((len(rad), REGION_COLS))
     reg[:, CX], reg[:, CY], reg[:, RAD], reg[:, ZLO], reg[:, ZHI] = *centre.T, rad, zlo, zhi
@@ -280,29 +245,7 @@ def region_rows(grid: CellGrid, fam: FamilyBounds, s: np.ndarray, margin: float,
     """Region array of the trial sizes `s (N,)` (finite, mm) of rows with bounds `fam`: every
     test point whose size can be <= s lies in it (family.py), with every bound grown by
     `margin` mm; `plane (N, 4)` the tangent plane lowered by the margin; `rot (N, 3, 3)` as in
-    `disc_candidates`."""
+    `regions`."""
     sphere, zeq = fam.lower_ball(s, margin)
     return regions(grid, fam.centre(s), fam.radius(s) + margin, fam.z_low(s) - margin,
                    fam.z_top + margin, sphere, zeq, plane, rot)
-
-
-def disc_candidates(grid: CellGrid, centre: np.ndarray, radius: np.ndarray, zlo: np.ndarray,
-                    zhi: np.ndarray, sphere: np.ndarray, zeq: np.ndarray, plane: np.ndarray,
-                    rot: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """CSR (indptr (N+1,), indices (K,)) of the test points within `radius` (N,) mm of `centre`
-    (N, 2) horizontally and with zlo <= z <= zhi (tool frame); points below `zeq (N,)` must also
-    lie in the ball `sphere (N, 4)` (centre x, y, z, radius); every point must satisfy
-    `plane[:, :3] . p >= plane[:, 3]` (the tangent plane lowered by the slack). `rot (N, 3, 3)`:
-    each row's own tool frame seen from the grid's (a point p of the grid is `rot[i] @ p` for
-    row i; default: the grid's frame)."""
-    n = len(radius)
-    rot = identity_rows(n) if rot is None else np.ascontiguousarray(rot)
-    reg = regions(grid, centre, radius, zlo, zhi, sphere, zeq, plane, rot)
-    collect = _collect_ser if n < SERIAL_ROWS else _collect_par
-    counts = np.zeros(n, dtype=np.int64)
-    collect(grid.kernel_args(), rot, reg, np.zeros(n + 1, dtype=np.int64), counts, False)
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(counts, out=indptr[1:])
-    indices = np.empty(indptr[-1], dtype=np.int64)
-    collect(grid.kernel_args(), rot, reg, indptr, indices, True)
-    return indptr, indices

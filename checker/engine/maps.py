@@ -15,6 +15,7 @@ from checker.engine.api import allowable
 from checker.geometry.evaluate import evaluate
 from checker.geometry.sampling import TestPoints
 from checker.part import Part
+from checker.tool_library import largest_fitting
 
 
 @dataclass
@@ -62,8 +63,7 @@ def allowable_maps(part: Part, tp: TestPoints, cutter, grid: tuple[int, int], to
         size = np.full(kept.shape, np.nan)
         size[kept] = res.size[at:at + k]
         at += k
-        key = np.nan_to_num(size, nan=-1.0, posinf=1e300) * (1 + 1e-12)
-        std = np.where(kept, np.searchsorted(sizes, key, side="right") - 1, -1)
+        std = largest_fitting(sizes, size)  # nan where not kept: -1
         out.append(SurfaceMap(s.id, s.name, u, v, kept, cc, nrm, size, std))
     return out
 

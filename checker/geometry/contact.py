@@ -24,6 +24,7 @@ from checker.geometry.evaluate import evaluate_mixed
 from checker.geometry.newton_uv import newton_steps
 from checker.geometry.sampling import TestPoints
 from checker.part import Part
+from checker.units import mm_per_unit
 
 if TYPE_CHECKING:
     from checker.toolpath import ToolPath
@@ -37,7 +38,6 @@ _CORNER = 1e-3         # mm: inside the core, both sides count as nearest within
 _REACHED = 1e-4        # mm: phase 1 ending this near the core goes on to look inside it
 _NUM = r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*"
 _CONTACT_COMMENT = re.compile(f"^{_NUM},{_NUM},{_NUM}$")
-_INCH = 25.4
 
 
 @dataclass
@@ -297,7 +297,7 @@ def contact_from_toolpath(toolpath: ToolPath, lines: np.ndarray) -> np.ndarray:
         return out
     raw = np.array([found.get(int(n), [np.nan] * 3) for n in np.unique(lines)])
     out = raw[np.searchsorted(np.unique(lines), lines)]
-    out *= _INCH if toolpath.units == "inch" else 1.0
+    out *= mm_per_unit(toolpath.units)
     frames = toolpath.frames
     mats = np.stack([np.eye(4)] + [f.matrix if f.applied else np.eye(4) for f in frames])
     which = np.searchsorted(np.array([f.line for f in frames], dtype=np.int64), lines)

@@ -4,7 +4,7 @@ with its (surface, u, v), in one cKDTree. Cached in memory by (content hash, set
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -34,6 +34,12 @@ class TestPoints:
     uv: np.ndarray
     spacing: np.ndarray
     tree: cKDTree
+    caches: dict[str, dict] = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def cache(self, owner: str) -> dict:
+        """A dict of derived data that lives and dies with these test points, one per `owner`
+        (the module that keeps it)."""
+        return self.caches.setdefault(owner, {})
 
 
 def sample_part(

@@ -15,10 +15,11 @@ from pathlib import Path
 
 from checker.atomic import write_file
 from checker.config import Config, default_config
+from checker.cutter import size_symbol_of
 from checker.errors import PathcheckError
 from checker.report.page import render_page
 from checker.report.pictures import JobPainter, trend_picture
-from checker.report.standard import parsed_cutter, per_region, standard_cutters
+from checker.report.standard import per_region, standard_cutters
 from checker.report.trends import DAY_S, compare, local_iso, nights
 from checker.results import VERDICTS
 from checker.store import JobRow, ResultsStore
@@ -74,9 +75,7 @@ def _draw(task: tuple) -> tuple[int, list[str], dict, list]:
     standard = standard_cutters(kind, cutter, cutter_size, diameters)
     reach = arrays["kind"] & (arrays["verdict"] != VERDICTS.index("inaccessible"))
     regions = per_region(standard, arrays["allowable"][reach], arrays["surface"][reach])
-    real = parsed_cutter(cutter)
-    symbol = "r" if real is None else real.size_symbol
-    return job_id, *painter.render(arrays, standard, cutter_size, symbol), regions
+    return job_id, *painter.render(arrays, standard, cutter_size, size_symbol_of(kind)), regions
 
 
 def _draw_all(store: ResultsStore, rows: list[JobRow], cfg: Config) -> dict[int, tuple]:

@@ -12,13 +12,13 @@ import numpy as np
 
 from checker.cutter import parse_cutter
 from checker.errors import PathcheckError
-from checker.tool_library import ToolLibrary, load_tool_library
+from checker.tool_library import ToolLibrary, largest_fitting, load_tool_library
 
 
 @dataclass(frozen=True)
 class StandardCutters:
     """Standard cutters of one family, ascending: names and sizes in the allowable variable
-    (R for flat/bull-nose/APT, r for ball; mm). A size <= 0 is never chosen."""
+    (R for flat/bull-nose/APT, r for ball; mm)."""
 
     names: tuple[str, ...]
     sizes: np.ndarray
@@ -26,12 +26,7 @@ class StandardCutters:
     def largest(self, allowable: np.ndarray) -> np.ndarray:
         """(N,) index into `names` of the largest standard cutter with size <= allowable (mm;
         nan = unbounded), -1 where none fits."""
-        a = np.where(np.isnan(allowable), np.inf, allowable)
-        if len(self.sizes) == 0:
-            return np.full(a.shape, -1)
-        index = np.searchsorted(self.sizes, a * (1 + 1e-12) + 1e-12, side="right") - 1
-        index[self.sizes[np.maximum(index, 0)] <= 0] = -1  # too small to exist in this family
-        return index
+        return largest_fitting(self.sizes, np.where(np.isnan(allowable), np.inf, allowable))
 
     def name_of(self, index: int) -> str:
         return "none" if index < 0 else self.names[index]
@@ -42,7 +37,7 @@ def _library() -> ToolLibrary:
     return load_tool_library()
 
 
-def parsed_cutter(cutter: str | None):
+def _parsed_cutter(cutter: str | None):
     """The real cutter of a stored `CUTTER/...` statement, None when there is none or it does
     not parse (a store written by another version)."""
     if not cutter:
@@ -60,8 +55,8 @@ def standard_cutters(
     """The standard cutters of the family of the real cutter (`kind`, its APT CUTTER/d,r,e,f,a,b
     statement and its size, mm). Library family: same kind (and corner radius r for the R
     families, taper angle b for tapered balls); otherwise the config diameters D with size
-    D/2 - (d/2 - size of the real cutter), i.e. the real cutter's corner kept."""
-    real = parsed_cutter(cutter)
+    D/2 - (d/2 - size of the real cutter) > 0, i.e. the real cutter's corner kept."""
+    real = _parsed_cutter(cutter)
     if kind and real is not None:
         theta = real.theta if real.ball_family and real.theta > 0.0 else None
         family = _library().family(kind, real.family_corner, theta=theta)
@@ -72,6 +67,7 @@ def standard_cutters(
             )
     offset = max(real.d / 2.0 - cutter_size, 0.0) if real is not None and cutter_size else 0.0
     d = np.sort(np.asarray(diameters, dtype=float))
+    d = d[d / 2.0 - offset > 0.0]  # a smaller diameter has no cutter with this corner
     return StandardCutters(tuple(f"D{x:g}" for x in d), d / 2.0 - offset)
 
 
