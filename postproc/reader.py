@@ -11,8 +11,9 @@ switch tool-centre-point control (G43.4, G234, M428, TRAORI, M128, G141) and the
 Sinumerik ``MCALL CYCLE81..89(RTP, RFP, SDIS, DP, DPR)`` holes, MillPlus G93/G92 datum shifts, G7
 tilted planes (``A5= B5= C5=``: rotations about X, then Y, then Z; the XYZ that follow are in the
 tilted frame and the tool is along its Z) and G8x definitions called by G79, LinuxCNC M61 Q,
-Heidenhain ``T`` tool calls. Other codes of the dialect table are accepted and counted. Unknown
-positions are NaN.
+Heidenhain ``T`` tool calls, block delete (a block starting with ``/``: skipped while the
+switch is on, the default, else run; counted either way). Other codes of the dialect table are
+accepted and counted. Unknown positions are NaN.
 """
 
 from __future__ import annotations
@@ -40,6 +41,9 @@ _PLANES = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}  # (u, v, normal) axis i
 _ARC_OFFSETS = "IJK"
 #: Sinumerik drilling and boring cycles read as holes
 _SIEMENS_CYCLE = re.compile(r"CYCLE(7[67]|8[1-9])")
+#: keys of `GcodeMoves.other` counting the block-delete (``/``) blocks, as the switch was set
+BLOCK_DELETE_SKIPPED = "/ blocks skipped (block delete on)"
+BLOCK_DELETE_RUN = "/ blocks run (block delete off)"
 
 
 @dataclass(frozen=True)
@@ -556,9 +560,20 @@ class _Program:
 
 
 def read_gcode_text(
-    text: str, dialect: str | Dialect, *, path: str = "<text>", units: str = "mm"
+    text: str, dialect: str | Dialect, *, path: str = "<text>", units: str = "mm",
+    block_delete: bool = True,
 ) -> GcodeMoves:
-    """Motion rows of G-code ``text``; ``units`` is the control's default before G20/G21."""
+    """Motion rows of G-code ``text``; ``units`` is the control's default before G20/G21.
+
+    ``block_delete`` is the operator's block-delete (optional block skip) switch: on, a block
+    starting with ``/`` is skipped whole (its moves, modes, parameters and comments), as the
+    control does; off, it runs like any other. On is the default because that is how a program
+    with ``/`` blocks runs in production: the ``/`` blocks are the optional ones (a probing
+    cycle, a first-part check, a spring pass) that the switch leaves out once the job is
+    proven, so the check sees the moves production makes; ``block_delete=False`` reads the
+    program as run with the switch off. Either way the ``/`` blocks are lexed (bad text is an
+    error under both settings) and counted in ``other`` (`BLOCK_DELETE_SKIPPED` or
+    `BLOCK_DELETE_RUN`), which the program summary lists."""
     dia = get_dialect(dialect) if isinstance(dialect, str) else dialect
     prog = _Program(dia, path, units)
     bad = _NOT_TEXT.search(text)
@@ -587,12 +602,19 @@ def read_gcode_text(
             )
         block = lex_block(stripped, dia, prog.params, path=path, line=number)
         prog.blocks += 1
+        if block.deleted:
+            prog.other[BLOCK_DELETE_SKIPPED if block_delete else BLOCK_DELETE_RUN] += 1
+            if block_delete:
+                continue
         prog.block(block, number)
     return prog.result()
 
 
-def read_gcode(path: str | Path, dialect: str | Dialect, *, units: str = "mm") -> GcodeMoves:
-    """Motion rows of the G-code file at ``path`` (see `read_gcode_text`)."""
+def read_gcode(
+    path: str | Path, dialect: str | Dialect, *, units: str = "mm", block_delete: bool = True
+) -> GcodeMoves:
+    """Motion rows of the G-code file at ``path`` (see `read_gcode_text`; ``block_delete``
+    the switch, on by default: ``/`` blocks skipped)."""
     path = Path(path)
     try:
         text = path.read_text(encoding="latin-1")
@@ -600,7 +622,8 @@ def read_gcode(path: str | Path, dialect: str | Dialect, *, units: str = "mm") -
         raise PathcheckError(
             f"cannot read G-code: {err.strerror}", path=path, code="gcode"
         ) from err
-    return read_gcode_text(text, dialect, path=str(path), units=units)
+    return read_gcode_text(text, dialect, path=str(path), units=units,
+                           block_delete=block_delete)
 
 
 def _rot_xyz(a: float, b: float, c: float) -> np.ndarray:

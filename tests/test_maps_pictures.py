@@ -8,8 +8,8 @@ from matplotlib.colors import LogNorm, to_rgb
 from PIL import Image
 
 from checker.cutter import parse_cutter
-from checker.engine.maps import MAP_DPI, SurfaceMap, draw_maps, size_norm
-from checker.report.pictures import UNBOUNDED
+from checker.engine.maps import SurfaceMap
+from checker.report.pictures import MAP_DPI, UNBOUNDED, draw_maps, size_norm, standard_colours
 from checker.tool_library import load_tool_library
 
 
@@ -51,3 +51,23 @@ def test_unbounded_is_its_own_colour(tmp_path):
                         tmp_path / "b", "bowl.json")
     assert _unbounded_share(files[0]) > 0.08
     assert 0 < _unbounded_share(control[0]) < 0.005
+
+
+def test_standard_map_has_the_reports_colours(tmp_path):
+    """The standard map of `pathcheck map` paints a cutter in the colour the report gives it
+    (`standard_colours`): on a part where the third tool fits everywhere the points are that
+    colour; every other colour is only a legend patch."""
+    cutter = parse_cutter("CUTTER/10,5")
+    tools = load_tool_library().family("ball", None)
+    surfaces = [_surface(k, np.full((12, 12), 5.0)) for k in range(2)]
+    for s in surfaces:
+        s.standard[:] = 2
+    files = draw_maps(surfaces, cutter, tools, tmp_path, "bowl.json")
+    img = np.asarray(Image.open(files[1]).convert("RGB")).astype(int)
+    colours = standard_colours(len(tools))[:, :3].astype(int)
+
+    def share(k: int) -> float:
+        return float(np.all(np.abs(img - colours[k + 1]) <= 2, axis=2).mean())
+
+    others = [share(k) for k in range(-1, len(tools)) if k != 2]
+    assert share(2) > 10 * max(others) and min(others) > 0

@@ -9,6 +9,7 @@ import io
 import json
 import re
 from datetime import datetime
+from html.parser import HTMLParser
 
 import numpy as np
 import pytest
@@ -165,6 +166,32 @@ def test_empty_store_says_no_jobs(tmp_path):
     assert "<tr class=\"job" not in html
     assert json.loads(files.json.read_text())["jobs"] == []
     assert files.csv.read_text().count("\n") == 1  # the header only
+
+
+def test_page_text_is_escaped(tmp_path):
+    """A job path and an error that look like markup are shown as text (the template
+    autoescapes): the parsed page has no element from them and its text has them verbatim."""
+    path, error = 'jobs/<img src=x onerror="alert(1)">.apt', "</td><script>alert('x')</script> & co"
+    with ResultsStore(tmp_path / "s.sqlite") as store:
+        store.record_job(None, error=error, job_path=path, elapsed_s=0.1, recorded_at=NOW - 60)
+        files = build_report(store, tmp_path / "r.html", now=NOW)
+
+    class Page(HTMLParser):
+        def __init__(self):
+            super().__init__()
+            self.tags, self.text = [], []
+
+        def handle_starttag(self, tag, attrs):
+            self.tags.append(tag)
+
+        def handle_data(self, data):
+            self.text.append(data)
+
+    page = Page()
+    page.feed(files.html.read_text())
+    assert "script" not in page.tags and page.tags.count("img") == 1  # the trend picture
+    text = "".join(page.text)
+    assert f"failed: {error}" in text and path in text
 
 
 def test_standard_cutters_against_brute_force():

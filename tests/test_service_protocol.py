@@ -134,6 +134,8 @@ def test_part_cache_is_lru_bounded_by_bytes():
     assert built == ["a", "b", "c", "huge"]
     assert cache.stats() == {"entries": 2, "bytes": 80, "max_bytes": 100, "hits": 1,
                              "misses": 4, "evictions": 1}
+    cache.get("full", build("full", 100))  # exactly the bound: both others go
+    assert list(cache.entries) == ["full"] and (cache.nbytes, cache.evictions) == (100, 3)
 
 
 def test_content_keys(tmp_path):

@@ -45,6 +45,10 @@ def assumed_units(moves, given: str | None, machine) -> None:
     "--units", type=click.Choice(["mm", "inch"]), default=None,
     help="units of a program that states none (no G20/G21) [default: the machine file's]"
 )
+@click.option(
+    "--block-delete", type=click.Choice(["on", "off"]), default="on", show_default=True,
+    help="the block-delete switch: on skips the blocks starting with '/', off runs them",
+)
 @opt.part_option()
 @opt.cutter_option(help='cutter, e.g. "CUTTER/6,3", in the program\'s units (G20/G21, --units)')
 @opt.tool_option()
@@ -53,8 +57,8 @@ def assumed_units(moves, given: str | None, machine) -> None:
 @opt.json_option("the program's summary (with --part and --cutter: the results document)")
 @opt.store_option()
 @click.option("--no-store", is_flag=True, help="do not record this check in the results store")
-def check_gcode(program: Path, machine, dialect, units, part_path, cutter_text, tool_name,
-                tool_library, config_path, json_out, store_path, no_store) -> None:
+def check_gcode(program: Path, machine, dialect, units, block_delete, part_path, cutter_text,
+                tool_name, tool_library, config_path, json_out, store_path, no_store) -> None:
     """Read PROGRAM (G-code) for a machine, bring its moves back into the part frame and, with
     --part and --cutter, check them like `pathcheck JOB.apt` (exit 1 on findings).
 
@@ -77,7 +81,8 @@ def check_gcode(program: Path, machine, dialect, units, part_path, cutter_text, 
             "part file not found: expected an existing file", path=part_path, code="part"
         )
     with step("read the program"):
-        moves = read_gcode(program, dialect or mach.dialect, units=units or mach.units)
+        moves = read_gcode(program, dialect or mach.dialect, units=units or mach.units,
+                           block_delete=block_delete == "on")
     assumed_units(moves, units, mach)
     if isinstance(cutter, str):  # read in the program's units (G20/G21, else --units)
         cutter = parse_cutter_in(cutter, moves.units)

@@ -43,9 +43,10 @@ def map_command(part_path, cutter_text, units, tool_name, tool_library, grid_tex
     """
     import numpy as np
 
-    from checker.engine.maps import allowable_maps, draw_maps, maps_document
+    from checker.engine.maps import allowable_maps, maps_document
     from checker.geometry import load_part
     from checker.geometry.sampling import sample_part
+    from checker.report.pictures import draw_maps
     from checker.tool_library import load_tool_library
 
     cutter = opt.cutter_family(cutter_text, tool_name, tool_library, units)

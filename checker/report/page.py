@@ -1,28 +1,25 @@
 """The report's HTML page: one self-contained file (inline CSS, pictures as data: URIs, no script,
-no network), built from the job summaries, the pictures and the trends."""
+no network), built from the job summaries, the pictures and the trends. The markup is the
+Jinja2 template `checker/resources/templates/report.html.j2` (autoescaped); this module gives
+it the numbers as text."""
 
 from __future__ import annotations
 
-from html import escape
+from functools import cache
 from pathlib import PurePath
+
+from jinja2 import Environment, FileSystemLoader, StrictUndefined, Template
+from markupsafe import Markup, escape
 
 from checker.report.pictures import CSS_PX_PER_IN, PANEL_IN, TREND_IN
 from checker.report.trends import local_iso
+from checker.resources import resource
 
-CSS = """
-body{font:14px/1.4 system-ui,sans-serif;margin:1.5em;color:#222;background:#fff}
-h1{margin:0 0 .2em}h2{margin-top:1.5em;border-bottom:1px solid #ccc}
-table{border-collapse:collapse;margin:.5em 0}th,td{border:1px solid #ccc;padding:2px 7px}
-th{background:#f0f0f0;text-align:left}td.n{text-align:right;font-variant-numeric:tabular-nums}
-tr.failed td{background:#fde2e2}tr.findings td.status{background:#ffe9c7;font-weight:bold}
-tr.ok td.status{background:#dff3df}.empty{font-size:1.3em;padding:1em;background:#f6f6f6}
-.job{margin:1em 0 2em}.pics{display:flex;flex-wrap:wrap;gap:12px}
-figure{margin:0;width:min-content}figcaption{font-size:13px;color:#444}.meta{color:#555;font-size:13px}
-"""
+DASH = Markup("&ndash;")  # a number that is not there
 
 
 def _num(value: float | int | None, fmt: str = "{:.3f}") -> str:
-    return "&ndash;" if value is None else escape(fmt.format(value))
+    return DASH if value is None else fmt.format(value)
 
 
 def _mm(value: float | None) -> str:
@@ -32,56 +29,25 @@ def _mm(value: float | None) -> str:
     return _num(value)
 
 
-def _regions(job: dict) -> str:
-    """'BALL-D8: S0, S2 · none: S3': the surfaces grouped by their largest safe cutter."""
-    groups: dict[str, list[str]] = {}
-    for surface, name in job["regions"]:
-        groups.setdefault(name, []).append(f"S{surface}")
-    text = " &middot; ".join(f"{escape(n)}: {', '.join(s)}" for n, s in groups.items())
-    std = job["largest_safe_standard"]
-    return text or (escape(std) if std else "&ndash;")
-
-
-def _breakable(path: str) -> str:
+def _breakable(path: str) -> Markup:
     """A path, escaped, that a narrow table cell may wrap after its slashes."""
-    return escape(path).replace("/", "/<wbr>")
+    return escape(path).replace("/", Markup("/<wbr>"))
 
 
-def _img(b64: str, alt: str, inches: tuple[float, float] = PANEL_IN) -> str:
-    """A picture shown at its size in inches (`CSS_PX_PER_IN`), whatever its dpi."""
-    w, h = (round(x * CSS_PX_PER_IN) for x in inches)
-    return (f'<img class="pic" width="{w}" height="{h}" alt="{escape(alt)}" '
-            f'src="data:image/png;base64,{b64}">')
+def _px(inches: float) -> int:
+    """A picture's size in inches as CSS px (`CSS_PX_PER_IN`), whatever its dpi."""
+    return round(inches * CSS_PX_PER_IN)
 
 
-def _job_table(jobs: list[dict]) -> str:
-    head = (
-        "<tr><th>#</th><th>job</th><th>status</th><th>points</th><th>gouges</th>"
-        "<th>interferences</th><th>holder hits</th><th>crashes</th><th>inaccessible</th>"
-        "<th>worst depth, mm</th>"
-        "<th>worst margin, mm</th><th>largest safe standard cutter per region</th>"
-        "<th>vs previous run</th><th>time, s</th></tr>"
+@cache
+def _template() -> Template:
+    env = Environment(
+        loader=FileSystemLoader(resource("templates")),
+        autoescape=True,
+        undefined=StrictUndefined, trim_blocks=True, lstrip_blocks=True,
     )
-    rows = []
-    for j in jobs:
-        if j["status"] == "failed":
-            detail = f'<td colspan="10">failed: {escape(j["error"] or "")}</td>'
-        else:
-            detail = (
-                f'<td class="n">{j["points"]}</td><td class="n">{j["gouge"]}</td>'
-                f'<td class="n">{j["interference"]}</td><td class="n">{j["holder"]}</td>'
-                f'<td class="n">{j["crash"]}</td><td class="n">{j["inaccessible"]}</td>'
-                f'<td class="n">{_mm(j["worst_depth"])}</td>'
-                f'<td class="n">{_mm(j["worst_margin"])}</td><td>{_regions(j)}</td>'
-                f'<td class="n">{_delta(j)}</td>'
-            )
-        rows.append(
-            f'<tr class="job {j["status"]}" id="row-{j["id"]}"><td class="n">{j["id"]}</td>'
-            f'<td><a href="#job-{j["id"]}">{_breakable(j["job_path"])}</a></td>'
-            f'<td class="status">{j["status"]}</td>{detail}'
-            f'<td class="n">{_num(j["elapsed_s"], "{:.2f}")}</td></tr>'
-        )
-    return f'<table class="jobs">{head}{"".join(rows)}</table>'
+    env.filters.update(num=_num, mm=_mm, breakable=_breakable, px=_px)
+    return env.get_template("report.html.j2")
 
 
 def _delta(job: dict) -> str:
@@ -93,20 +59,11 @@ def _delta(job: dict) -> str:
     return "same gouges" if d == 0 else f"{d:+d} gouges"
 
 
-def _trend_table(rows: list[tuple]) -> str:
-    head = (
-        "<tr><th></th><th>tonight</th><th>previous night</th>"
-        "<th>mean of earlier nights</th></tr>"
-    )
-    body = []
-    for quantity, tonight, previous, mean in rows:
-        if quantity == "worst depth":
-            cells = (_mm(tonight), _mm(previous), _mm(mean))
-        else:
-            cells = (_num(tonight, "{:g}"), _num(previous, "{:g}"), _num(mean, "{:.2f}"))
-        tds = "".join(f'<td class="n">{c}</td>' for c in cells)
-        body.append(f"<tr><th>{escape(quantity)}</th>{tds}</tr>")
-    return f'<table class="trend">{head}{"".join(body)}</table>'
+def _trend_cells(quantity: str, tonight, previous, mean) -> tuple[str, tuple[str, str, str]]:
+    """A row of the trend table: the quantity and its three numbers as text."""
+    if quantity == "worst depth":
+        return quantity, (_mm(tonight), _mm(previous), _mm(mean))
+    return quantity, (_num(tonight, "{:g}"), _num(previous, "{:g}"), _num(mean, "{:.2f}"))
 
 
 def findings_caption(job: dict) -> str:
@@ -138,21 +95,20 @@ def _captions(job: dict) -> tuple[str, ...]:
     )
 
 
-def _job_section(job: dict) -> str:
-    captions = _captions(job)
-    figs = "".join(
-        f"<figure>{_img(b64, cap)}<figcaption>{escape(cap)}</figcaption></figure>"
-        for b64, cap in zip(job["pictures"], captions, strict=True)
-    )
-    meta = " &middot; ".join(
-        escape(f"{k}: {job[k]}") for k in ("recorded_at", "cutter", "part", "machine", "axis_class")
-        if job[k]
-    )
-    return (
-        f'<section class="job" id="job-{job["id"]}"><h3>#{job["id"]} '
-        f'{escape(job["job_path"])} &mdash; {job["status"]}</h3>'
-        f'<div class="meta">{meta}</div><div class="pics">{figs}</div></section>'
-    )
+def _shown(job: dict) -> dict:
+    """The job with what the template shows of it beside its summary: the surfaces grouped by
+    their largest safe cutter, the change since the previous run, the meta line and the
+    pictures with their captions."""
+    groups: dict[str, list[str]] = {}
+    for surface, name in job["regions"]:
+        groups.setdefault(name, []).append(f"S{surface}")
+    meta = [f"{k}: {job[k]}" for k in ("recorded_at", "cutter", "part", "machine", "axis_class")
+            if job[k]]
+    figures = (list(zip(job["pictures"], _captions(job), strict=True)) if job["pictures"]
+               else [])
+    delta = _delta(job) if job["status"] != "failed" else ""
+    return {**job, "region_groups": list(groups.items()), "delta": delta, "meta": meta,
+            "figures": figures}
 
 
 def render_page(
@@ -161,29 +117,10 @@ def render_page(
     """The whole page. `jobs` are the summaries of `build.job_summary` with `pictures` (base64
     PNG, four per job that did not fail) and `facts` (see `JobPainter.render`); times are UTC
     epoch seconds, shown as ISO 8601 local time."""
-    counts = {s: sum(j["status"] == s for j in jobs) for s in ("ok", "findings", "failed")}
-    parts = [
-        "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">",
-        f"<title>pathcheck report {local_iso(until)}</title><style>{CSS}</style></head><body>",
-        "<h1>pathcheck nightly report</h1>",
-        f'<p class="meta">jobs recorded from {local_iso(since)} to {local_iso(until)}</p>',
-    ]
-    if not jobs:
-        parts.append(
-            f'<p class="empty" id="no-jobs">No jobs were recorded between {local_iso(since)} and '
-            f"{local_iso(until)}.</p>"
-        )
-    else:
-        parts.append(
-            f'<p class="totals"><b>{len(jobs)}</b> jobs: <b>{counts["ok"]}</b> clean, '
-            f'<b>{counts["findings"]}</b> with findings, <b>{counts["failed"]}</b> failed.</p>'
-        )
-    parts.append("<h2>Trends against previous nights</h2>")
-    if trend_png:
-        parts.append(_img(trend_png, "jobs and gouge points per night", TREND_IN))
-    parts.append(_trend_table(trend_rows))
-    if jobs:
-        parts += ["<h2>Jobs</h2>", _job_table(jobs), "<h2>Pictures per job</h2>"]
-        parts += [_job_section(j) for j in jobs if j["pictures"]]
-    parts.append("</body></html>")
-    return "\n".join(parts)
+    return _template().render(
+        jobs=[_shown(j) for j in jobs],
+        counts={s: sum(j["status"] == s for j in jobs) for s in ("ok", "findings", "failed")},
+        since=local_iso(since), until=local_iso(until), trend_png=trend_png,
+        trend_rows=[_trend_cells(*row) for row in trend_rows],
+        panel_in=PANEL_IN, trend_in=TREND_IN,
+    )

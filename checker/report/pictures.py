@@ -15,12 +15,18 @@ only the data is drawn on top per job (blitting); the titles are the page's capt
 
 Pictures are `PANEL_IN` inches at the configured dpi; the page shows them at that size (96 CSS
 px per inch), so text of `FONT_PT` points is FONT_PT * 96 / 72 px on screen. Maps are projected
-views of the part frame onto the two coordinates with the largest spread."""
+views of the part frame onto the two coordinates with the largest spread.
+
+The pictures of `pathcheck map` (`draw_maps`: allowable size per surface over (u, v), largest
+standard cutter per CC point from the top) are drawn here too, in the same colours: one
+unbounded colour, one "none fits" colour, the standard cutters small to large on viridis."""
 
 from __future__ import annotations
 
 import base64
 import io
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -29,12 +35,13 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.cm import ScalarMappable  # noqa: E402
-from matplotlib.colors import LogNorm  # noqa: E402
+from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm, Normalize  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 from PIL import Image  # noqa: E402
 
+from checker.atomic import write_file  # noqa: E402
 from checker.report.standard import StandardCutters  # noqa: E402
 from checker.results import VERDICTS  # noqa: E402
 from checker.verdict import FINDINGS  # noqa: E402
@@ -53,6 +60,10 @@ STANDARD_NONE = "#d62728"  # no standard cutter fits
 B_RANGES = (10.0, 30.0, 60.0, 90.0, 180.0)  # degrees: the fixed scales of the B panel
 AXES = "XYZ"
 FINDING_CODES = np.array([VERDICTS.index(v) for v in FINDINGS])
+MAP_DPI = 150  # the `pathcheck map` pictures print at this dpi; their text is at least 9 pt
+
+if TYPE_CHECKING:
+    from checker.engine.maps import SurfaceMap
 
 
 def png_base64(rgba: np.ndarray, dpi: float) -> str:
@@ -124,6 +135,13 @@ def _rgba_bytes(colours: list) -> np.ndarray:
     return (255 * np.array([matplotlib.colors.to_rgba(c) for c in colours]) + 0.5).astype(np.uint8)
 
 
+def standard_colours(count: int) -> np.ndarray:
+    """(count+1, 4) uint8 RGBA: 'none fits' red, then `count` standard cutters small to large
+    on the allowable map's colour scale (bright = large)."""
+    steps = matplotlib.colormaps["viridis"](np.linspace(0.05, 1.0, count), bytes=True)
+    return np.vstack([_rgba_bytes([STANDARD_NONE]), steps])
+
+
 def b_range(values: np.ndarray) -> float:
     """The smallest of the fixed B scales (degrees, symmetric) that holds all finite values."""
     finite = np.abs(values[np.isfinite(values)])
@@ -160,7 +178,6 @@ class JobPainter:
         self.verdict_rgba = _rgba_bytes([VERDICT_COLOURS[v] for v in VERDICTS])
         self.unbounded_rgba = _rgba_bytes([UNBOUNDED])[0]
         self.drawn: dict[tuple, _Drawn] = {}
-        self.standard_rgba: dict[tuple[str, ...], np.ndarray] = {}
 
     def _figure(self) -> tuple[Figure, object]:
         fig = Figure(figsize=PANEL_IN, dpi=self.dpi, layout="constrained")
@@ -189,7 +206,7 @@ class JobPainter:
 
     def _standard(self, names: tuple[str, ...]) -> _Drawn:
         if ("standard", names) not in self.drawn:
-            colours = self._standard_colours(names) / 255.0
+            colours = standard_colours(len(names)) / 255.0
             handles = [Patch(color=c, label=n) for c, n in
                        zip(colours[::-1], [*names[::-1], "none"], strict=True)]
             fig, ax = self._map_figure(handles, ncol=1 + len(handles) // 13)
@@ -230,14 +247,6 @@ class JobPainter:
             self.drawn["path", scale] = _Drawn(fig, ax, (a, b, limit, top))
         return self.drawn["path", scale]
 
-    def _standard_colours(self, names: tuple[str, ...]) -> np.ndarray:
-        """(K+1, 4) uint8: 'none fits' red, then the standard cutters small to large on the
-        allowable map's colour scale (bright = large)."""
-        if names not in self.standard_rgba:
-            steps = self.allow_cmap(np.linspace(0.05, 1.0, len(names)), bytes=True)
-            self.standard_rgba[names] = np.vstack([_rgba_bytes([STANDARD_NONE]), steps])
-        return self.standard_rgba[names]
-
     def _png(self, drawn: _Drawn, xy: np.ndarray, rgba: np.ndarray, size: np.ndarray,
              order: np.ndarray, view: tuple[np.ndarray, float]) -> str:
         img = drawn.restored()
@@ -267,7 +276,7 @@ class JobPainter:
             bytes=True,
         )
         allow_rgba[unbounded] = self.unbounded_rgba
-        std_rgba = self._standard_colours(standard.names)[standard.largest(allowable) + 1]
+        std_rgba = standard_colours(len(standard.names))[standard.largest(allowable) + 1]
         flat, n = np.full(int(cl.sum()), dot), np.zeros(int(cl.sum()), dtype=int)
         found = is_finding(verdict).astype(int)
         pictures = [
@@ -335,3 +344,85 @@ def trend_picture(nights: list[dict], dpi: int = 150) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
     return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def size_norm(sizes: np.ndarray) -> Normalize:
+    """The colour scale of allowable sizes (mm) of `pathcheck map`: logarithmic when the
+    positive finite ones span a decade or more (as the report's), else linear; over the
+    positive finite sizes."""
+    pos = sizes[np.isfinite(sizes) & (sizes > 0)]
+    lo, hi = (float(pos.min()), float(pos.max())) if pos.size else (1.0, 10.0)
+    hi = max(hi, lo * 1.001)
+    return LogNorm(lo, hi) if hi >= 10.0 * lo else Normalize(lo, hi)
+
+
+def _save_png(fig: Figure, path: Path) -> Path:
+    """The figure as a PNG file of MAP_DPI, written atomically."""
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=MAP_DPI, format="png")
+    return write_file(path, buf.getvalue(), what="map picture")
+
+
+def draw_maps(maps: list[SurfaceMap], cutter, tools: list, out_dir: Path,
+              part_name: str) -> list[Path]:
+    """`allowable_map.png` (per surface, the allowable size over (u, v), like thesis fig. 3-2;
+    unbounded and zero sizes in their own colours) and `standard_map.png` (top view, the
+    largest standard cutter per CC point, like figs. 4-2 and 4-3), titled with the part file
+    `part_name`, the cutter and the units. Returns the files written."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    var = cutter.size_symbol
+    what = f"{cutter.kind} cutter {cutter.to_apt()} on {part_name}"
+    norm = size_norm(np.concatenate([m.size.ravel() for m in maps]))
+    scale = "log scale" if isinstance(norm, LogNorm) else "linear scale"
+    marks = {"unbounded": ListedColormap([UNBOUNDED]),
+             "0: none fits": ListedColormap([STANDARD_NONE])}
+    n = len(maps)
+    cols = min(3, n)
+    rows = (n + cols - 1) // cols
+    fig = Figure(figsize=(3.6 * cols + 1.2, 3.2 * rows + 0.8), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(rows, cols, squeeze=False)
+    for ax, m in zip(axes.ravel(), maps, strict=False):
+        shown = np.where(np.isfinite(m.size) & (m.size > 0), m.size, np.nan)
+        im = ax.pcolormesh(m.u, m.v, np.clip(shown, norm.vmin, norm.vmax).T, shading="nearest",
+                           cmap="viridis", norm=norm)
+        for mask, cmap in zip((np.isinf(m.size), m.size <= 0), marks.values(), strict=True):
+            if mask.any():
+                ax.pcolormesh(m.u, m.v, np.where(mask, 0.0, np.nan).T, shading="nearest",
+                              cmap=cmap, vmin=0.0, vmax=1.0)
+        ax.set_title(f"surface {m.id}: {m.name}", fontsize=FONT_PT + 1)
+        ax.set_xlabel("u", fontsize=FONT_PT + 1)
+        ax.set_ylabel("v", fontsize=FONT_PT + 1)
+        ax.tick_params(labelsize=FONT_PT)
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    bar = fig.colorbar(im, ax=axes.ravel().tolist())
+    bar.set_label(f"allowable {var}, mm ({scale})", fontsize=FONT_PT + 1)
+    bar.ax.tick_params(labelsize=FONT_PT)
+    fig.legend(handles=[Patch(color=c(0), label=k) for k, c in marks.items()],
+               loc="outside lower center", ncol=2, fontsize=FONT_PT, frameon=False)
+    fig.suptitle(f"allowable {var} (mm) per CC point\n{what}", fontsize=FONT_PT + 2)
+    f1 = _save_png(fig, out_dir / "allowable_map.png")
+
+    colours = standard_colours(len(tools)) / 255.0
+    cmap = ListedColormap(colours)
+    fig = Figure(figsize=(8, 5.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    for m in maps:
+        k = m.kept
+        ax.scatter(m.cc[..., 0][k], m.cc[..., 1][k], c=m.standard[k], cmap=cmap,
+                   norm=BoundaryNorm(np.arange(-1.5, len(tools)), cmap.N), s=12, marker="s",
+                   linewidths=0)
+    handles = [Patch(color=colours[0], label="none fits")]
+    handles += [Patch(color=colours[i + 1], label=f"{t.name} ({var} {t.size:.4g})")
+                for i, t in enumerate(tools)]
+    ax.legend(handles=handles, fontsize=FONT_PT, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+              ncol=1 + len(handles) // 16, frameon=False, borderaxespad=0.0)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x, mm", fontsize=FONT_PT + 1)
+    ax.set_ylabel("y, mm", fontsize=FONT_PT + 1)
+    ax.tick_params(labelsize=FONT_PT)
+    fig.suptitle(f"largest standard cutter per CC point, top view\n{what}",
+                 fontsize=FONT_PT + 2)
+    return [f1, _save_png(fig, out_dir / "standard_map.png")]

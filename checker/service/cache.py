@@ -1,17 +1,18 @@
 """A worker's cache of loaded and sampled parts, keyed by the content hash of the part's bytes,
-least recently used first out when the total size exceeds the memory bound."""
+least recently used first out when the total size exceeds the memory bound (cachetools'
+`LRUCache` sized by each entry's bytes)."""
 
 from __future__ import annotations
 
 import hashlib
 import json
-from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from cachetools import LRUCache
 
 from checker.errors import PathcheckError
 
@@ -27,34 +28,50 @@ class CachedPart:
     sample_s: float
 
 
+class _LruBytes(LRUCache):
+    """cachetools' LRU of CachedPart bounded by the sum of their `nbytes`, counting what it
+    evicts (cachetools evicts through `popitem`)."""
+
+    def __init__(self, max_bytes: int) -> None:
+        super().__init__(maxsize=max_bytes, getsizeof=lambda entry: entry.nbytes)
+        self.evictions = 0
+
+    def popitem(self) -> tuple[str, CachedPart]:
+        self.evictions += 1
+        return super().popitem()
+
+
 @dataclass
 class PartCache:
-    """LRU of CachedPart bounded by `max_bytes` (an entry larger than the bound is not kept)."""
+    """LRU of CachedPart bounded by `max_bytes` (an entry larger than the bound is not kept);
+    `entries` is the cachetools mapping, key -> CachedPart."""
 
     max_bytes: int
-    entries: OrderedDict[str, CachedPart] = field(default_factory=OrderedDict)
+    entries: _LruBytes = field(init=False)
     hits: int = 0
     misses: int = 0
-    evictions: int = 0
+
+    def __post_init__(self) -> None:
+        self.entries = _LruBytes(self.max_bytes)
 
     @property
     def nbytes(self) -> int:
-        return sum(e.nbytes for e in self.entries.values())
+        return int(self.entries.currsize)
+
+    @property
+    def evictions(self) -> int:
+        return self.entries.evictions
 
     def get(self, key: str, build: Callable[[], CachedPart]) -> tuple[CachedPart, bool]:
         """The entry for `key`, built on a miss; returns `(entry, was_cached)`."""
         entry = self.entries.get(key)
         if entry is not None:
-            self.entries.move_to_end(key)
             self.hits += 1
             return entry, True
         self.misses += 1
         entry = build()
         if entry.nbytes <= self.max_bytes:
-            self.entries[key] = entry
-            while self.nbytes > self.max_bytes:
-                self.entries.popitem(last=False)
-                self.evictions += 1
+            self.entries[key] = entry  # least recently used out until it fits
         return entry, False
 
     def stats(self) -> dict:
