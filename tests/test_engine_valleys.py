@@ -52,8 +52,6 @@ def _local_minimum(part, cutter, cc: np.ndarray, n: np.ndarray) -> float:
 
 @pytest.fixture(scope="module")
 def job_rows():
-    if not JOB.is_file():
-        pytest.skip("samples/mould not built (samples/make_samples.py)")
     part, samples, con = job_contacts(JOB)
     rows = np.array(ROWS)
     return part, samples, con.cc[rows], con.normal[rows], con.surface[rows], con.uv[rows]
