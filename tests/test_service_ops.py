@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import json
 import re
-import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
+from brokers import running_broker
 
 from checker import engine
 from checker import job as job_module
@@ -219,14 +219,8 @@ def test_check_errors_name_the_line_the_option_and_the_b_range(state, tiny_job):
 @pytest.fixture(scope="module")
 def served():
     """The address of a broker with one worker (stopped after the module)."""
-    from checker.service.broker import Broker
-
-    broker = Broker(default_config(), bind="tcp://127.0.0.1:*", workers=1)
-    thread = threading.Thread(target=broker.run, daemon=True)
-    thread.start()
-    yield broker.wait_started(60)
-    broker.stop()
-    thread.join(30)
+    with running_broker(default_config(), workers=1) as broker:
+        yield broker.address
 
 
 def test_allowable_over_a_socket_hits_the_cache_the_second_time(served, mould_rows):
