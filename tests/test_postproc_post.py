@@ -202,7 +202,9 @@ def test_moves_from_toolpath_recomputes_the_tip_at_the_chosen_b():
     )
     tp = read_cl_text(text)
     original = moves_from_toolpath(tp)
-    assert original.b_deg == pytest.approx([0, 0, 36.8698976, 36.8698976])
+    # b = atan2(-i, k) (docs/MATH.md §1): the axis (-0.6, 0, 0.8) gives atan2(3, 4)
+    b_cl = np.degrees(np.arctan2(0.6, 0.8))
+    assert original.b_deg == pytest.approx([0, 0, b_cl, b_cl], abs=1e-9)
     assert original.tool.tolist() == [4, 4, 4, 4] and original.spindle[0] == 9000.0
     assert original.rapid.tolist() == [True, False, False, False] and original.feed[1] == 500.0
     # a ball D6: contact points and normals, then the B chosen by the checker (+10 degrees)
