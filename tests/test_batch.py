@@ -4,10 +4,11 @@ results documents, failures recorded with their reason while the batch goes on, 
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
+import numba
 import pytest
+from requires import require_extra
 
 from checker.batch import find_jobs, run_batch, run_one
 from checker.cli import main
@@ -70,7 +71,7 @@ def test_an_internal_fault_is_a_failed_job_not_a_crash(jobs):
 
 
 def _dask_vs_local(paths: list[Path], job_function: str, tmp_path: Path) -> None:
-    distributed = pytest.importorskip("distributed")
+    distributed = require_extra("distributed", "dask")
     local = run_batch(paths, store=None, workers=2, job_function=job_function)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
                                   dashboard_address=None) as cluster, \
@@ -93,12 +94,8 @@ def test_dask_cluster_gives_the_local_documents(jobs, tmp_path):
 
 
 def test_dask_cluster_on_the_sample_jobs(tmp_path):
-    if importlib.util.find_spec("checker.job") is None:
-        pytest.skip("checker.job.check_job (the engine issue) is not there yet")
-    samples = sorted((REPO / "samples").rglob("*_small.apt")) or sorted(
-        (REPO / "samples").rglob("*.apt"))
-    if not samples:
-        pytest.skip("no sample jobs in samples/ yet")
+    samples = sorted((REPO / "samples").rglob("*_small.apt"))
+    assert samples, "the bundled samples/*/*_small.apt are missing"
     _dask_vs_local(samples, "checker.job:check_job", tmp_path)
 
 
@@ -213,8 +210,7 @@ def test_dask_from_the_environment_one_numba_thread_per_task_and_a_retry(jobs, t
                                                                           monkeypatch, capsys):
     """`pathcheck batch` on the cluster of DASK_SCHEDULER_ADDRESS, each task on one numba
     thread (this thread's count untouched); a task that fails on its worker runs again."""
-    distributed = pytest.importorskip("distributed")
-    numba = pytest.importorskip("numba")
+    distributed = require_extra("distributed", "dask")
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("one numba thread on this machine: nothing to cap")
     _, paths = jobs

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from requires import missing
 
 from checker.cli import main
 
@@ -108,7 +109,7 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, name, text, line, wh
 def test_console_script_in_a_subprocess(job, tmp_path):
     exe = Path(sys.executable).with_name("pathcheck")
     if not exe.exists():
-        pytest.skip(f"console script {exe} not installed")
+        missing(f"console script {exe} not installed (pip install -e .)")
     ok = subprocess.run([str(exe), "info", "--json", "-", str(job)], capture_output=True, text=True,
                         timeout=120)
     assert ok.returncode == 0 and json.loads(ok.stdout)["totals"]["goto"] == 6

@@ -49,17 +49,28 @@ def test_engine_finds_global_minimum_in_100_of_100_runs(truth):
 
 
 def test_pso_baseline_success_rate(truth, capsys):
-    best, _, local, _ = truth
+    """The rate reported is the count of runs that ended in the global minimum's basin: each
+    run's size is the ball radius of the oracle at the point it reports (evaluated again on S2
+    from its (u, v)), none is below the true minimum, a run counts as found exactly when that
+    point lies on the global ridge (|v - v_best| < 0.05), and the example is a real global
+    problem for the baseline (some runs miss, some find it: 0 < rate < 100)."""
+    best, v_best, local, _ = truth
     part = fig31()
     tp = jittered_test_points(part, 8, 0)
     cutter = parse_cutter("CUTTER/20,10")
     n = 100
     res = allowable(tp, part, cutter, np.zeros((n, 3)), np.tile([0.0, 0.0, 1.0], (n, 1)),
                     method="pso", seed=12345)
+    assert (res.limiting_surface == 1).all()
+    at = evaluate(part.surfaces[1], res.limiting_uv[:, 0], res.limiting_uv[:, 1]).points
+    np.testing.assert_allclose(res.limiting_point, at, atol=1e-9)
+    np.testing.assert_allclose(res.size, ball_radius_oracle(at), rtol=1e-9)
+    assert (res.size >= best - 1e-6).all()  # PSO never goes below the true minimum
     found = res.size < 0.5 * (best + local)
+    on_global_ridge = np.abs(res.limiting_uv[:, 1] - v_best) < 0.05
+    np.testing.assert_array_equal(found, on_global_ridge)
     rate = int(found.sum())
     with capsys.disabled():
         print(f"\nFig. 3-1 example: engine 100/100, PSO baseline {rate}/100 "
               f"(mean {res.evaluations.mean():.0f} evaluations per run)")
-    assert (res.size >= best - 1e-6).all()  # PSO never goes below the true minimum
-    assert rate >= 1
+    assert 0 < rate < n

@@ -29,8 +29,6 @@ AGREE_MIN = 500
 
 @pytest.fixture(scope="module")
 def comparison():
-    if not MOULD.is_file():
-        pytest.skip("samples/mould/mould.json not built (samples/make_samples.py)")
     part = load_part(MOULD)
     tp = sample_part(part)
     out = []

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from engine_oracle import oracle_sizes
+from requires import require_extra
 
 from checker.cutter import parse_cutter
 from checker.engine.maps import allowable_maps
@@ -20,7 +21,7 @@ from checker.geometry import load_part
 from checker.geometry.sampling import sample_part
 from checker.tool_library import load_tool_library
 
-pytest.importorskip("OCP")
+require_extra("OCP", "cad")
 
 REALDATA = Path(__file__).resolve().parents[2] / "shared" / "realdata"
 PARTS = sorted([*(REALDATA / "occt-cad-nurbs").glob("*.stp"),

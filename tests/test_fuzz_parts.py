@@ -27,6 +27,7 @@ import numpy as np
 import pytest
 import yaml
 from part_runs import problems, run_pathcheck
+from requires import require_extra
 
 REPO = Path(__file__).resolve().parents[1]
 _QUICK = {"json": 8, "yaml": 6, "stl": 6, "step": 2, "iges": 4}
@@ -283,5 +284,5 @@ def test_fuzzed_stl_files(realdata, tmp_path):
 @_TIMEOUT
 @pytest.mark.parametrize("kind", ["step", "iges"])
 def test_fuzzed_cad_files(realdata, tmp_path, kind):
-    pytest.importorskip("OCP")
+    require_extra("OCP", "cad")
     _run_family(kind, _cad_bases(realdata, kind), tmp_path)

@@ -18,18 +18,15 @@ import copy
 import json
 import os
 import random
-import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+from brokers import running_broker, service_config
 
 from checker.client import Client
-from checker.config import default_config
 from checker.errors import PathcheckError
-from checker.service.broker import Broker
-from checker.service.roots import Roots
 
 REPO = Path(__file__).resolve().parents[1]
 MAX_BYTES = 256 * 1024
@@ -184,18 +181,10 @@ def broker(tmp_path_factory):
     (root / "tiny.apt").write_text(_tiny_apt())
     (root / "secret.txt").write_text(f"{SECRET}\n")
     (root / "sub").mkdir()
-    base = default_config()
-    service = base.service.model_copy(update={
-        "debug_ops": True, "max_message_bytes": MAX_BYTES, "request_timeout_s": 60.0,
-        "max_points": 1000, "worker_memory_bytes": MEMORY_BYTES})
-    b = Broker(base.model_copy(update={"service": service}), bind="tcp://127.0.0.1:*",
-               workers=2, roots=Roots([root]))
-    thread = threading.Thread(target=b.run, daemon=True)
-    thread.start()
-    b.wait_started(60, ready_workers=2)
-    yield b
-    b.stop()
-    thread.join(20)
+    config = service_config(debug_ops=True, max_message_bytes=MAX_BYTES, request_timeout_s=60.0,
+                            max_points=1000, worker_memory_bytes=MEMORY_BYTES)
+    with running_broker(config, roots=[root]) as b:
+        yield b
 
 
 def _problem(raw: bytes, want_id: object, reply: object, took: float) -> str | None:

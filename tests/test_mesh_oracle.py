@@ -11,12 +11,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from requires import require_extra
 
 from checker.cutter import parse_cutter
 from checker.geometry.stl_io import read_stl
 from checker.mesh import MeshIndex, pose_depths, tool_pieces
 
-ocl_oracle = pytest.importorskip("ocl_oracle", reason="opencamlib is not installed")
+require_extra("opencamlib", "test")
+import ocl_oracle  # noqa: E402  (imports opencamlib)
 
 SET = "amorim-solidworkscam-apt"
 CUTTERS = ("CUTTER/10", "CUTTER/6,3", "CUTTER/10,2")

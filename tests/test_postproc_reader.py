@@ -145,9 +145,13 @@ def test_real_linuxcnc_5axis_programs(realdata):
     }
     impeller = read["impeller-7bl-xyzac.ngc"]
     assert len(impeller) > 4400
-    # its footer: Amin -74.49 Amax 0.00, Cmin -399.81 Cmax 0.00, all in G93
-    assert np.nanmin(impeller.abc[:, 0]) == pytest.approx(-74.49, abs=0.01)
-    assert np.nanmin(impeller.abc[:, 2]) == pytest.approx(-399.81, abs=0.01)
+    # the CAM's own footer states the ranges, "( Amin -74.49 Amax   0.00 )" and likewise C, to 0.01
+    footer = (realdata / "linuxcnc-5axis-gcode" / "impeller-7bl-xyzac.ngc").read_text()
+    for k, axis in ((0, "A"), (2, "C")):
+        lo, hi = (float(x) for x in re.search(
+            rf"\(\s*{axis}min\s+(\S+)\s+{axis}max\s+(\S+)\s*\)", footer).groups())
+        assert np.nanmin(impeller.abc[:, k]) == pytest.approx(lo, abs=0.005), axis
+        assert np.nanmax(impeller.abc[:, k]) == pytest.approx(hi, abs=0.005), axis
     assert set(impeller.feed_mode[impeller.motion == 1].tolist()) == {93}
     boat = read["boat-xyzbc.ngc"]
     assert {93, 94} <= set(boat.feed_mode.tolist()) and np.isfinite(boat.abc[:, 1]).any()

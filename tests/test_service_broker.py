@@ -13,9 +13,9 @@ from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 import zmq
+from brokers import running_broker, service_config, wait_busy
 
 from checker.client import Client
-from checker.config import default_config
 from checker.errors import PathcheckError
 from checker.service.broker import Broker
 
@@ -24,26 +24,15 @@ TIMEOUT_S = 5.0  # long enough for a cold worker to import the library on a busy
 
 
 def _config():
-    base = default_config()
-    service = base.service.model_copy(update={
-        "debug_ops": True, "max_message_bytes": MAX_BYTES, "request_timeout_s": TIMEOUT_S,
-        "max_points": 1000,
-    })
-    return base.model_copy(update={"service": service})
+    return service_config(debug_ops=True, max_message_bytes=MAX_BYTES,
+                          request_timeout_s=TIMEOUT_S, max_points=1000)
 
 
 @pytest.fixture(scope="module")
 def broker():
-    b = Broker(_config(), bind="tcp://127.0.0.1:*", workers=2)
-    thread = threading.Thread(target=b.run, daemon=True)
-    thread.start()
-    b.wait_started(60, ready_workers=2)
-    assert b.address.startswith("tcp://127.0.0.1:")
-    yield b
-    b.stop()
-    thread.join(15)
-    assert not thread.is_alive(), "broker did not stop"
-    assert b.worker_pids() == []
+    with running_broker(_config()) as b:
+        assert b.address.startswith("tcp://127.0.0.1:")
+        yield b
 
 
 def _client(b: Broker, **kw) -> Client:
@@ -214,21 +203,13 @@ def test_a_slow_job_does_not_block_the_others(broker):
         assert pending.result(10)["slept"] == 1.0
 
 
-def _wait_busy(b: Broker, timeout_s: float = 10.0) -> int:
-    deadline = time.monotonic() + timeout_s
-    while not b.busy_pids():
-        assert time.monotonic() < deadline, "no worker became busy"
-        time.sleep(0.01)
-    return b.busy_pids()[0]
-
-
 def test_worker_killed_mid_request_gets_error_then_the_same_request_is_refused(broker):
     """A killed worker: its request gets `worker` with its id, the client does not re-send it,
     and the same request sent again (a new id) is refused by content hash: `crashed`."""
     requests_before = broker.counters.requests
     with _client(broker, retries=2) as c, ThreadPoolExecutor(1) as pool:
         pending = pool.submit(c.call, "sleep", seconds=1.5, id="victim-1")
-        victim = _wait_busy(broker)
+        victim = wait_busy(broker)
         os.kill(victim, signal.SIGKILL)
         reply = pending.result(10)
         assert reply["ok"] is False and reply["error"]["code"] == "worker"

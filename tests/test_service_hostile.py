@@ -22,12 +22,11 @@ from pathlib import Path
 
 import pytest
 import zmq
+from brokers import running_broker, service_config, wait_busy
 
 from checker.client import Client
-from checker.config import default_config
 from checker.errors import PathcheckError
 from checker.service.broker import Broker
-from checker.service.roots import Roots
 
 REPO = Path(__file__).resolve().parents[1]
 MAX_BYTES = 64 * 1024
@@ -35,12 +34,9 @@ SECRET = "s3cret-token-4711"
 TINY_APT = "PARTNO T\n{pprint}CUTTER/10\nFEDRAT/100\nGOTO/0,0,0\nGOTO/1,0,0\nFINI\n"
 
 
-def _config(**service):
-    base = default_config()
-    update = {"debug_ops": True, "max_message_bytes": MAX_BYTES, "request_timeout_s": 30.0,
-              "max_points": 1000, "heartbeat_s": 0.5, "worker_memory_bytes": 1000 * 2**20,
-              **service}
-    return base.model_copy(update={"service": base.service.model_copy(update=update)})
+def _config():
+    return service_config(debug_ops=True, max_message_bytes=MAX_BYTES, request_timeout_s=30.0,
+                          max_points=1000, heartbeat_s=0.5, worker_memory_bytes=1000 * 2**20)
 
 
 def _surfaces(n: int, size: float) -> dict:
@@ -73,14 +69,8 @@ def root(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def broker(root):
-    b = Broker(_config(), bind="tcp://127.0.0.1:*", workers=2, roots=Roots([root]))
-    thread = threading.Thread(target=b.run, daemon=True)
-    thread.start()
-    b.wait_started(60, ready_workers=2)
-    yield b
-    b.stop()
-    thread.join(20)
-    assert not thread.is_alive(), "broker did not stop"
+    with running_broker(_config(), roots=[root]) as b:
+        yield b
 
 
 def _client(b: Broker, **kw) -> Client:
@@ -263,11 +253,6 @@ def test_frame_far_over_the_limit_drops_the_connection_not_the_service(broker):
 # --- faults ---------------------------------------------------------------------------------
 
 
-def _busy(b: Broker) -> int:
-    _wait(lambda: bool(b.busy_pids()), what="a worker running the request")
-    return b.busy_pids()[0]
-
-
 def test_a_part_that_took_a_worker_down_is_refused_by_its_content_hash(broker, root):
     """A slow part file whose worker dies mid-request (killed from outside, as a segfault in
     native code would end it), sent three times by a client with retries: one `worker` reply,
@@ -280,7 +265,7 @@ def test_a_part_that_took_a_worker_down_is_refused_by_its_content_hash(broker, r
     replies = []
     with _client(broker, retries=2) as c, ThreadPoolExecutor(1) as pool:
         pending = pool.submit(c.call, "allowable", id="crash-1", **fields)
-        victim = _busy(broker)
+        victim = wait_busy(broker)
         time.sleep(0.3)
         os.kill(victim, signal.SIGKILL)
         replies.append(pending.result(30))
@@ -393,11 +378,8 @@ def test_curve_admits_only_clients_with_a_known_key(tmp_path):
     zmq.auth.create_certificates(str(stranger), "client")
     (stranger / "server.key").write_bytes((keys / "server.key").read_bytes())
 
-    b = Broker(_config(), bind="tcp://0.0.0.0:*", workers=1, curve_keys=keys)
-    thread = threading.Thread(target=b.run, daemon=True)
-    thread.start()
-    try:
-        address = b.wait_started(60).replace("0.0.0.0", "127.0.0.1")
+    with running_broker(_config(), bind="tcp://0.0.0.0:*", workers=1, curve_keys=keys) as b:
+        address = b.address.replace("0.0.0.0", "127.0.0.1")
         with Client(address, timeout_s=20, curve_keys=keys) as c:
             assert c.call("ping", id="k")["ok"] is True
         called = subprocess.run(
@@ -409,10 +391,6 @@ def test_curve_admits_only_clients_with_a_known_key(tmp_path):
             with Client(address, timeout_s=1.0, retries=0, **who) as c, \
                     pytest.raises(PathcheckError, match="no reply"):
                 c.call("ping")
-    finally:
-        b.stop()
-        thread.join(20)
-    assert not thread.is_alive()
 
 
 # --- SIGTERM with requests in flight -------------------------------------------------------

@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import json
 import re
-import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
+from brokers import running_broker
 
+from checker import engine
+from checker import job as job_module
 from checker.config import default_config
 from checker.service.cache import PartCache
 from checker.service.ops import WorkerState
@@ -22,11 +24,6 @@ REPO = Path(__file__).resolve().parents[1]
 MOULD = REPO / "samples" / "mould" / "mould.json"
 CUTTER = "CUTTER/12,3"
 SMALL = REPO / "samples" / "compressor" / "compressor_small"
-
-
-def _engine():
-    return pytest.importorskip(
-        "checker.engine", reason="checker.engine (the engine issue) not present yet")
 
 
 def _call(state: WorkerState, recorder=None, **request) -> dict:
@@ -43,7 +40,6 @@ def state() -> WorkerState:
 @pytest.fixture(scope="module")
 def mould_rows() -> np.ndarray:
     """4 CC rows [x, y, z, nx, ny, nz] inside the mould's first surface."""
-    _engine()
     from checker.geometry import load_part
     from checker.geometry.evaluate import evaluate
 
@@ -55,7 +51,6 @@ def mould_rows() -> np.ndarray:
 
 
 def test_allowable_matches_the_library_and_caches_the_part(state, mould_rows):
-    engine = _engine()
     from checker.cutter import parse_cutter
     from checker.geometry import load_part
     from checker.geometry.sampling import sample_part
@@ -113,7 +108,6 @@ def _plane() -> dict:
 def test_a_plane_never_limits_a_ball_or_a_bull_nose(state):
     """Analytic: on a plane with the axis along the normal nothing limits the cutter, so the
     allowable size is unbounded (null) and the verdict ok."""
-    _engine()
     rows = [[x, y, 0.0, 0.0, 0.0, 1.0] for x, y in [(0, 0), (10, -5), (-20, 30)]]
     for cutter in ("CUTTER/10", "CUTTER/12,3"):
         reply = _call(state, op="allowable", part={"geomdl": _plane()}, cc=rows, cutter=cutter)
@@ -124,7 +118,6 @@ def test_a_plane_never_limits_a_ball_or_a_bull_nose(state):
 
 
 def test_best_b_is_at_least_the_size_at_every_b_of_the_scan(state, mould_rows):
-    engine = _engine()
     from checker.b_axis import axis_for_b
     from checker.cutter import parse_cutter
 
@@ -153,7 +146,6 @@ def test_best_b_is_at_least_the_size_at_every_b_of_the_scan(state, mould_rows):
 
 
 def test_library_errors_become_error_replies(state):
-    _engine()
     rows = [[0.0, 0.0, 0.0, 0.0, 0.0, 1.0]]
     bad_cutter = _call(state, op="allowable", part={"path": str(MOULD)}, cc=rows,
                        cutter="CUTTER/-5")
@@ -178,7 +170,6 @@ def tiny_job(tmp_path_factory) -> Path:
 
 
 def test_check_returns_the_results_document_and_records_it(state, tiny_job, tmp_path):
-    job_module = pytest.importorskip("checker.job", reason="checker.job not present yet")
     from checker.results import ResultsDocument
     from checker.service.recorder import open_recorder
     from checker.store import ResultsStore
@@ -202,7 +193,6 @@ def test_check_returns_the_results_document_and_records_it(state, tiny_job, tmp_
 
 
 def test_check_errors_name_the_line_the_option_and_the_b_range(state, tiny_job):
-    pytest.importorskip("checker.job", reason="checker.job not present yet")
     part = {"path": str(SMALL.with_suffix(".json"))}
     lines = SMALL.with_suffix(".apt").read_text().splitlines()
     goto = next(i for i, text in enumerate(lines) if text.startswith("GOTO"))
@@ -229,14 +219,8 @@ def test_check_errors_name_the_line_the_option_and_the_b_range(state, tiny_job):
 @pytest.fixture(scope="module")
 def served():
     """The address of a broker with one worker (stopped after the module)."""
-    from checker.service.broker import Broker
-
-    broker = Broker(default_config(), bind="tcp://127.0.0.1:*", workers=1)
-    thread = threading.Thread(target=broker.run, daemon=True)
-    thread.start()
-    yield broker.wait_started(60)
-    broker.stop()
-    thread.join(30)
+    with running_broker(default_config(), workers=1) as broker:
+        yield broker.address
 
 
 def test_allowable_over_a_socket_hits_the_cache_the_second_time(served, mould_rows):
@@ -251,7 +235,6 @@ def test_allowable_over_a_socket_hits_the_cache_the_second_time(served, mould_ro
 
 
 def test_post_hook_writes_the_gcode_the_service_returns(served, tiny_job, tmp_path, capsys):
-    pytest.importorskip("checker.job", reason="checker.job (check_job) not present yet")
     import importlib.util
 
     from pygcode import Line

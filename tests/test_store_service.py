@@ -4,12 +4,9 @@ request row with the message."""
 
 from __future__ import annotations
 
-import pytest
-
 from checker.report.synthetic import synthetic_document
+from checker.service import recorder
 from checker.store import ResultsStore
-
-recorder = pytest.importorskip("checker.service.recorder")
 
 
 def test_service_requests_land_in_the_store(tmp_path):
