@@ -18,8 +18,9 @@ class PoseJudge:
     a cutting pose is feasible when its verdict is not a finding, i.e. no piece penetrates by
     more than `tolerance` (mm) plus the deviation of the deepest triangle from the surface it
     stands for (`deviation (T,)` mm, as the check adds it; None: 0). `reach` (mm) bounds the
-    clearances computed (0: none, all a verdict needs); `gouge_neighbourhood` (tool radii from the tip) names a body hit near
-    the contact a gouge, as the check does (it changes the label, never the feasibility);
+    clearances computed (0: none, all a verdict needs); `gouge_neighbourhood` (tool radii
+    from the tip) names a body hit near the contact a gouge, as the check does (it changes the
+    label, never the feasibility);
     `method` the exact depth method of `checker.mesh.pose_depths` ("gjk": an independent
     cross-check)."""
 
