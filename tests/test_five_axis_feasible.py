@@ -202,3 +202,17 @@ def test_boundary_against_a_brute_force_scan(folder):
     assert check.poses > 20 * len(reg.crossing)
     assert float(check.distance.max()) <= TOL + 1e-9
     assert (check.transitions == 1).all()
+
+
+def test_cusp_of_a_flat_end_mill_is_the_cutting_ellipse():
+    """On a plane at tilt 0 the profile is the ellipse of semi-axes R and b = R sin(lead)
+    (seed 002 eq. 1), whose cusp for a step-over w is b (1 - sqrt(1 - w^2 / (4 R^2)))."""
+    from checker.cutter import parse_cutter
+    from checker.five_axis.cusp import cusp_heights
+
+    fr = local_frames(np.tile([0.0, 0.0, 1.0], (4, 1)), np.tile([1.0, 0.0, 0.0], (4, 1)))
+    lead = np.radians([0.0, 5.0, 10.0, 20.0])
+    axes = axes_from_angles(fr, lead, np.zeros(4))
+    got = cusp_heights(parse_cutter("CUTTER/10"), fr, np.arange(4), axes, 2.0)
+    b = 5.0 * np.sin(lead)
+    np.testing.assert_allclose(got, b * (1 - np.sqrt(1 - 4.0 / 100.0)), atol=5e-5)
