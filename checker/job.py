@@ -84,8 +84,10 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
     """Check a job: `apt_path` the CL file; `part_path` the part (default: the file beside the
     job with the same stem); `cutter` a `Cutter` or "CUTTER/..." overriding the file's; `config`
     a Config or a TOML path; `machine` a machine name, TOML file or `Machine` (default: the CL
-    file's `PPRINT/MACHINE`, else fanuc-hmc); `output` the G-code to write; `b_range` (degrees)
-    the B range searched for 4-axis operations; `reorient` plans B for 3-axis operations too;
+    file's `PPRINT/MACHINE`, else fanuc-hmc; multi-axis operations move as a 5-axis machine
+    moves them, joints linear, and on a machine with fewer rotary axes in the part frame);
+    `output` the G-code to write; `b_range` (degrees) the B range searched for 4-axis
+    operations; `reorient` plans B for 3-axis operations too;
     `part_transform` moves a part exported in another frame (`geometry.transform`);
     `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's);
     `on_findings` what posting does when the program as written has findings or points
@@ -120,6 +122,19 @@ def post_unchecked(apt_path, output, cutter=None, machine=None, config=None,
                              arc_chord_tol=cfg.check.arc_chord_tolerance)
 
 
+def _machine_motion(mach, ops: set[int], cfg: Config):
+    """Multi-axis operations `ops` moved as machine `mach` moves them (joints linear), when it
+    has two rotary axes; else None: they move in the part frame (tip straight, axis turning in
+    its plane), as on no particular machine."""
+    from checker.five_axis.motion import MachineMotion
+    from postproc.kinematics import Chain
+
+    if not ops or len(mach.rotary_axes) < 2:
+        return None
+    tol = float(np.degrees(np.arcsin(min(cfg.four_axis.axis_j_tolerance, 1.0)))) + 1e-9
+    return MachineMotion(Chain(mach), bool(mach.tcp.enabled), tol, frozenset(ops))
+
+
 @dataclass
 class _Job:
     """What the operations share: the motions, the part and its triangles, the config."""
@@ -132,6 +147,7 @@ class _Job:
     cfg: Config
     apt_path: Path
     samples: object = None
+    motion: object = None  # multi-axis operations on a 5-axis machine (`five_axis.motion`)
 
     def test_points(self):
         """The part's test points for the allowable-cutter engine (NURBS parts), made once."""
@@ -194,10 +210,12 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
                             cfg.four_axis.axis_j_tolerance)
     planned = {o for o, cls in classes.items()
                if cls == "4-axis-Y" or (cls == "3-axis" and asked)}
-    if planned or output is not None:
+    multi = {o for o, cls in classes.items() if cls == "multi-axis"}
+    if planned or multi or output is not None:
         from postproc.post import machine_for_toolpath
 
         mach = machine_for_toolpath(toolpath, machine)
+        job.motion = _machine_motion(mach, multi, cfg)
     with step("plan and check the program"):
         program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach)
     with step("advice at the cutting poses"):

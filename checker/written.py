@@ -16,6 +16,7 @@ import numpy as np
 
 from checker import verdict as vd
 from checker.errors import PathcheckError
+from checker.five_axis.motion import machine_path
 from checker.four_axis.axes import b_for_axis, rotate_about_y
 from checker.moves import RAPID, START, Moves, machine_moves
 from checker.verify import Depths, MoveDepths, PoseProbe, along_moves
@@ -86,6 +87,9 @@ def verify(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray, cutters: dict,
     v = job.triangles.vertices
     box = np.array([v.min(axis=0), v.max(axis=0)]) + [[-cfg.check.reach], [cfg.check.reach]]
     ends_all, along_parts = [], []
+    five = getattr(job, "motion", None)  # multi-axis operations: the machine's joints linear
+    path = None if five is None else machine_path(five, axis, job.m.line, str(job.apt_path),
+                                                  moves.row, moves.tip)
     for o in np.unique(op_of):
         c = cutters[int(o)]
         probe = PoseProbe(job.index, tool_pieces(c, with_holder=True), cfg.check.reach)
@@ -94,7 +98,8 @@ def verify(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray, cutters: dict,
         ends = P[moves.kind[P] != START]
         turning = np.isfinite(b_pose[ends]).all() and len(ends)
         along_parts.append(along_moves(probe, moves, ends, poses.depth, tolerance[ends], box,
-                                       b_pose if turning else None, center))
+                                       b_pose if turning else None, center,
+                                       motion=path if path is not None and o in five.ops else None))
         ends_all.append(ends)
     along = _concat_moves(along_parts, n)
     near = _near(job, moves, cutters, poses.height)
@@ -329,7 +334,7 @@ def post(job, program: Program, output, mach, cutters: dict, counts: dict[str, i
     from postproc.header import verdict_text
     from postproc.post import post_toolpath
 
-    if np.isnan(program.b).any():
+    if np.isnan(program.b).any() and len(mach.rotary_axes) < 2:
         bad = int(job.m.line[np.flatnonzero(np.isnan(program.b))[0]])
         raise PathcheckError("cannot post a multi-axis path for a 4-axis machine: expected tool "
                              "axes perpendicular to Y (j = 0)", path=job.apt_path, line=bad,

@@ -1,0 +1,1 @@
+"""5-axis (multi-axis) jobs: the machine's motion between poses, orientations, feasibility."""
