@@ -22,6 +22,7 @@ from checker.b_axis import check_four_axis
 from checker.config import Config
 from checker.document import build_document
 from checker.errors import PathcheckError
+from checker.five_axis.motion import MachineMotion
 from checker.geometry import load_part
 from checker.geometry.sampling import sample_part
 from checker.geometry.tessellate import part_triangles
@@ -32,6 +33,7 @@ from checker.posting import post_checked
 from checker.progress import step
 from checker.results import ResultsDocument
 from checker.tolerance import operation_tolerances
+from postproc.kinematics import Chain
 from postproc.post import machine_for_toolpath
 
 _AXIS_TOL = 1e-9  # axes equal to this are one axis (an indexed operation)
@@ -55,8 +57,10 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
     """Check a job: `apt_path` the CL file; `part_path` the part (default: the file beside the
     job with the same stem); `cutter` a `Cutter` or "CUTTER/..." overriding the file's; `config`
     a Config or a TOML path; `machine` a machine name, TOML file or `Machine` (default: the CL
-    file's `PPRINT/MACHINE`, else fanuc-hmc); `output` the G-code to write; `b_range` (degrees)
-    the B range searched for 4-axis operations; `reorient` plans B for 3-axis operations too;
+    file's `PPRINT/MACHINE`, else fanuc-hmc; multi-axis operations move as a 5-axis machine
+    moves them, joints linear, and on a machine with fewer rotary axes in the part frame);
+    `output` the G-code to write; `b_range` (degrees) the B range searched for 4-axis
+    operations; `reorient` plans B for 3-axis operations too;
     `part_transform` moves a part exported in another frame (`geometry.transform`);
     `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's);
     `on_findings` what posting does when the program as written has findings or points
@@ -68,6 +72,16 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
                           config=config, output=output, b_range=b_range, reorient=reorient,
                           part_transform=part_transform, started=t0,
                           cutter_units=cutter_units, on_findings=on_findings)
+
+
+def _machine_motion(mach, ops: set[int], cfg: Config):
+    """Multi-axis operations `ops` moved as machine `mach` moves them (joints linear), when it
+    has two rotary axes; else None: they move in the part frame (tip straight, axis turning in
+    its plane), as on no particular machine."""
+    if not ops or len(mach.rotary_axes) < 2:
+        return None
+    tol = float(np.degrees(np.arcsin(min(cfg.four_axis.axis_j_tolerance, 1.0)))) + 1e-9
+    return MachineMotion(Chain(mach), bool(mach.tcp.enabled), tol, frozenset(ops))
 
 
 @dataclass
@@ -82,6 +96,7 @@ class _Job:
     cfg: Config
     apt_path: Path
     samples: object = None
+    motion: object = None  # multi-axis operations on a 5-axis machine (`five_axis.motion`)
 
     def test_points(self):
         """The part's test points for the allowable-cutter engine (NURBS parts), made once."""
@@ -148,8 +163,10 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
                             cfg.four_axis.axis_j_tolerance)
     planned = {o for o, cls in classes.items()
                if cls == "4-axis-Y" or (cls == "3-axis" and asked)}
-    if planned or to_post:
+    multi = {o for o, cls in classes.items() if cls == "multi-axis"}
+    if planned or multi or to_post:
         mach = machine_for_toolpath(toolpath, machine)
+        job.motion = _machine_motion(mach, multi, cfg)
     with step("plan and check the program"):
         program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach)
     with step("advice at the cutting poses"):

@@ -53,7 +53,7 @@ def post_checked(checked: Checked, output, on_findings: str = "refuse") -> Path:
 
 def _post(checked: Checked, output, on_findings: str):
     job, program = checked.job, checked.program
-    if np.isnan(program.b).any():
+    if np.isnan(program.b).any() and len(checked.machine.rotary_axes) < 2:
         bad = int(job.m.line[np.flatnonzero(np.isnan(program.b))[0]])
         raise PathcheckError("cannot post a multi-axis path for a 4-axis machine: expected tool "
                              "axes perpendicular to Y (j = 0)", path=job.apt_path, line=bad,

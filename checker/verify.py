@@ -11,7 +11,8 @@ halved and their middles checked, until every stretch is certified within the to
 the move's deepest pose is found to a fraction of it (`along_moves`). A move in the air is
 certified from its clearances in a few halvings; in contact, stretches of about twice the
 tolerance remain: the number of poses follows the length in contact with the part, never the
-length of a move. mm, part frame."""
+length of a move. A multi-axis move on a 5-axis machine runs the machine's joints linearly
+(`checker.five_axis.motion`, which gives its poses and its L). mm, part frame."""
 
 from __future__ import annotations
 
@@ -107,14 +108,21 @@ def move_lengths(moves: Moves, end: np.ndarray, box: np.ndarray, b: np.ndarray |
     part's box `box (2, 3)`, grown by the reach) travels along each move, at most. The tool
     translating and its axis turning by dθ: |Δtip| + dθ times the farthest such point from the
     tip. The table turning by dB (machine-linear moves): |Δ machine tip| + dB times the
-    farthest point of the box from the table's axis (Y through `center`)."""
+    farthest point of the box from the table's axis (Y through `center`).
+
+    The axis turning "linearly" is the normalised chord between the end axes: over an angle θ
+    its rate peaks at 2 tan(θ/2) (at the middle), which stands in for dθ; the tip runs
+    straight, so the farthest point is measured from both end tips (the distance to a point of
+    a segment is largest at an end)."""
     a = end - 1
     corners = np.array([[box[i, 0], box[j, 1], box[k, 2]] for i in (0, 1) for j in (0, 1)
                         for k in (0, 1)])
     if b is None:
-        turn = np.arccos(np.clip(np.einsum("ij,ij->i", moves.axis[a], moves.axis[end]),
-                                 -1.0, 1.0))
-        far = np.linalg.norm(corners[None] - moves.tip[a][:, None], axis=2).max(axis=1)
+        cos = np.clip(np.einsum("ij,ij->i", moves.axis[a], moves.axis[end]), -1.0, 1.0)
+        turn = 2.0 * np.tan(0.5 * np.minimum(np.arccos(cos), np.pi - 1e-6))
+        far = np.maximum(
+            np.linalg.norm(corners[None] - moves.tip[a][:, None], axis=2).max(axis=1),
+            np.linalg.norm(corners[None] - moves.tip[end][:, None], axis=2).max(axis=1))
         return np.linalg.norm(moves.tip[end] - moves.tip[a], axis=1) + turn * far
     c = np.zeros(3) if center is None else center
     far = np.hypot(corners[:, 0] - c[0], corners[:, 2] - c[2]).max()
@@ -124,7 +132,8 @@ def move_lengths(moves: Moves, end: np.ndarray, box: np.ndarray, b: np.ndarray |
 
 def along_moves(probe: PoseProbe, moves: Moves, end: np.ndarray, end_depths: np.ndarray,
                 tolerance: np.ndarray, box: np.ndarray, b: np.ndarray | None = None,
-                center: np.ndarray | None = None, precision: float = 0.25) -> MoveDepths:
+                center: np.ndarray | None = None, precision: float = 0.25,
+                motion=None) -> MoveDepths:
     """The deepest pose along each move ending at poses `end` (see the module docstring):
     `end_depths (P,)` the depths at all poses, `tolerance (M,)` mm. A stretch of a move between
     two checked poses with depths da, db and length L (mm, `move_lengths`) cannot go deeper
@@ -132,13 +141,15 @@ def along_moves(probe: PoseProbe, moves: Moves, end: np.ndarray, end_depths: np.
     bound exceeds the tolerance, and the deepest depth found on the move by more than
     `precision` times the tolerance and _DEPTH_PRECISION times that depth, are split at their
     middle and checked again: a move is certified within the tolerance, or its deepest pose is
-    found to that precision."""
+    found to that precision. `motion` (a `checker.five_axis.motion.MachinePath` over these
+    poses) moves the machine's joints linearly instead, with its own bound on L."""
     center = np.zeros(3) if center is None else np.asarray(center, float)
     m = len(end)
     best = Depths.empty(m)
     t_best = np.full(m, np.nan)
     tip_best, axis_best = np.full((m, 3), np.nan), np.full((m, 3), np.nan)
-    length = move_lengths(moves, end, box, b, center)
+    length = (move_lengths(moves, end, box, b, center) if motion is None
+              else motion.lengths(end, box))
     count = np.zeros(m, dtype=np.int64)
     ends = np.maximum(end_depths[end - 1], end_depths[end])  # the deepest known at the ends
     # the open stretches: move k, from t0 to t1 with depths d0, d1 there
@@ -155,7 +166,8 @@ def along_moves(probe: PoseProbe, moves: Moves, end: np.ndarray, end_depths: np.
             if k.size == 0:
                 break
             tm = 0.5 * (t0 + t1)
-            tips, axes = _pose_at(moves, end[k], tm, b, center)
+            tips, axes = (_pose_at(moves, end[k], tm, b, center) if motion is None
+                          else motion.pose_at(end[k], tm))
             got = probe(tips, axes)
             advance(1)
             np.add.at(count, k, 1)

@@ -17,6 +17,7 @@ import numpy as np
 from checker import verdict as vd
 from checker.b_axis import axis_for_b, b_for_axis, rotate_about_y
 from checker.errors import PathcheckError
+from checker.five_axis.motion import machine_path
 from checker.four_axis.job import plan_b
 from checker.geometry.contact import cl_to_cc, contact_from_toolpath
 from checker.mesh.tool import tool_pieces
@@ -87,6 +88,9 @@ def verify(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray, cutters: dict,
     v = job.triangles.vertices
     box = np.array([v.min(axis=0), v.max(axis=0)]) + [[-cfg.check.reach], [cfg.check.reach]]
     ends_all, along_parts = [], []
+    five = getattr(job, "motion", None)  # multi-axis operations: the machine's joints linear
+    path = None if five is None else machine_path(five, axis, job.m.line, str(job.apt_path),
+                                                  moves.row, moves.tip)
     for o in np.unique(op_of):
         c = cutters[int(o)]
         probe = PoseProbe(job.index, tool_pieces(c, with_holder=True), cfg.check.reach)
@@ -95,7 +99,8 @@ def verify(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray, cutters: dict,
         ends = P[moves.kind[P] != START]
         turning = np.isfinite(b_pose[ends]).all() and len(ends)
         along_parts.append(along_moves(probe, moves, ends, poses.depth, tolerance[ends], box,
-                                       b_pose if turning else None, center))
+                                       b_pose if turning else None, center,
+                                       motion=path if path is not None and o in five.ops else None))
         ends_all.append(ends)
     along = _concat_moves(along_parts, n)
     near = _near(job, moves, cutters, poses.height)

@@ -134,7 +134,8 @@ def moves_from_toolpath(
     the config's ``check.arc_chord_tolerance``, the rows the checker sees) with their rapid
     flag, feed, spindle, coolant (where the arrays carry it), line and the tool number of their
     operation. With ``b_deg (N,)`` (the chosen B, degrees) the axis becomes ``(-sin b, 0, cos
-    b)``, else B follows from the CL axis; with ``cc (N,3)``, ``normals (N,3)`` (part frame,
+    b)`` (rows with nan keep the CL axis: a 5-axis machine's words follow from it), else B
+    follows from the CL axis; with ``cc (N,3)``, ``normals (N,3)`` (part frame,
     out of the material) and ``cutter`` the tip is recomputed from the contact by
     ``cutter.tip_from_contact(cc, n, axis)`` at the new axis. ``comments`` (one per row, ''
     none) are written before the blocks (flags), ``stops (N,)`` bool an optional stop (M01)
@@ -147,9 +148,11 @@ def moves_from_toolpath(
     lines = np.asarray(arrays.line)
     b = None
     axis = np.asarray(arrays.axis, dtype=float)
-    if b_deg is not None:
+    if b_deg is not None:  # rows without a B (nan: a multi-axis operation) keep their axis
         b = np.asarray(b_deg, dtype=float)
-        axis = axis_from_rotation(np.radians(b))
+        given = np.isfinite(b)
+        axis = np.where(given[:, None], axis_from_rotation(np.radians(np.nan_to_num(b))), axis)
+        b = b if given.all() else None
     elif four_axis:
         b = rotation_from_axis(
             axis,

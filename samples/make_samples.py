@@ -380,6 +380,125 @@ def build_mould(folder: Path) -> dict:
     return {"part": part, "passes": [ps], "cutter": cutter, "goto": (n,)}
 
 
+# ---- impeller passage (5-axis) ----------------------------------------------------------------
+IMP_BLADES = 9                 # blades of the full wheel; the passage lies between two of them
+IMP_PITCH = 2 * np.pi / IMP_BLADES
+IMP_PROFILE = np.array([[28.0, 36.0], [32.0, 12.0], [58.0, 6.0]])  # hub meridian (r, z) Bezier
+IMP_HEIGHT = 20.0              # mm, blade height along the hub normal
+IMP_WRAP = np.radians(25.0)    # blade angle gained from inlet to outlet (wrap)
+IMP_LEAN = np.radians(4.0)     # blade tip turned further on (+angle): over the passage at blade 0
+IMP_HALF = 1.2                 # mm, half the blade thickness mid-chord
+IMP_CUTTER = (6.0, 3.0)        # CUTTER/6,3: ball end-mill D6
+IMP_ROWS, IMP_STATIONS = 7, 25  # CC rows across the passage, CC points along each (inlet -> outlet)
+IMP_CLEAR = 3.6                # mm, ball's distance from the blade roots at the outer rows
+IMP_MACHINE = "linuxcnc-xyzac-trt"
+
+
+def _meridian(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Hub meridian at Bezier parameters s (K,): points (K, 2) (r, z) and unit normals (K, 2)
+    pointing out of the hub (outwards and up)."""
+    s = np.asarray(s, float)[:, None]
+    p0, p1, p2 = IMP_PROFILE
+    pt = (1 - s) ** 2 * p0 + 2 * s * (1 - s) * p1 + s**2 * p2
+    d = 2 * (1 - s) * (p1 - p0) + 2 * s * (p2 - p1)
+    n = np.stack([-d[:, 1], d[:, 0]], axis=1)
+    return pt, n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+def _spin(rz: np.ndarray, ang: np.ndarray) -> np.ndarray:
+    """Meridian points or vectors (K, 2) (r, z) at angles ang (K,) about Z: (K, 3)."""
+    return np.stack([rz[:, 0] * np.cos(ang), rz[:, 0] * np.sin(ang), rz[:, 1]], axis=1)
+
+
+def impeller_hub() -> NURBS.Surface:
+    """The hub between the blades: the exact surface of revolution about Z of the quadratic
+    meridian IMP_PROFILE (u: the meridian, inlet -> outlet; v: one rational quadratic arc over
+    1.6 pitches, angle increasing), so that du x dv points out of the hub."""
+    half = 0.8 * IMP_PITCH
+    ang = 0.5 * IMP_PITCH + np.array([-half, 0.0, half])
+    poles = np.empty((3, 3, 3))
+    weights = np.empty((3, 3))
+    for j in range(3):
+        scale = 1.0 / np.cos(half) if j == 1 else 1.0
+        rz = IMP_PROFILE * [scale, 1.0]
+        poles[:, j] = _spin(rz, np.full(3, ang[j]))
+        weights[:, j] = np.cos(half) if j == 1 else 1.0
+    return _surface("hub", 2, 2, _clamped(2), _clamped(2), poles, weights)
+
+
+def impeller_blade(k: int, side: int) -> NURBS.Surface:
+    """One side (+1 suction, -1 pressure) of blade k (at angle k * IMP_PITCH): a ruled surface,
+    cubic along the meridian (7 poles at s = 0 .. 1) and linear from 1.5 mm inside the hub to
+    IMP_HEIGHT above it along the hub normal, its tip turned IMP_LEAN further about Z than its
+    root (twisted). The sides are IMP_HALF apart mid-chord and meet at both edges. The suction
+    side faces +angle, the pressure side -angle (du x dv out of the blade)."""
+    s = np.linspace(0.0, 1.0, 7)
+    rz, n = _meridian(s)
+    thick = side * IMP_HALF * np.sin(np.pi * s) / rz[:, 0]
+    ang = k * IMP_PITCH + IMP_WRAP * s**2 + thick
+    root = _spin(rz - 1.5 * n, ang)
+    tip = _spin(rz + IMP_HEIGHT * n, ang + IMP_LEAN)
+    poles = np.stack([root, tip], axis=1)
+    if side > 0:
+        poles = poles[::-1]
+    return _surface(f"blade{k}_{'suction' if side > 0 else 'pressure'}", 3, 1,
+                    _clamped(3, (0.25, 0.5, 0.75)), _clamped(1), poles)
+
+
+def impeller_surfaces() -> list[NURBS.Surface]:
+    """Hub and the two blades bounding the passage (blade 0 leans over it, blade 1 away)."""
+    return [impeller_hub()] + [impeller_blade(k, side) for k in (0, 1) for side in (-1, 1)]
+
+
+def impeller_passes(cutter: Cutter) -> list[Pass]:
+    """IMP_ROWS rows across the passage, each IMP_STATIONS CC points along the meridian (zig-zag),
+    on the hub at IMP_CLEAR from the blade roots at the outer rows; the naive CAM's tool axis: the
+    hub normal at the CC point."""
+    s = np.linspace(0.04, 0.96, IMP_STATIONS)
+    rz, n = _meridian(s)
+    r = rz[:, 0]
+    wrap = IMP_WRAP * s**2
+    # the suction side of blade 0 and the pressure side of blade 1 at the root
+    lo = wrap + IMP_HALF * np.sin(np.pi * s) / r + IMP_CLEAR / r
+    hi = IMP_PITCH + wrap - IMP_HALF * np.sin(np.pi * s) / r - IMP_CLEAR / r
+    out = []
+    for i, f in enumerate(np.linspace(0.0, 1.0, IMP_ROWS)):
+        ang = lo + f * (hi - lo)
+        cc, nn = _spin(rz, ang), _spin(n, ang)
+        if i % 2:
+            cc, nn = cc[::-1], nn[::-1]
+        out.append(Pass(cc, nn, nn.copy(), cutter.tip_from_contact(cc, nn, nn)))
+    return out
+
+
+def impeller_blocks(passes: list[Pass]) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """Each row: rapid to 40 mm above its first CL point along its axis, plunge to 5 mm above
+    it, cut, retract 40 mm along the last axis."""
+    blocks = []
+    for ps in passes:
+        a0, a1 = ps.axes[0], ps.axes[-1]
+        blocks.append(("rapid", (ps.tips[0] + 40.0 * a0)[None], a0[None]))
+        blocks.append(("plunge", (ps.tips[0] + 5.0 * a0)[None], a0[None]))
+        blocks.append(("feed", ps.tips, ps.axes))
+        blocks.append(("rapid", (ps.tips[-1] + 40.0 * a1)[None], a1[None]))
+    return blocks
+
+
+def build_impeller(folder: Path) -> dict:
+    """passage.json (hub + two blades), passage.apt (5-axis, ball D6 along the hub normal, for
+    IMP_MACHINE) and cc.csv (its CC points)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    part = write_part(impeller_surfaces(), folder / "passage.json")
+    cutter = cutter_from_apt(list(IMP_CUTTER))
+    passes = impeller_passes(cutter)
+    header = ["PARTNO/IMPELLER PASSAGE HUB FINISH BALL D6 HUB NORMAL",
+              f"PPRINT/MACHINE {IMP_MACHINE}", "UNITS/MM", "MULTAX",
+              f"CUTTER/{IMP_CUTTER[0]:g},{IMP_CUTTER[1]:g}", "LOADTL/1", "SPINDL/12000,RPM,CLW"]
+    n = write_apt(folder / "passage.apt", header, impeller_blocks(passes), multax=True)
+    write_cc_csv(folder / "cc.csv", passes, IMP_ROWS * IMP_STATIONS)
+    return {"part": part, "passes": passes, "cutter": cutter, "goto": (n,)}
+
+
 # ---- checks -----------------------------------------------------------------------------------
 def dense_points(part: Part, n: int = 160) -> np.ndarray:
     """An n x n grid of points on every surface of the part (mm)."""
@@ -422,8 +541,9 @@ def copy_warmup_job() -> None:
 def main() -> None:
     comp = build_compressor(HERE / "compressor")
     mould = build_mould(HERE / "mould")
+    impeller = build_impeller(HERE / "impeller")
     copy_warmup_job()
-    for name, res in (("compressor", comp), ("mould", mould)):
+    for name, res in (("compressor", comp), ("mould", mould), ("impeller", impeller)):
         pts = dense_points(res["part"])
         core = res["cutter"].core
         for ps in res["passes"]:

@@ -18,7 +18,7 @@ def missing(reason: str) -> None:
     if os.environ.get("CI", "").strip().lower() not in ("", "0", "false", "no"):
         pytest.fail(f"{reason} (CI installs .[all]: a missing extra is a failure there)",
                     pytrace=False)
-    pytest.skip(reason)
+    pytest.skip(reason, allow_module_level=True)
 
 
 def require_extra(module: str, extra: str) -> ModuleType:

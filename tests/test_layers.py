@@ -11,9 +11,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
+from requires import require_extra
 
-pytest.importorskip("importlinter", reason="import-linter (the test extra) is not installed")
+require_extra("importlinter", "test")
 
 REPO = Path(__file__).resolve().parents[1]
 LINT = "import sys; from importlinter.cli import lint_imports_command; lint_imports_command()"

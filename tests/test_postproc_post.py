@@ -172,7 +172,9 @@ def test_round_trip_inch_program():
 
 
 def _sample_jobs() -> list[Path]:
-    return sorted((REPO / "samples").glob("*/*.apt"))
+    """The 4-axis and 3-axis sample jobs (the 5-axis impeller has its own round trip,
+    tests/test_impeller_sample.py)."""
+    return sorted(p for p in (REPO / "samples").glob("*/*.apt") if p.parent.name != "impeller")
 
 
 @pytest.mark.parametrize("dialect_machine", ["fanuc-hmc", "linuxcnc-hmc"])
