@@ -16,7 +16,8 @@ from scipy.spatial import cKDTree
 
 from checker import verdict as vd
 from checker.apt import read_cl
-from checker.job import check_job, check_toolpath, post_unchecked
+from checker.job import check_job, check_toolpath
+from checker.posting import post_unchecked
 from postproc.machine import load_machine
 from postproc.reader import read_gcode
 from postproc.replay import part_motions, toolpath_of
