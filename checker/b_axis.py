@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.errors import PathcheckError
+from checker.errors import PathcheckError, raise_at_first
 
 
 def axis_for_b(b_deg: np.ndarray) -> np.ndarray:
@@ -41,17 +41,12 @@ def check_four_axis(axes: np.ndarray, lines: np.ndarray | None, path: str | None
                     tolerance: float) -> None:
     """Raise when a tool axis is not perpendicular to Y (|j| > tolerance): the path is not 4-axis
     about Y, and is never silently projected. Names the first offending line (of `lines`)."""
-    j = np.abs(np.asarray(axes, dtype=float)[:, 1])
-    bad = np.flatnonzero(j > tolerance)
-    if bad.size:
-        first = int(bad[0])
-        raise PathcheckError(
-            f"not a 4-axis path about Y: tool axis {np.round(axes[first], 6).tolist()} has "
-            f"j = {axes[first, 1]:.6g} (expected |j| <= {tolerance:g}); {bad.size} axes like it",
-            path=path,
-            line=None if lines is None else int(lines[first]),
-            code="not-4-axis",
-        )
+    axes = np.asarray(axes, dtype=float)
+    bad = np.abs(axes[:, 1]) > tolerance
+    raise_at_first(bad, lines, lambda k: (
+        f"not a 4-axis path about Y: tool axis {np.round(axes[k], 6).tolist()} has "
+        f"j = {axes[k, 1]:.6g} (expected |j| <= {tolerance:g}); {int(bad.sum())} axes like it"),
+        path=path, code="not-4-axis")
 
 
 def check_b_range(b_min: float, b_max: float, limit_min: float, limit_max: float) -> None:

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
+
+import numpy as np
 
 
 class PathcheckError(Exception):
@@ -40,3 +43,24 @@ class PathcheckError(Exception):
         if self.line is not None:
             out["line"] = self.line
         return out
+
+
+def raise_at_first(bad, lines, message: Callable[[int], str], *, path: str | Path | None = None,
+                   code: str = "input") -> None:
+    """Raise at the first row where `bad (N,) bool` holds, naming its line `lines[k]` (None: no
+    line): `message(k)` the text for row k. Nothing when no row is bad."""
+    rows = np.flatnonzero(np.asarray(bad, bool))
+    if rows.size:
+        k = int(rows[0])
+        raise PathcheckError(message(k), path=path, code=code,
+                             line=None if lines is None else int(lines[k]))
+
+
+def read_input(path: str | Path, what: str, code: str = "input") -> bytes:
+    """The bytes of the input file `path`; a file that cannot be read is one error naming it and
+    `what` it is (e.g. "CL file")."""
+    try:
+        return Path(path).read_bytes()
+    except OSError as err:
+        raise PathcheckError(f"cannot read {what}: {err.strerror or err}", path=path,
+                             code=code) from None

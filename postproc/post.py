@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from checker.config import default_config
-from checker.errors import PathcheckError
+from checker.errors import PathcheckError, raise_at_first
 from checker.units import mm_per_unit
 from postproc.dialects import get_dialect
 from postproc.header import NOT_CHECKED, header_lines
@@ -223,38 +223,20 @@ def _validate(moves: PostMoves, machine: Machine) -> None:
             )
     if n == 0:
         raise PathcheckError("nothing to post: the tool path has no moves", code="post")
+    where = {"path": moves.source, "code": "post"}
     finite = np.isfinite(moves.tip).all(axis=1) & np.isfinite(moves.axis).all(axis=1)
-    if not finite.all():
-        k = int(np.flatnonzero(~finite)[0])
-        raise PathcheckError(
-            "move has a non-finite tip or tool axis",
-            path=moves.source,
-            line=int(moves.line[k]),
-            code="post",
-        )
-    given = np.isfinite(moves.b_deg)
-    mismatch = given & (
+    raise_at_first(~finite, moves.line, lambda k: "move has a non-finite tip or tool axis",
+                   **where)
+    mismatch = np.isfinite(moves.b_deg) & (
         np.linalg.norm(moves.axis - axis_from_rotation(np.radians(np.nan_to_num(moves.b_deg))),
                        axis=1) > 1e-6
     )
-    if mismatch.any():
-        k = int(np.flatnonzero(mismatch)[0])
-        raise PathcheckError(
-            f"tool axis {tuple(np.round(moves.axis[k], 6))} does not match "
-            f"B = {moves.b_deg[k]:.4f} deg: expected (-sin B, 0, cos B)",
-            path=moves.source,
-            line=int(moves.line[k]),
-            code="post",
-        )
-    no_feed = ~moves.rapid & ~(moves.feed > 0)
-    if no_feed.any():
-        k = int(np.flatnonzero(no_feed)[0])
-        raise PathcheckError(
-            "feed move without a feed rate: expected a FEDRAT > 0 before it",
-            path=moves.source,
-            line=int(moves.line[k]),
-            code="post",
-        )
+    raise_at_first(mismatch, moves.line, lambda k: (
+        f"tool axis {tuple(np.round(moves.axis[k], 6))} does not match "
+        f"B = {moves.b_deg[k]:.4f} deg: expected (-sin B, 0, cos B)"), **where)
+    raise_at_first(~moves.rapid & ~(moves.feed > 0), moves.line,
+                   lambda k: "feed move without a feed rate: expected a FEDRAT > 0 before it",
+                   **where)
 
 
 def rotary_words(moves: PostMoves, machine: Machine) -> tuple[np.ndarray, Choice]:

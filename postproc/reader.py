@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from checker.errors import PathcheckError
+from checker.errors import PathcheckError, read_input
 from checker.input_limits import MAX_COORDINATE_MM, MAX_ROTARY_DEG
 from checker.units import mm_per_unit
 from postproc.dialects import CANNED_CYCLES, Dialect, get_dialect
@@ -616,12 +616,7 @@ def read_gcode(
     """Motion rows of the G-code file at ``path`` (see `read_gcode_text`; ``block_delete``
     the switch, on by default: ``/`` blocks skipped)."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="latin-1")
-    except OSError as err:
-        raise PathcheckError(
-            f"cannot read G-code: {err.strerror}", path=path, code="gcode"
-        ) from err
+    text = read_input(path, "G-code", code="gcode").decode("latin-1")
     return read_gcode_text(text, dialect, path=str(path), units=units,
                            block_delete=block_delete)
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.errors import PathcheckError
+from checker.errors import raise_at_first
 
 #: the largest B change in one block (degrees); longer moves are split so "shortest" is unambiguous
 MAX_STEP = 179.0
@@ -64,16 +64,9 @@ def range_branches(
     w = np.asarray(w, dtype=float)
     n_lo = np.ceil((lo - w) / 360.0 - 1e-12)
     n_hi = np.floor((hi - w) / 360.0 + 1e-12)
-    bad = np.flatnonzero(n_lo > n_hi)
-    if bad.size:
-        k = int(bad[0])
-        raise PathcheckError(
-            f"B = {w[k]:.4f} deg cannot be reached: expected a B word in [{lo:g}, {hi:g}] "
-            f"(modulo 360), found none",
-            path=path,
-            line=None if lines is None else int(lines[k]),
-            code="travel",
-        )
+    raise_at_first(n_lo > n_hi, lines, lambda k: (
+        f"B = {w[k]:.4f} deg cannot be reached: expected a B word in [{lo:g}, {hi:g}] "
+        f"(modulo 360), found none"), path=path, code="travel")
     branch = np.empty(w.size, dtype=int)
     start = 0
     while start < w.size:

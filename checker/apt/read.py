@@ -8,7 +8,7 @@ from pathlib import Path
 from checker.apt.dialect import detect_dialect, is_cl_text
 from checker.apt.interpret import interpret
 from checker.apt.lexer import is_card_image, lex
-from checker.errors import PathcheckError
+from checker.errors import PathcheckError, read_input
 from checker.toolpath import ToolPath
 
 # control characters that never occur in text (tab, LF, FF and CR do)
@@ -65,15 +65,8 @@ def read_cl(
 ) -> ToolPath:
     """The tool path of an APT-CL or NX CLSF file; bad input raises PathcheckError."""
     p = Path(path)
-    try:
-        data = p.read_bytes()
-    except OSError as err:
-        raise PathcheckError(
-            f"cannot read CL file: {err.strerror or err}", path=p, code="io"
-        ) from err
-    return read_cl_text(
-        _decode(data), str(p), column72=column72, require_cutter=require_cutter
-    )
+    return read_cl_text(_decode(read_input(p, "CL file", code="io")), str(p),
+                        column72=column72, require_cutter=require_cutter)
 
 
 def is_cl_file(path: str | Path) -> bool:

@@ -7,7 +7,7 @@ import hashlib
 from pathlib import Path
 
 from checker.config import GeometryConfig, default_config
-from checker.errors import PathcheckError
+from checker.errors import PathcheckError, read_input
 from checker.geometry.limits import check_mesh, check_surface
 from checker.part import Part
 from checker.sandbox import Limits
@@ -69,12 +69,7 @@ def load_part(path: str | Path, geometry: GeometryConfig | None = None) -> Part:
             path=path,
             code="part",
         )
-    try:
-        raw = path.read_bytes()
-    except OSError as err:
-        raise PathcheckError(
-            f"cannot read part file: {err.strerror}", path=path, code="part"
-        ) from err
+    raw = read_input(path, "part file", code="part")
     digest = hashlib.sha256(raw).hexdigest()
     key = (str(path.resolve()), digest)
     if key in _CACHE:
