@@ -110,7 +110,7 @@ def _terminated(signum: int, frame: object) -> None:
     raise SystemExit(128 + signum)
 
 
-EXIT_OK, EXIT_FINDINGS, EXIT_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+EXIT_OK, EXIT_INPUT, EXIT_INTERNAL = 0, 2, 3  # 1 (findings): the commands' own exit
 
 
 def _os_error(err: OSError) -> str:

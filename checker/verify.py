@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.b_axis import axis_for_b, b_for_axis, rotate_about_y
-from checker.moves import START, Moves
+from checker.b_axis import axis_for_b, rotate_about_y
+from checker.moves import Moves
 from checker.progress import step
 
 _MAX_ROUNDS = 60  # halvings at most (2^-60 of a move: far below any tolerance)
@@ -182,12 +182,3 @@ def along_moves(probe: PoseProbe, moves: Moves, end: np.ndarray, end_depths: np.
             d0, d1 = np.r_[d0, got.depth], np.r_[got.depth, d1]
     return MoveDepths(end, best, t_best, tip_best, axis_best, count)
 
-
-def moves_of(moves: Moves, poses: np.ndarray) -> np.ndarray:
-    """Of the poses `poses`, those a move reaches (not a START)."""
-    return poses[moves.kind[poses] != START]
-
-
-def table_angles(moves: Moves) -> np.ndarray:
-    """B (degrees) of every pose from its axis (4-axis about Y)."""
-    return b_for_axis(moves.axis)

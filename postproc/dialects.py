@@ -94,7 +94,6 @@ class Dialect:
     letter_assignments: bool  # "R3=1.5" / "A5=0.0" words (indexed addresses, R parameters)
     feed_distance: Callable[..., np.ndarray]
     format_code: Callable[[str, float], str]
-    g94_rule: str  # one line for the README and program headers
     last_g_wins: bool  # two G codes of one group in a block: Fanuc takes the last, rs274 errs
     initial_motion: int | None  # motion mode at program start (Fanuc G00; rs274: none)
     units_codes: dict[str, str] = field(default_factory=lambda: {"20": "inch", "21": "mm"})
@@ -202,7 +201,6 @@ FANUC = Dialect(
     letter_assignments=True,
     feed_distance=_feed_distance_combined,
     format_code=_code_padded,
-    g94_rule="F = feed * sqrt(dX^2+dY^2+dZ^2+dA^2+dB^2+dC^2) / tip path length (degrees as mm)",
     last_g_wins=True,
     initial_motion=0,
     tcp_on=frozenset({"G43.4", "G43.5"}),
@@ -259,8 +257,6 @@ LINUXCNC = Dialect(
     letter_assignments=False,
     feed_distance=_feed_distance_linear_first,
     format_code=_code_plain,
-    g94_rule="F = feed * |dXYZ| / tip path length (rotary-only moves: F = |dABC| / block time, "
-    "deg/min)",
     last_g_wins=False,
     initial_motion=None,
     tcp_on=frozenset({"M428"}),  # the switchkins M codes of LinuxCNC's 5-axis configurations
@@ -299,7 +295,6 @@ SIEMENS = Dialect(
     letter_assignments=True,  # R1=5
     feed_distance=_feed_distance_linear_first,
     format_code=_code_plain,
-    g94_rule="F = feed * |dXYZ| / tip path length (FGROUP(X,Y,Z); rotary-only: deg/min)",
     last_g_wins=True,
     initial_motion=0,
     units_codes={"70": "inch", "71": "mm", "700": "inch", "710": "mm"},
@@ -347,7 +342,6 @@ HEIDENHAIN = Dialect(
     letter_assignments=False,
     feed_distance=_feed_distance_linear_first,
     format_code=_code_padded,
-    g94_rule="F = feed * |dXYZ| / tip path length (rotary-only moves: deg/min)",
     last_g_wins=False,
     initial_motion=None,
     units_codes={"70": "inch", "71": "mm"},
@@ -392,7 +386,6 @@ MILLPLUS = Dialect(
     letter_assignments=True,  # indexed addresses: A5=, L1=, F2=, E254=
     feed_distance=_feed_distance_linear_first,
     format_code=_code_padded,
-    g94_rule="F = feed * |dXYZ| / tip path length (rotary-only moves: deg/min)",
     last_g_wins=True,
     initial_motion=0,
     units_codes={"70": "inch", "71": "mm"},

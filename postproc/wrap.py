@@ -19,13 +19,6 @@ from checker.errors import raise_at_first
 MAX_STEP = 179.0
 
 
-def pieces_per_move(w: np.ndarray) -> np.ndarray:
-    """Number of blocks ``(N,)`` each move needs so no block turns MAX_STEP degrees or more;
-    ``w (N,)`` continuous words, degrees. The first move is one block."""
-    step = np.abs(np.diff(np.asarray(w, dtype=float), prepend=w[:1]))
-    return np.maximum(1, np.ceil(step / MAX_STEP - 1e-12)).astype(int)
-
-
 def rollover_words(w: np.ndarray, mode: str, decimals: int) -> np.ndarray:
     """Words ``(N,)`` for a rollover axis from continuous words ``w (N,)`` degrees, rounded to
     ``decimals``. ``signed`` words are negative (``-0.0`` included) when the block turns the

@@ -13,7 +13,7 @@ from postproc.machine import load_machine
 from postproc.post import PostMoves, post_program
 from postproc.reader import read_gcode_text
 from postproc.replay import part_motions
-from postproc.wrap import pieces_per_move, range_branches, rollover_words, unroll_rollover
+from postproc.wrap import range_branches, rollover_words, unroll_rollover
 
 
 def machine(wrap: str, **rotary):
@@ -104,9 +104,7 @@ def test_every_mode_reads_back_to_the_same_path(wrap):
     assert all(np.min(np.abs((got - e + 180) % 360 - 180)) < 1e-4 for e in expected)
 
 
-def test_long_turns_are_split_and_unrolled():
-    w = np.array([0.0, 400.0, 390.0])
-    assert pieces_per_move(w).tolist() == [1, 3, 1]
+def test_rollover_words_unroll_and_branches():
     words = rollover_words(np.array([0.0, 170.0, 340.0, 510.0, 350.0]), "signed", 3)
     assert np.signbit(words).tolist() == [False, False, False, False, True]
     assert np.allclose(unroll_rollover(words, "signed"), [0.0, 170.0, 340.0, 510.0, 350.0])

@@ -24,7 +24,6 @@ from checker.errors import PathcheckError
 
 PROTOCOL_VERSION = 1
 OPS: tuple[str, ...] = ("ping", "stats", "allowable", "check")
-DEBUG_OPS: tuple[str, ...] = ("sleep",)
 
 Vec3 = tuple[float, float, float]
 CCRow = tuple[float, float, float, float, float, float]
