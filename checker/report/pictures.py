@@ -256,7 +256,7 @@ class JobPainter:
 
     def render(
         self, arrays: dict[str, np.ndarray], standard: StandardCutters, cutter_size: float | None,
-        symbol: str = "r",
+        symbol: str,
     ) -> tuple[list[str], dict]:
         """The four pictures (base64 PNG) of one job from its point arrays (see
         `checker.store.point_arrays`; the two cutter maps over the cutting poses with a
