@@ -233,12 +233,12 @@ def test_painter_path_panel_scales():
     doc3 = synthetic_document(2, n=11, four_axis=False)
     painter = JobPainter()
     std = standard_cutters("ball", doc3.job.cutter, doc3.job.cutter_size, (1.0,))
-    pictures, facts = painter.render(point_arrays(doc3), std, doc3.job.cutter_size)
+    pictures, facts = painter.render(point_arrays(doc3), std, doc3.job.cutter_size, "r")
     assert len(pictures) == 4 and facts["has_b"] is False and facts["view"] == "XY"
     assert facts["symbol"] == "r"
     # the highlighted points are the findings, not every point that is not ok
     doc = synthetic_document(5, n=11, four_axis=False)
-    facts = painter.render(point_arrays(doc), std, doc.job.cutter_size)[1]
+    facts = painter.render(point_arrays(doc), std, doc.job.cutter_size, "r")[1]
     c = doc.summary.counts
     assert facts["highlighted"] == _findings(doc) == c.gouge + c.interference == 13
     assert c.within_tolerance == 1  # 'not ok' would say 14
@@ -253,7 +253,7 @@ def test_allowable_map_marks_unbounded_points():
     pink = np.array(Image.new("RGB", (1, 1), UNBOUNDED))[0, 0].astype(int)
 
     def pink_pixels(arrays) -> list[int]:
-        pictures = painter.render(arrays, std, doc.job.cutter_size)[0]
+        pictures = painter.render(arrays, std, doc.job.cutter_size, "r")[0]
         out = []
         for k in (0, 3):  # allowable map, path panel
             img = np.asarray(Image.open(io.BytesIO(base64.b64decode(pictures[k]))).convert("RGB"))
@@ -355,7 +355,7 @@ def test_painter_pictures_do_not_depend_on_the_jobs_before():
     tasks = []
     for d in docs:
         std = standard_cutters(d.job.cutter_kind, d.job.cutter, d.job.cutter_size, (1.0,))
-        tasks.append((point_arrays(d), std, d.job.cutter_size))
+        tasks.append((point_arrays(d), std, d.job.cutter_size, "r"))
     shared = JobPainter()
     in_turn = [shared.render(*t)[0] for t in tasks]
     alone = [JobPainter().render(*t)[0] for t in tasks[:3]]
