@@ -252,6 +252,14 @@ class ToolPath:
     unknown: dict[str, int] = field(default_factory=dict)
     ignored: dict[str, int] = field(default_factory=dict)
 
+    def machine_name(self) -> str | None:
+        """The machine the CL file names (its first `PPRINT/MACHINE NAME`), or None."""
+        for record in self.records:
+            words = (record.text or "").split() if record.word == "PPRINT" else []
+            if len(words) == 2 and words[0].upper() == "MACHINE":
+                return words[1]
+        return None
+
     def motion_arrays(self, arc_chord_tol: float | None = None) -> MotionArrays:
         """The motions; with ``arc_chord_tol`` (mm) every arc is expanded into points placed
         before its end row, with the end row's axis, feed, line and operation."""

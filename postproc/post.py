@@ -190,13 +190,7 @@ def machine_for_toolpath(toolpath, name: str | Path | Machine | None = None) -> 
     (fanuc-hmc)."""
     if isinstance(name, Machine):
         return name
-    if name is None:
-        for record in toolpath.records:
-            words = (record.text or "").split() if record.word == "PPRINT" else []
-            if len(words) == 2 and words[0].upper() == "MACHINE":
-                name = words[1]
-                break
-    return load_machine(name)
+    return load_machine(toolpath.machine_name() if name is None else name)
 
 
 @dataclass

@@ -140,11 +140,7 @@ def _machine(name: str | None, toolpath: Any, files: _Files) -> str | None:
     the default machine."""
     field_name = "machine"
     if name is None:
-        for record in toolpath.records:
-            words = (record.text or "").split() if record.word == "PPRINT" else []
-            if len(words) == 2 and words[0].upper() == "MACHINE":
-                name, field_name = words[1], "PPRINT/MACHINE"
-                break
+        name, field_name = toolpath.machine_name(), "PPRINT/MACHINE"
     if name is None:
         return None
     from postproc.machine import MACHINES_DIR
