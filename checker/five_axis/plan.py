@@ -199,3 +199,18 @@ def _follow(m, rows, op_rows, cam_axis, axis, tips):
     at = np.searchsorted(op_rows, rows)
     tip[at], ax[at] = tips, axis
     return tip, ax / np.linalg.norm(ax, axis=1)[:, None]
+
+
+def rotary_words(chain, axes: np.ndarray) -> np.ndarray:
+    """(N, k) the machine's rotary words (degrees) for unit axes (N, 3), part frame, chosen as
+    the post chooses them (`Chain.words_for_axes`: continuous, within the limits)."""
+    joints, _, _ = chain.words_for_axes(axes)
+    return joints
+
+
+def rotary_metrics(chain, plan: FivePlan, axes: np.ndarray):
+    """`posture.posture_metrics` of the rotary words of `axes (N, 3)` at the plan's contact
+    points (per mm of CC path, segments not crossed)."""
+    from checker.five_axis.posture import posture_metrics
+
+    return posture_metrics(rotary_words(chain, axes), plan.s, plan.starts)
