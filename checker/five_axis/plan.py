@@ -24,6 +24,7 @@ frame, mm; radians inside, degrees in the config."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,7 +42,9 @@ class FivePlan:
     along the CC points (mm), `starts` rows that begin a segment, `region` the feasible sets,
     `cam_axis` and `cam_feasible` (the CAM's pose judged), `planned` (least turn) and `chosen`
     (faired) postures, `lead`, `tilt` (rad) of the chosen axis in the CC frame. Per row of the
-    operation (M): `op_rows`, `tip_rows`, `axis_rows` the program to write."""
+    operation (M): `op_rows`, `tip_rows`, `axis_rows` the program to write. `feasible_at(k,
+    axes)`: whether contact rows `k` may be cut at `axes` (the machine reaches them and the
+    judge finds nothing), the fairing's oracle."""
 
     rows: np.ndarray
     contacts: object
@@ -58,6 +61,7 @@ class FivePlan:
     op_rows: np.ndarray
     tip_rows: np.ndarray
     axis_rows: np.ndarray
+    feasible_at: Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
 def machine_reach(chain, *, cone: float, tolerance: float = 1e-3) -> Machine:
@@ -184,7 +188,7 @@ def plan_operation(job, rows: np.ndarray, op_rows: np.ndarray, cutter, tolerance
                                                                       cam_axis))
     tip_rows, axis_rows = _follow(m, rows, op_rows, cam_axis, chosen.axis, tips)
     return FivePlan(rows, con, frames, s, starts, region, cam_axis, cam_ok, planned, chosen,
-                    lead, tilt, op_rows, tip_rows, axis_rows)
+                    lead, tilt, op_rows, tip_rows, axis_rows, oracle)
 
 
 def _follow(m, rows, op_rows, cam_axis, axis, tips):
