@@ -73,11 +73,12 @@ def main() -> None:
           f"({fa.grid_step_deg:g} deg), boundary to {fa.boundary_tolerance_deg:g} deg: "
           f"{per_s:.1f} CC points/s; {reg.mask.mean():.1%} of the nodes feasible, "
           f"{len(reg.crossing)} crossings")
-    counts = checked.document.summary.counts
-    cam = checked.document.summary.counts_cam
+    def found(c) -> int:
+        return sum(getattr(c, v) for v in ("gouge", "interference", "holder", "crash"))
+
+    summary = checked.document.summary
     print(f"whole job with --reorient (no G-code): {job_s:.1f} s; findings at the CAM's axes "
-          f"{sum(getattr(cam, v) for v in ('gouge', 'interference', 'holder', 'crash'))}, "
-          f"written {sum(getattr(counts, v) for v in ('gouge', 'interference', 'holder', 'crash'))}")
+          f"{found(summary.counts_cam)}, written {found(summary.counts)}")
 
 
 if __name__ == "__main__":
