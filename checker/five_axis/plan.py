@@ -1,5 +1,6 @@
-"""Re-orienting one multi-axis operation (docs/MATH.md §11.4): the tool axis along its cutting
-poses chosen inside each CC point's feasible set, smooth, and near the CAM's where it may.
+"""Re-orienting one multi-axis operation (docs/MATH.md §10; seeds 002 and 004): the tool axis
+along its cutting poses chosen inside each CC point's feasible set, smooth, and near the CAM's
+where it may.
 
 Per contact row of the operation (a feed move whose tool touches the part, CL -> CC as the
 4-axis plan does it): the CC point, its normal and the feed direction (the next CC point of the
