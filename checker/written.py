@@ -4,7 +4,9 @@ Per operation, by its axis class: 3-axis and indexed operations are written as p
 indexed operation keeps its one B). A 4-axis operation (or a 3-axis one asked to be
 re-oriented) gets a B per cutting pose from the allowable-cutter engine (`checker.four_axis`:
 best B, feasible intervals, shortest path), its other moves following the nearest cutting pose;
-that program is checked, and where it does not have fewer findings than the CAM's own angles,
+A multi-axis operation asked to be re-oriented gets an axis per contact pose inside its feasible
+set (`checker.five_axis.plan`), its other moves following the nearest contact pose. That
+program is checked, and where it does not have fewer findings than the CAM's own angles,
 the CAM's are written instead: a corrected program is never worse. What is written is what is
 checked, verdicted and reported. Part frame, mm, degrees."""
 
