@@ -36,24 +36,32 @@ def _cases():
                rows[pick, 3:6], rows[pick + 1, :3] - rows[pick, :3])
 
 
+def rate(judge, cc, n, f, runs: int = 2, **kw):
+    """(region, CC points per second): `feasible_region` after a warm-up call on two points,
+    the best of `runs` runs; `kw` its options (grid, limits, tolerance, machine)."""
+    from checker.five_axis.feasible import feasible_region
+
+    feasible_region(judge, cc[:2], n[:2], f[:2], **kw)
+    best = np.inf
+    for _ in range(runs):
+        t = time.perf_counter()
+        reg = feasible_region(judge, cc, n, f, **kw)
+        best = min(best, time.perf_counter() - t)
+    return reg, len(cc) / best
+
+
 def main() -> None:
     from five_axis_parts import tool
 
-    from checker.five_axis.feasible import feasible_region
     from checker.five_axis.poses import PoseJudge
 
     cutter = tool("CUTTER/8,1", 12.0, 8.0, 30.0, 24.0, 30.0)
     print(f"{'part':10} {'triangles':>9} {'CC':>4} {'feasible':>8} {'edges':>6} {'CC/s':>7}")
     for name, tri, cc, n, f in _cases():
         judge = PoseJudge.for_triangles(tri, cutter, 0.01)
-        feasible_region(judge, cc[:2], n[:2], f[:2])
-        best = np.inf
-        for _ in range(2):
-            t = time.perf_counter()
-            reg = feasible_region(judge, cc, n, f)
-            best = min(best, time.perf_counter() - t)
+        reg, per_s = rate(judge, cc, n, f)
         print(f"{name:10} {len(tri.triangles):9d} {len(cc):4d} {reg.mask.mean():8.1%} "
-              f"{len(reg.crossing):6d} {len(cc) / best:7.1f}")
+              f"{len(reg.crossing):6d} {per_s:7.1f}")
 
 
 if __name__ == "__main__":

@@ -52,6 +52,20 @@ class FourAxisConfig(_Section):
     axis_j_tolerance: PositiveFloat = 1e-6
 
 
+class FiveAxisConfig(_Section):
+    """Re-orienting multi-axis operations (`checker.five_axis.plan`); angles in degrees."""
+
+    grid_step_deg: PositiveFloat = 10.0
+    lead_limit_deg: float = Field(60.0, gt=0, lt=90)
+    tilt_limit_deg: float = Field(60.0, gt=0, lt=90)
+    boundary_tolerance_deg: PositiveFloat = 0.25
+    singular_cone_deg: float = Field(5.0, ge=0, lt=90)
+    max_turn_per_mm_deg: PositiveFloat = 10.0
+    preference_weight: float = Field(0.05, ge=0)
+    fairing_passes: int = Field(6, ge=0)
+    contact_gap: PositiveFloat = 0.05
+
+
 class ServiceConfig(_Section):
     bind: str = "tcp://127.0.0.1:5555"
     workers: PositiveInt = 2
@@ -99,6 +113,7 @@ class Config(_Section):
     geometry: GeometryConfig = GeometryConfig()
     check: CheckConfig = CheckConfig()
     four_axis: FourAxisConfig = FourAxisConfig()
+    five_axis: FiveAxisConfig = FiveAxisConfig()
     service: ServiceConfig = ServiceConfig()
     store: StoreConfig = StoreConfig()
     engine: EngineConfig = EngineConfig()

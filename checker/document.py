@@ -1,7 +1,8 @@
 """The results document of a checked job, built from the program that is written
 (`checker.written.Program`): a point per pose at a CL record or a canned-cycle hole, a point per
 move that penetrates somewhere along its length (at its deepest pose), the advice at the
-cutting poses (contact, allowable cutter, margin; 4-axis: best B and feasible B), per
+cutting poses (contact, allowable cutter, margin; 4-axis: best B and feasible B; re-oriented
+multi-axis: the axis's lead and tilt and the feasible set as bits of the operation's grid), per
 operation what was done with it, and the summary whose status is the one answer. mm, degrees,
 part frame."""
 
@@ -14,6 +15,7 @@ import numpy as np
 from checker import verdict as vd
 from checker.moves import RAPID
 from checker.results import (
+    FeasibleGrid,
     Finding,
     JobInfo,
     OperationResult,
@@ -190,6 +192,48 @@ def _orientation(job, program) -> Orientation | None:
         infeasible_points=sum(int((~p.orientations.chosen.feasible).sum()) for p in plans))
 
 
+def _reoriented(program) -> dict:
+    """The multi-axis plans whose program is written (handling re-oriented)."""
+    return {o: p for o, p in program.fives.items() if program.handling[o] == "re-oriented"}
+
+
+def _five_points(program) -> dict[int, dict]:
+    """Per contact row of a re-oriented multi-axis operation: the written axis's lead and tilt
+    (degrees), its feasible grid nodes (base64 bits) and the count of boundary crossings."""
+    import base64
+
+    out: dict[int, dict] = {}
+    for p in _reoriented(program).values():
+        packed = p.region.packed()
+        crossings = np.bincount(p.region.edge_point, minlength=len(p.rows))
+        for k, row in enumerate(p.rows.tolist()):
+            out[row] = dict(lead=float(np.degrees(p.lead[k])), tilt=float(np.degrees(p.tilt[k])),
+                            feasible_mask=base64.b64encode(packed[k].tobytes()).decode("ascii"),
+                            feasible_crossings=int(crossings[k]))
+    return out
+
+
+def _feasible_grid(program, o: int, chain) -> FeasibleGrid | None:
+    """The grid and the planner of re-oriented multi-axis operation o (None otherwise)."""
+    from checker.five_axis.plan import rotary_metrics
+
+    p = _reoriented(program).get(o)
+    if p is None:
+        return None
+    motion = cam_motion = None
+    if chain is not None:
+        motion = rotary_metrics(chain, p, p.chosen.axis).total_motion_deg
+        cam_motion = rotary_metrics(chain, p, p.cam_axis).total_motion_deg
+    return FeasibleGrid(
+        leads=np.degrees(p.region.leads).round(9).tolist(),
+        tilts=np.degrees(p.region.tilts).round(9).tolist(),
+        boundary_tolerance=float(np.degrees(p.region.tolerance)),
+        method=f"{p.planned.method}, then {p.chosen.method}", points=len(p.rows),
+        infeasible_points=int((~p.chosen.feasible).sum()),
+        cam_infeasible_points=int((~p.cam_feasible).sum()),
+        rotary_motion=motion, rotary_motion_cam=cam_motion)
+
+
 def build_document(job, program, cutters: dict, classes: dict, tol, ppath: Path,
                    transform, mach, t0: float) -> ResultsDocument:
     """The results document (see the module docstring)."""
@@ -208,6 +252,7 @@ def build_document(job, program, cutters: dict, classes: dict, tol, ppath: Path,
         cam_at = _pose_of_rows(program.cam.moves, np.arange(len(m)))
         cam_row_verdict = program.cam.pose_verdict[cam_at]
         cam_row_depth = program.cam.poses.depth[cam_at]
+    five = _five_points(program)
     points: list[PointResult] = []
     for i in range(len(w.moves)):
         row = int(w.moves.row[i])
@@ -229,6 +274,8 @@ def build_document(job, program, cutters: dict, classes: dict, tol, ppath: Path,
                          depth_cam=_opt(cam_row_depth[row]))
         if np.isfinite(clearance[i]):
             extra["holder_clearance"] = float(clearance[i])
+        if first_of_row and row in five:
+            extra.update(five[row])
         points.append(_point(job, program, w, i, row, pose_verdict[i],
                              "cycle" if w.moves.hole[i] else "cl", **extra))
     along = w.along
@@ -291,6 +338,8 @@ def _op_counts(v: object, o: int, job) -> VerdictCounts:
 
 
 def _operations(job, program, cutters, classes, tol) -> list[OperationResult]:
+    motion = getattr(job, "motion", None)
+    chain = None if motion is None else motion.chain
     out = []
     for o in sorted(classes):
         rows = np.flatnonzero(job.m.op == o)
@@ -303,7 +352,8 @@ def _operations(job, program, cutters, classes, tol) -> list[OperationResult]:
             None,
             tolerance=float(tol.value[o]), tolerance_source=tol.source[o],
             counts=_op_counts(program.written, o, job),
-            counts_cam=None if program.cam is None else _op_counts(program.cam, o, job)))
+            counts_cam=None if program.cam is None else _op_counts(program.cam, o, job),
+            feasible_grid=_feasible_grid(program, o, chain)))
     return out
 
 

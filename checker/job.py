@@ -60,7 +60,8 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
     file's `PPRINT/MACHINE`, else fanuc-hmc; multi-axis operations move as a 5-axis machine
     moves them, joints linear, and on a machine with fewer rotary axes in the part frame);
     `output` the G-code to write; `b_range` (degrees) the B range searched for 4-axis
-    operations; `reorient` plans B for 3-axis operations too;
+    operations; `reorient` plans B for 3-axis operations too and re-orients multi-axis ones
+    (`five_axis.plan`);
     `part_transform` moves a part exported in another frame (`geometry.transform`);
     `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's);
     `on_findings` what posting does when the program as written has findings or points
@@ -157,8 +158,8 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
                for o in ops}
     asked = reorient or b_range is not None
     for o, cls in classes.items():
-        if cls == "multi-axis" and asked:  # a B search for a path that is not 4-axis: say where
-            rows = np.flatnonzero(m.op == o)
+        if cls == "multi-axis" and b_range is not None and not reorient:
+            rows = np.flatnonzero(m.op == o)  # a B search for a path that is not 4-axis
             check_four_axis(m.axis[rows], m.line[rows], str(apt_path),
                             cfg.four_axis.axis_j_tolerance)
     planned = {o for o, cls in classes.items()
@@ -167,8 +168,10 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
     if planned or multi or to_post:
         mach = machine_for_toolpath(toolpath, machine)
         job.motion = _machine_motion(mach, multi, cfg)
+    reoriented = multi if reorient else set()
     with step("plan and check the program"):
-        program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach)
+        program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach,
+                                       reoriented)
     with step("advice at the cutting poses"):
         doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
     doc.summary.time_s = time.perf_counter() - t0

@@ -68,7 +68,8 @@ def _post(checked: Checked, output, on_findings: str):
     return post_toolpath(job.toolpath, output, machine=checked.machine, b_deg=program.b,
                          comments=comments, stops=stops,
                          arc_chord_tol=job.cfg.check.arc_chord_tolerance, tip=program.tip,
-                         cutters=checked.cutters, verdict=verdict_text(checked.counts))
+                         cutters=checked.cutters, verdict=verdict_text(checked.counts),
+                         axes=program.axis)
 
 
 def post_unchecked(apt_path, output, cutter=None, machine=None, config=None,

@@ -77,6 +77,17 @@ class PointResult(_Model):
     depth_cam: float | None = None
     holder_clearance: float | None = Field(
         None, description="minimum stick-out that clears the holder, mm (holder verdicts)")
+    lead: float | None = Field(
+        None, description="re-oriented multi-axis contact poses: the written axis's lead from "
+        "the normal towards the feed in the CC frame, degrees (docs/MATH.md §10.1)")
+    tilt: float | None = Field(
+        None, description="the written axis's tilt from the normal sideways (n x feed), degrees")
+    feasible_mask: str | None = Field(
+        None, description="the feasible (lead, tilt) grid nodes of this CC point: base64 of "
+        "the bits, lead-major, most significant bit first (numpy packbits); the grid is the "
+        "operation's `feasible_grid`")
+    feasible_crossings: int | None = Field(
+        None, description="grid edges on which the boundary of the feasible set was refined")
 
 
 class JobInfo(_Model):
@@ -105,6 +116,24 @@ class VerdictCounts(_Model):
     inaccessible: int = 0
 
 
+class FeasibleGrid(_Model):
+    """The (lead, tilt) grid of a re-oriented multi-axis operation's feasible sets and how its
+    axis was chosen (`checker.five_axis.plan`)."""
+
+    leads: list[float] = Field(description="grid leads, degrees")
+    tilts: list[float] = Field(description="grid tilts, degrees")
+    boundary_tolerance: float = Field(description="the boundary's accuracy on the grid lines, "
+                                      "degrees")
+    method: str = Field(description="the planner of the chosen axes")
+    points: int = Field(description="contact points planned")
+    infeasible_points: int = Field(description="of them, with no feasible axis (the CAM's kept)")
+    cam_infeasible_points: int = Field(description="of them, infeasible at the CAM's axis")
+    rotary_motion: float | None = Field(
+        None, description="total motion of the machine's rotary words along the contact "
+        "points, written program, degrees")
+    rotary_motion_cam: float | None = Field(None, description="the same at the CAM's axes")
+
+
 class OperationResult(_Model):
     """What was done with one operation of the job."""
 
@@ -123,6 +152,9 @@ class OperationResult(_Model):
     tolerance_source: str
     counts: VerdictCounts
     counts_cam: VerdictCounts | None = None
+    feasible_grid: FeasibleGrid | None = Field(
+        None, description="re-oriented multi-axis operations: the grid of the points' "
+        "`feasible_mask`")
 
 
 class Finding(_Model):

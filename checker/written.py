@@ -4,7 +4,9 @@ Per operation, by its axis class: 3-axis and indexed operations are written as p
 indexed operation keeps its one B). A 4-axis operation (or a 3-axis one asked to be
 re-oriented) gets a B per cutting pose from the allowable-cutter engine (`checker.four_axis`:
 best B, feasible intervals, shortest path), its other moves following the nearest cutting pose;
-that program is checked, and where it does not have fewer findings than the CAM's own angles,
+A multi-axis operation asked to be re-oriented gets an axis per contact pose inside its feasible
+set (`checker.five_axis.plan`), its other moves following the nearest contact pose. That
+program is checked, and where it does not have fewer findings than the CAM's own angles,
 the CAM's are written instead: a corrected program is never worse. What is written is what is
 checked, verdicted and reported. Part frame, mm, degrees."""
 
@@ -72,6 +74,7 @@ class Program:
     cam: Verified | None
     handling: dict[int, str]
     plans: dict[int, Plan] = field(default_factory=dict)
+    fives: dict[int, object] = field(default_factory=dict)  # multi-axis: `five_axis.plan`
 
 
 def verify(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray, cutters: dict, tol,
@@ -225,8 +228,23 @@ def cam_b(job) -> np.ndarray:
     return np.where(j_ok, b_for_axis(job.m.axis), np.nan)
 
 
-def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, mach) -> Program:
-    """The program to write and the real tool along it (see the module docstring)."""
+def _five_plan(job, o: int, cutter, tolerance: float, mach):
+    """The 5-axis plan of multi-axis operation o (`five_axis.plan`), or None."""
+    from checker.five_axis.plan import plan_operation
+
+    op_rows = np.flatnonzero(job.m.op == o)
+    chain = job.motion.chain if getattr(job, "motion", None) is not None else None
+    if chain is None and mach is not None and len(mach.rotary_axes) >= 2:
+        from postproc.kinematics import Chain
+        chain = Chain(mach)
+    return plan_operation(job, cutting_rows(job, op_rows), op_rows, cutter, tolerance, chain,
+                          job.cfg)
+
+
+def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, mach,
+                 reoriented: set = frozenset()) -> Program:
+    """The program to write and the real tool along it (see the module docstring); `planned`
+    the 4-axis operations to plan B for, `reoriented` the multi-axis ones to re-orient."""
     m = job.m
     center = _center(mach)
     b_cam = cam_b(job)
@@ -235,12 +253,16 @@ def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, 
     cam = verify(job, m.tip, m.axis, b_move, cutters, tol, center)
     check_frames(job, cam, cutters)
     handling = {o: "as-programmed" for o in classes}
-    plans = {}
+    plans, fives = {}, {}
     for o in sorted(planned):
         p = _plan(job, o, cutters[o], b_range, mach)
         if p is not None:
             plans[o] = p
-    if not plans:
+    for o in sorted(reoriented):
+        p = _five_plan(job, o, cutters[o], float(tol.value[o]), mach)
+        if p is not None:
+            fives[o] = p
+    if not plans and not fives:
         return Program(m.tip, m.axis, b_cam, cam, None, handling)
     tip, axis, b = m.tip.copy(), m.axis.copy(), b_cam.copy()
     b_turn = b_move.copy()
@@ -248,8 +270,11 @@ def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, 
         op_rows = np.flatnonzero(m.op == o)
         tip[op_rows], b[op_rows], b_turn[op_rows] = p.tip_rows, p.b_rows, p.b_rows
         axis[op_rows] = axis_for_b(p.b_rows)
+    for p in fives.values():
+        tip[p.op_rows], axis[p.op_rows] = p.tip_rows, p.axis_rows
+        b[p.op_rows] = b_turn[p.op_rows] = np.nan
     new = verify(job, tip, axis, b_turn, cutters, tol, center)
-    for o in plans:
+    for o in [*plans, *fives]:
         mine_new = np.flatnonzero(job.m.op[new.moves.row] == o)
         mine_cam = np.flatnonzero(job.m.op[cam.moves.row] == o)
         planned_n, cam_n = new.findings(mine_new), cam.findings(mine_cam)
@@ -261,10 +286,10 @@ def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, 
         tip[op_rows], axis[op_rows], b[op_rows] = m.tip[op_rows], m.axis[op_rows], b_cam[op_rows]
         b_turn[op_rows] = b_move[op_rows]
     if all(h != "re-oriented" for h in handling.values()):
-        return Program(m.tip, m.axis, b_cam, cam, None, handling, plans)
+        return Program(m.tip, m.axis, b_cam, cam, None, handling, plans, fives)
     if any(h == "cam-kept" for h in handling.values()):
         new = verify(job, tip, axis, b_turn, cutters, tol, center)
-    return Program(tip, axis, b, new, cam, handling, plans)
+    return Program(tip, axis, b, new, cam, handling, plans, fives)
 
 
 @dataclass
@@ -285,9 +310,12 @@ class Checked:
 
 def infeasible_rows(program: Program) -> np.ndarray:
     """Motion rows whose written B is a re-oriented operation's chosen B where no B is feasible
-    (the allowable cutter is smaller than the real one at every B)."""
+    (the allowable cutter is smaller than the real one at every B), and a re-oriented
+    multi-axis operation's contact rows where no tool axis is feasible."""
     rows = [p.rows[~np.asarray(p.orientations.chosen.feasible, bool)]
             for o, p in program.plans.items() if program.handling[o] == "re-oriented"]
+    rows += [p.rows[~np.asarray(p.chosen.feasible, bool)]
+             for o, p in program.fives.items() if program.handling[o] == "re-oriented"]
     return np.concatenate(rows) if rows else np.zeros(0, dtype=int)
 
 

@@ -128,6 +128,7 @@ def moves_from_toolpath(
     tip=None,
     four_axis: bool = True,
     stops: np.ndarray | None = None,
+    axes=None,
 ) -> PostMoves:
     """PostMoves from a `checker.toolpath.ToolPath`: the rows of
     ``toolpath.motion_arrays(arc_chord_tol)`` (arcs cut into chords of that sagitta, mm; None:
@@ -140,14 +141,15 @@ def moves_from_toolpath(
     ``cutter.tip_from_contact(cc, n, axis)`` at the new axis. ``comments`` (one per row, ''
     none) are written before the blocks (flags), ``stops (N,)`` bool an optional stop (M01)
     after them. ``tip (N,3)`` (part frame, mm) replaces the CL tips outright (the checker's
-    recomputed tips at the chosen B). ``four_axis=False`` keeps the CL axes as they are (5-axis
-    jobs; the machine's inverse kinematics finds the words)."""
+    recomputed tips at the chosen B); ``axes (N,3)`` the CL axes (the checker's re-oriented
+    multi-axis rows; a row with a B takes the B's axis). ``four_axis=False`` keeps the CL axes
+    as they are (5-axis jobs; the machine's inverse kinematics finds the words)."""
     if arc_chord_tol is None:
         arc_chord_tol = default_config().check.arc_chord_tolerance
     arrays = toolpath.motion_arrays(arc_chord_tol)
     lines = np.asarray(arrays.line)
     b = None
-    axis = np.asarray(arrays.axis, dtype=float)
+    axis = np.asarray(arrays.axis if axes is None else axes, dtype=float)
     if b_deg is not None:  # rows without a B (nan: a multi-axis operation) keep their axis
         b = np.asarray(b_deg, dtype=float)
         given = np.isfinite(b)
@@ -671,6 +673,7 @@ def post_toolpath(
     tip=None,
     cutters: dict[int, object] | None = None,
     verdict: str = NOT_CHECKED,
+    axes=None,
 ) -> Path:
     """The job's corrected G-code in one call (what `pathcheck JOB.apt -o JOB.nc [--machine
     NAME]` needs): the machine by `machine_for_toolpath`, the moves by `moves_from_toolpath`
@@ -680,7 +683,7 @@ def post_toolpath(
     mach = machine_for_toolpath(toolpath, machine)
     moves = moves_from_toolpath(
         toolpath, b_deg, cc, normals, cutter, arc_chord_tol=arc_chord_tol, comments=comments,
-        tip=tip, four_axis=b_deg is not None, stops=stops,
+        tip=tip, four_axis=b_deg is not None, stops=stops, axes=axes,
     )
     name = Path(str(toolpath.path)).stem.upper() or "PATHCHECK"
     text = post_program(moves, mach, program_name=name, tools=tool_lines(toolpath, cutters),

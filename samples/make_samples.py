@@ -390,7 +390,7 @@ IMP_LEAN = np.radians(4.0)     # blade tip turned further on (+angle): over the 
 IMP_HALF = 1.2                 # mm, half the blade thickness mid-chord
 IMP_CUTTER = (6.0, 3.0)        # CUTTER/6,3: ball end-mill D6
 IMP_ROWS, IMP_STATIONS = 7, 25  # CC rows across the passage, CC points along each (inlet -> outlet)
-IMP_CLEAR = 3.6                # mm, ball's distance from the blade roots at the outer rows
+IMP_CLEAR = 4.5                # mm, ball's distance across the blade roots at the outer rows
 IMP_MACHINE = "linuxcnc-xyzac-trt"
 
 
@@ -458,9 +458,14 @@ def impeller_passes(cutter: Cutter) -> list[Pass]:
     rz, n = _meridian(s)
     r = rz[:, 0]
     wrap = IMP_WRAP * s**2
+    # IMP_CLEAR across the blade root, which runs obliquely over the hub (tan = r dθ / dm):
+    # along the circle it is IMP_CLEAR / cos of that angle
+    dm = np.linalg.norm(2 * (1 - s)[:, None] * (IMP_PROFILE[1] - IMP_PROFILE[0])
+                        + 2 * s[:, None] * (IMP_PROFILE[2] - IMP_PROFILE[1]), axis=1)
+    across = IMP_CLEAR * np.hypot(1.0, r * 2 * IMP_WRAP * s / dm)
     # the suction side of blade 0 and the pressure side of blade 1 at the root
-    lo = wrap + IMP_HALF * np.sin(np.pi * s) / r + IMP_CLEAR / r
-    hi = IMP_PITCH + wrap - IMP_HALF * np.sin(np.pi * s) / r - IMP_CLEAR / r
+    lo = wrap + IMP_HALF * np.sin(np.pi * s) / r + across / r
+    hi = IMP_PITCH + wrap - IMP_HALF * np.sin(np.pi * s) / r - across / r
     out = []
     for i, f in enumerate(np.linspace(0.0, 1.0, IMP_ROWS)):
         ang = lo + f * (hi - lo)

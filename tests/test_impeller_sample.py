@@ -1,6 +1,6 @@
 """The 5-axis sample (samples/impeller): what the script builds, the findings at the CAM's
 orientations (the hub normal: the tool's body meets the blade that leans over the passage on the
-two rows beside it, and nowhere else), the program posted for the 5-axis machine and read back
+row beside it, and nowhere else), the program posted for the 5-axis machine and read back
 (tips and axes within 1e-4 mm / rad), the same findings when the posted program is checked, and
 the NX multi-axis jobs of mech491 posted and read back on a table-table and a head-table
 machine."""
@@ -89,10 +89,10 @@ def test_findings_at_the_cam_orientations_are_the_body_on_the_leaning_blade(chec
     row = _rows(sample / "passage.apt")
     cl = [p for p in doc.points if p.kind == "cl"]
     bad = [p for p in cl if p.verdict in vd.FINDINGS]
-    assert {int(row[p.line]) for p in bad} == {0, 1}  # the two rows beside blade 0 only
+    assert {int(row[p.line]) for p in bad} == {0}  # the row beside blade 0 only
     assert all(p.piece == "body" and p.verdict == "interference" for p in bad)
     assert {p.surface for p in bad} == {2}  # blade0_suction
-    cutting = [p for p in cl if not p.rapid and row[p.line] >= 2]
+    cutting = [p for p in cl if not p.rapid and row[p.line] >= 1]
     assert cutting and not any(p.verdict in vd.FINDINGS for p in cutting)
     assert sum(p.verdict in vd.FINDINGS for p in cl) < 0.3 * len(cl)
 
@@ -118,7 +118,7 @@ def test_the_posted_sample_reads_back_as_its_cl_poses(checked, sample):
     doc, program = checked
     text = program.read_text()
     assert "M428" in text and " A" in text and " C" in text  # TCP, both rotary words
-    assert text.count("M1\n") >= 30  # a stop before each flagged move
+    assert text.count("M1\n") >= 20  # a stop before each flagged move
     mach = load_machine(make_samples.IMP_MACHINE)
     tip_err, axis_err = _round_trip(sample / "passage.apt", program, mach)
     assert tip_err <= ROUND_TRIP and axis_err <= ROUND_TRIP
