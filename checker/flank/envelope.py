@@ -68,11 +68,12 @@ def grazing(cutter: Cutter, state: MotionState, z: np.ndarray, side: np.ndarray)
     A = np.einsum("tzk,tk->tz", w, e1)
     B = np.einsum("tzk,tk->tz", w, e2)
     C = slope[None, :] * np.einsum("tk,tk->t", a, dtip)[:, None]
-    R = np.hypot(A, B)
+    mag = np.hypot(A, B)
     speed = np.linalg.norm(dtip, axis=1) + np.abs(z).max(initial=1.0) * np.linalg.norm(da, axis=1)
-    valid = (R > 1e-12 * np.maximum(speed, 1e-300)[:, None]) & (np.abs(C) <= R)
+    floor = 1e-12 * np.maximum(speed, 1e-300)[:, None]  # |(A, B)| of a tool at rest
+    valid = (mag > floor) & (np.abs(C) <= mag)
     with np.errstate(invalid="ignore", divide="ignore"):
-        delta = np.arccos(np.clip(C / R, -1.0, 1.0))
+        delta = np.arccos(np.clip(C / mag, -1.0, 1.0))
     centre = np.arctan2(B, A)
     phis = np.stack([centre + delta, centre - delta])  # (2, T, Z)
     s1, s2 = np.einsum("tk,tk->t", side, e1), np.einsum("tk,tk->t", side, e2)

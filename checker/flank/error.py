@@ -82,7 +82,8 @@ class ErrorField:
     """The envelope's error at (T, Z) = (path parameters `t`, heights `z`): `error` mm (> 0
     overcut, < 0 undercut, nan where there is no grazing point or its normal line misses the
     surface), `raw` the same with the misses' last Newton value (finite where there is a
-    grazing point; what the optimiser follows), `side` (T, 3) the side of the surface, grazing `points` and `normals` (T, Z, 3), `uv` (T, Z, 2) where the normal lines
+    grazing point; what the optimiser follows), `side` (T, 3) the side of the surface, grazing
+    `points` and `normals` (T, Z, 3), `uv` (T, Z, 2) where the normal lines
     meet the surface, `segment` (T,) the move (pose i -> i + 1) each t lies on, `pose` (T,) the
     pose index at a pose's own t, else -1."""
 
