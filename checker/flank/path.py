@@ -1,6 +1,7 @@
 """The flank pass of a CL file and the file with the pass's poses replaced: the pass is the
-longest run of consecutive cutting moves that move the axis sideways (a plunge or retract
-along the axis, a rapid or a canned cycle ends it). Part frame, mm."""
+longest run of consecutive cutting moves that move the tool more across its axis than along
+it, or turn it in place (a plunge or retract, a rapid or a canned cycle ends it). Part frame,
+mm."""
 
 from __future__ import annotations
 
@@ -13,18 +14,22 @@ from checker.errors import PathcheckError
 from checker.toolpath import MotionArrays, Record, ToolPath
 from checker.units import MM_PER_INCH
 
-SIDEWAYS = 1e-6  # mm of tip motion across the axis, or rad of axis turn, that make a flank move
+ACROSS = 5e-3  # mm of tip motion across the axis that make a flank move (above CL rounding)
+TURN = 1e-4  # rad of axis turn that make a flank move
 
 
 def flank_pass(m: MotionArrays, path: str) -> np.ndarray:
     """Row indices (K,) of the flank pass: the longest run of consecutive non-rapid,
-    non-cycle motions whose steps move the tip across the axis or turn the axis."""
+    non-cycle motions whose steps move the tip more across the axis than along it (and by
+    more than ACROSS), or turn the axis by more than TURN with the tip within ACROSS."""
     cut = ~m.rapid & ~m.cycle
     d = np.diff(m.tip, axis=0)
-    along = np.einsum("ij,ij->i", d, m.axis[:-1])[:, None] * m.axis[:-1]
-    across = np.linalg.norm(d - along, axis=1)
+    along = np.einsum("ij,ij->i", d, m.axis[:-1])
+    across = np.linalg.norm(d - along[:, None] * m.axis[:-1], axis=1)
     turn = np.linalg.norm(np.diff(m.axis, axis=0), axis=1)
-    step = cut[:-1] & cut[1:] & ((across > SIDEWAYS) | (turn > SIDEWAYS))
+    sideways = (across > ACROSS) & (across >= np.abs(along))
+    in_place = (turn > TURN) & (np.linalg.norm(d, axis=1) <= ACROSS)
+    step = cut[:-1] & cut[1:] & (sideways | in_place)
     best, start, run = (0, 0), 0, 0
     for i, ok in enumerate(step):  # one pass over the moves: the longest run of True
         run = run + 1 if ok else 0
