@@ -19,6 +19,7 @@ SUBCOMMANDS: dict[str, str] = {
     "info": "checker.commands.info:info",
     "allowable": "checker.commands.allowable:allowable",
     "map": "checker.commands.map:map_command",
+    "flank": "checker.commands.flank:flank",
     "check-gcode": "checker.commands.check_gcode:check_gcode",
     "serve": "checker.commands.serve:serve",
     "call": "checker.commands.call:call",

@@ -504,6 +504,32 @@ def build_impeller(folder: Path) -> dict:
     return {"part": part, "passes": passes, "cutter": cutter, "goto": (n,)}
 
 
+# ---- flank milling (seed 001: a hyperbolic-paraboloid wall, cylinder D10) --------------------
+def build_flank(folder: Path) -> dict:
+    """hypar.json (the wall y = x z / 100, x in [-30, 30], z in [0, 30], exact bilinear) and
+    hypar.apt (a 5-axis flank pass of CUTTER/10,0,5,0,0,0,40 by the naive rule: axis along the
+    21 rulings x = const, offset 5 mm along the normal at mid-height, tip 2 mm below the wall,
+    entered and left along the axis;
+    the envelope overcuts about 0.05 mm at the ends of the rulings, `pathcheck flank
+    --optimise` brings it under 0.001 mm)."""
+    from checker.flank.ruled import hyperbolic_paraboloid, naive_poses
+
+    folder.mkdir(parents=True, exist_ok=True)
+    k = [0.0, 0.0, 1.0, 1.0]
+    wall = hyperbolic_paraboloid(30.0, 30.0, 100.0)
+    part = write_part([_surface("hypar wall", 1, 1, k, k, wall.ctrlpts)], folder / "hypar.json")
+    cutter = cutter_from_apt([10.0, 0.0, 5.0, 0.0, 0.0, 0.0, 40.0])
+    tips, axes = naive_poses(part.surfaces[0], cutter, np.linspace(0.0, 1.0, 21), 2.0)
+    a0, a1 = axes[0], axes[-1]
+    blocks = [("rapid", (tips[0] + 45.0 * a0)[None], a0[None]),
+              ("plunge", (tips[0] + 5.0 * a0)[None], a0[None]), ("feed", tips, axes),
+              ("rapid", (tips[-1] + 45.0 * a1)[None], a1[None])]
+    header = ["PARTNO/HYPERBOLIC PARABOLOID WALL FLANK CYLINDER D10", "UNITS/MM", "MULTAX",
+              "CUTTER/10,0,5,0,0,0,40", "LOADTL/1", "SPINDL/10000,RPM,CLW"]
+    n = write_apt(folder / "hypar.apt", header, blocks, multax=True)
+    return {"part": part, "cutter": cutter, "tips": tips, "axes": axes, "goto": (n,)}
+
+
 # ---- checks -----------------------------------------------------------------------------------
 def dense_points(part: Part, n: int = 160) -> np.ndarray:
     """An n x n grid of points on every surface of the part (mm)."""
@@ -547,6 +573,7 @@ def main() -> None:
     comp = build_compressor(HERE / "compressor")
     mould = build_mould(HERE / "mould")
     impeller = build_impeller(HERE / "impeller")
+    build_flank(HERE / "flank")
     copy_warmup_job()
     for name, res in (("compressor", comp), ("mould", mould), ("impeller", impeller)):
         pts = dense_points(res["part"])

@@ -22,13 +22,13 @@ from checker.commands.options import EXIT_CODES
 REPO = Path(__file__).resolve().parents[1]
 
 # the commands that take each kind of input or output (the vocabulary's "where")
-TAKES_PART = {"check", "check-gcode", "allowable", "map"}
-TAKES_CUTTER = {"check", "check-gcode", "allowable", "map"}
+TAKES_PART = {"check", "check-gcode", "allowable", "map", "flank"}
+TAKES_CUTTER = {"check", "check-gcode", "allowable", "map", "flank"}
 USES_STORE = {"check", "check-gcode", "batch", "report", "serve", "store prune"}
 READS_CONFIG = {"check", "check-gcode", "allowable", "batch", "call", "report", "serve",
-                "store prune"}
-HAS_JSON = {"check", "check-gcode", "allowable", "info"}
-HAS_OUTPUT = {"check", "map", "report", "call"}
+                "store prune", "flank"}
+HAS_JSON = {"check", "check-gcode", "allowable", "info", "flank"}
+HAS_OUTPUT = {"check", "map", "report", "call", "flank"}
 # spellings that another name replaced: none may be shown in any help
 RETIRED = {"--out", "--tools", "--json-out", "--part-file", "--gcode", "--cutters"}
 
@@ -62,8 +62,8 @@ def _shown(cmd: click.Command) -> dict[str, click.Option]:
 
 
 def test_the_tree_has_every_command():
-    assert set(COMMANDS) == {"allowable", "batch", "call", "check", "check-gcode", "info",
-                             "map", "report", "serve", "store prune", "warm"}
+    assert set(COMMANDS) == {"allowable", "batch", "call", "check", "check-gcode", "flank",
+                             "info", "map", "report", "serve", "store prune", "warm"}
 
 
 @pytest.mark.parametrize("name", sorted(COMMANDS))
@@ -161,7 +161,10 @@ def test_json_dash_puts_only_the_document_on_stdout(command, floor_job, tmp_path
     args = {"check": [str(floor_job), "--no-store"], "info": ["info", str(floor_job)],
             "check-gcode": ["check-gcode", "p.nc"],
             "allowable": ["allowable", "--part", part, "--cc", "cc.csv", "--cutter",
-                          "CUTTER/6,3"]}[command]
+                          "CUTTER/6,3"],
+            "flank": ["flank", str(REPO / "samples/flank/hypar.apt"), "--part",
+                      str(REPO / "samples/flank/hypar.json"), "--heights", "5",
+                      "--tolerance", "0.1"]}[command]
     dash = _pathcheck([*args, "--json", "-"], tmp_path)
     assert dash.returncode == 0, dash.stderr
     doc = json.loads(dash.stdout)
