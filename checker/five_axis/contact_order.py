@@ -174,7 +174,8 @@ class ContactPlan(NamedTuple):
     """Per CC point (N,): unit `axes (N, 3)` (part frame; nan where none is feasible), `lead`,
     `tilt` (rad, docs/MATH.md §10.1), `order` of contact of the derived pose (`Contact`),
     `raised` (rad) the lead added to make the pose gouge-free, `found` whether the judge
-    accepts the pose, `width` (mm) the flat-end strip's effective width and `ball` that of a
+    accepts the pose, `width` (mm) the flat-end strip's effective width at the derived (unraised)
+    pose and `ball` that of a
     ball end mill of the same diameter, both at the scallop height."""
 
     axes: np.ndarray
