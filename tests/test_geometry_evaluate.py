@@ -120,4 +120,4 @@ def test_invert_points_recovers_parameters():
 
 def test_bad_order_rejected():
     with pytest.raises(ValueError, match="order"):
-        evaluate(flat_patch([0, 0, 0], [1, 0, 0], [0, 1, 0]), [0.5], [0.5], order=3)
+        evaluate(flat_patch([0, 0, 0], [1, 0, 0], [0, 1, 0]), [0.5], [0.5], order=4)

@@ -1,4 +1,4 @@
-"""Re-orienting one multi-axis operation (docs/MATH.md §10; seeds 002 and 004): the tool axis
+"""Re-orienting one multi-axis operation (docs/MATH.md §10, §13; seeds 002 and 004): the tool axis
 along its cutting poses chosen inside each CC point's feasible set, smooth, and near the CAM's
 where it may.
 

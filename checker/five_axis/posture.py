@@ -1,4 +1,4 @@
-"""The tool axis along a 5-axis path, inside each point's feasible set (docs/MATH.md §11).
+"""The tool axis along a 5-axis path, inside each point's feasible set (docs/MATH.md §13).
 
 Three planners over the same candidates (each CC point's grid of tool axes, which of them are
 feasible, and a score per axis, larger better, e.g. the allowable cutter size):

@@ -23,6 +23,7 @@ _CHUNK = 512
 _NO_IDS = np.zeros(0, dtype=np.int64)
 _PARALLEL_MIN = 50_000  # fewer points: one thread (thread start-up costs more than it saves)
 _MAXDEG = 32
+_SLOTS = (1, 3, 6, 10)  # derivatives S, Su, Sv, ... up to each order
 
 
 @nb.njit(cache=True, inline="always")
@@ -90,18 +91,19 @@ def _basis_ders(knots, p, span, x, nd, ders, ndu, a, left, right):
 
 @nb.njit(cache=True)
 def _eval_range(G, sid, u, v, order, out, normals, i0, i1):
-    """out[i, m] for m = S, Su, Sv (, Suu, Suv, Svv) and unit normals[i] for i in [i0, i1),
-    point i on packed surface sid[i] (surface 0 when sid is empty); see `_Packed`."""
+    """out[i, m] for m = S, Su, Sv (, Suu, Suv, Svv (, Suuu, Suuv, Suvv, Svvv)) and unit
+    normals[i] for i in [i0, i1), point i on packed surface sid[i] (surface 0 when sid is
+    empty); see `_Packed`."""
     knots_u, ou, knots_v, ov, Hw, op, nus, nvs, degu, degv, signs = G
     # scratch shared by the points of this range
-    Nu = np.empty((3, _MAXDEG + 1))
-    Nv = np.empty((3, _MAXDEG + 1))
+    Nu = np.empty((4, _MAXDEG + 1))
+    Nv = np.empty((4, _MAXDEG + 1))
     ndu = np.empty((_MAXDEG + 1, _MAXDEG + 1))
     a = np.empty((2, _MAXDEG + 1))
     left = np.empty(_MAXDEG + 1)
     right = np.empty(_MAXDEG + 1)
-    A = np.empty((6, 4))
-    T = np.empty((3, 4))
+    A = np.empty((10, 4))
+    T = np.empty((4, 4))
     last = 0
     ku = knots_u[ou[0] : ou[1]]
     kv = knots_v[ov[0] : ov[1]]
@@ -136,6 +138,11 @@ def _eval_range(G, sid, u, v, order, out, normals, i0, i1):
                     A[3, m] += Nu[2, ii] * T[0, m]
                     A[4, m] += Nu[1, ii] * T[1, m]
                     A[5, m] += Nu[0, ii] * T[2, m]
+                if order >= 3:
+                    A[6, m] += Nu[3, ii] * T[0, m]
+                    A[7, m] += Nu[2, ii] * T[1, m]
+                    A[8, m] += Nu[1, ii] * T[2, m]
+                    A[9, m] += Nu[0, ii] * T[3, m]
         w = A[0, 3]
         for m in range(3):
             S = A[0, m] / w
@@ -148,6 +155,16 @@ def _eval_range(G, sid, u, v, order, out, normals, i0, i1):
                 out[i, 3, m] = (A[3, m] - 2.0 * A[1, 3] * Su - A[3, 3] * S) / w
                 out[i, 4, m] = (A[4, m] - A[1, 3] * Sv - A[2, 3] * Su - A[4, 3] * S) / w
                 out[i, 5, m] = (A[5, m] - 2.0 * A[2, 3] * Sv - A[5, 3] * S) / w
+            if order >= 3:  # Leibniz on A = w S (The NURBS Book eq. 4.20)
+                Suu, Suv, Svv = out[i, 3, m], out[i, 4, m], out[i, 5, m]
+                out[i, 6, m] = (A[6, m] - 3.0 * A[1, 3] * Suu - 3.0 * A[3, 3] * Su
+                                - A[6, 3] * S) / w
+                out[i, 7, m] = (A[7, m] - 2.0 * A[1, 3] * Suv - A[3, 3] * Sv - A[2, 3] * Suu
+                                - 2.0 * A[4, 3] * Su - A[7, 3] * S) / w
+                out[i, 8, m] = (A[8, m] - 2.0 * A[2, 3] * Suv - A[5, 3] * Su - A[1, 3] * Svv
+                                - 2.0 * A[4, 3] * Sv - A[8, 3] * S) / w
+                out[i, 9, m] = (A[9, m] - 3.0 * A[2, 3] * Svv - 3.0 * A[5, 3] * Sv
+                                - A[9, 3] * S) / w
         nx = out[i, 1, 1] * out[i, 2, 2] - out[i, 1, 2] * out[i, 2, 1]
         ny = out[i, 1, 2] * out[i, 2, 0] - out[i, 1, 0] * out[i, 2, 2]
         nz = out[i, 1, 0] * out[i, 2, 1] - out[i, 1, 1] * out[i, 2, 0]
@@ -173,8 +190,9 @@ def _eval_parallel(G, sid, u, v, order, out, normals):
 @dataclass
 class SurfaceEval:
     """Evaluation at N parameter pairs: `points`, first derivatives `du`, `dv` (mm per unit
-    parameter), unit `normals` (out of the material), and with order=2 `duu`, `duv`, `dvv`;
-    all (N, 3) in the part frame. Normals are exact limits at degenerate points (poles)."""
+    parameter), unit `normals` (out of the material), with order >= 2 `duu`, `duv`, `dvv` and
+    with order 3 `duuu`, `duuv`, `duvv`, `dvvv`; all (N, 3) in the part frame. Normals are
+    exact limits at degenerate points (poles)."""
 
     points: np.ndarray
     du: np.ndarray
@@ -183,6 +201,10 @@ class SurfaceEval:
     duu: np.ndarray | None = None
     duv: np.ndarray | None = None
     dvv: np.ndarray | None = None
+    duuu: np.ndarray | None = None
+    duuv: np.ndarray | None = None
+    duvv: np.ndarray | None = None
+    dvvv: np.ndarray | None = None
 
 
 @dataclass
@@ -250,10 +272,10 @@ def _packed(owner: Surface | Part, surfaces: list[Surface]) -> _Packed:
 
 
 def _run(G: _Packed, sid: np.ndarray, u: np.ndarray, v: np.ndarray, order: int):
-    if order not in (1, 2):
-        raise ValueError(f"order must be 1 or 2, got {order}")
+    if order not in (1, 2, 3):
+        raise ValueError(f"order must be 1, 2 or 3, got {order}")
     n = u.shape[0]
-    out = np.empty((n, 3 * order, 3))
+    out = np.empty((n, _SLOTS[order], 3))
     normals = np.empty((n, 3))
     if n >= _PARALLEL_MIN:
         _eval_parallel(G, sid, u, v, order, out, normals)
@@ -293,15 +315,21 @@ def _fix_degenerate(surface: Surface, u: np.ndarray, v: np.ndarray, normals: np.
         bad[idx[ok]] = False
 
 
+def _surface_eval(out: np.ndarray, normals: np.ndarray) -> SurfaceEval:
+    ev = SurfaceEval(out[:, 0], out[:, 1], out[:, 2], normals)
+    if out.shape[1] > 3:
+        ev.duu, ev.duv, ev.dvv = out[:, 3], out[:, 4], out[:, 5]
+    if out.shape[1] > 6:
+        ev.duuu, ev.duuv, ev.duvv, ev.dvvv = out[:, 6], out[:, 7], out[:, 8], out[:, 9]
+    return ev
+
+
 def evaluate(surface: Surface, u, v, order: int = 1) -> SurfaceEval:
-    """Evaluate `surface` at parameter arrays `u`, `v` (N,); order 1 or 2 derivatives."""
+    """Evaluate `surface` at parameter arrays `u`, `v` (N,); derivatives of order 1, 2 or 3."""
     u, v = _params(u, v)
     out, normals = _raw_eval(surface, u, v, order)
     _fix_degenerate(surface, u, v, normals)
-    ev = SurfaceEval(out[:, 0], out[:, 1], out[:, 2], normals)
-    if order == 2:
-        ev.duu, ev.duv, ev.dvv = out[:, 3], out[:, 4], out[:, 5]
-    return ev
+    return _surface_eval(out, normals)
 
 
 def evaluate_mixed(part: Part, surface_ids, u, v, order: int = 1) -> SurfaceEval:
@@ -318,10 +346,7 @@ def evaluate_mixed(part: Part, surface_ids, u, v, order: int = 1) -> SurfaceEval
     for sid in np.unique(ids[bad]):  # poles only: a handful of points, if any
         sel = bad[ids[bad] == sid]
         normals[sel] = evaluate(part.surfaces[int(sid)], u[sel], v[sel]).normals
-    ev = SurfaceEval(out[:, 0], out[:, 1], out[:, 2], normals)
-    if order == 2:
-        ev.duu, ev.duv, ev.dvv = out[:, 3], out[:, 4], out[:, 5]
-    return ev
+    return _surface_eval(out, normals)
 
 
 def curvatures_of(ev: SurfaceEval) -> Curvatures:
