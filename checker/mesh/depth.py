@@ -891,17 +891,31 @@ def _frame(ax, ay, az):
 
 
 @nb.njit(cache=True)
+def _to_frame(tv, t, px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, T):
+    """Triangle t's vertices in the pose's tool frame (tip (px, py, pz), axes e1, e2, e) into
+    T (3, 3)."""
+    for v in range(3):
+        dx, dy, dz = tv[t, v, 0] - px, tv[t, v, 1] - py, tv[t, v, 2] - pz
+        T[v, 0] = dx * e1x + dy * e1y + dz * e1z
+        T[v, 1] = dx * e2x + dy * e2y + dz * e2z
+        T[v, 2] = dx * ex + dy * ey + dz * ez
+
+
+@nb.njit(cache=True)
 def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tn, tid, mlo,
           mhi, prof, nprof, rho, kind, tool_ptr, pose_tool, tips, axes, floor, reach, method,
           out_d, out_piece, out_tri, out_pt, stats, cand, bnd, order, stack, P, Pc, cn, cc, T, W,
-          A, lam, res, buf_a, buf_b, wit, ev, br, bq):
-    """One pose: the branch and bound over the pieces and the BVH's candidates. Returns the
-    candidate buffers (grown when needed)."""
+          A, lam, res, buf_a, buf_b, wit, ev, br, bq, warm):
+    """One pose: the branch and bound over the pieces and the BVH's candidates, started from
+    the value at the point nearest the axis of triangle `warm[0]` (tree order; the previous
+    pose's deepest, -1: none), a lower bound that makes the BVH query and the bounds cull
+    more. Returns the candidate buffers (grown when needed); the deepest triangle in `warm`."""
     px, py, pz = tips[i, 0], tips[i, 1], tips[i, 2]
     e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez = _frame(axes[i, 0], axes[i, 1], axes[i, 2])
     best = floor
     best_tri = -1
     best_piece = -1
+    best_t = -1
     bx = by = bz = np.nan
     # highest point of the mesh's box above the tip
     hm = -np.inf
@@ -934,6 +948,18 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
             rmax = max(rmax, Pc[k, 0])
             hlo = min(hlo, Pc[k, 1])
             hhi = max(hhi, Pc[k, 1])
+        if warm[0] >= 0:  # a lower bound first: the previous pose's deepest triangle
+            _to_frame(tv, warm[0], px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, T)
+            _upper(T, cn, cc, nc, solid, rp, rmax, hlo, hhi, bq)
+            _lower(T, Pc, mc, cn, cc, nc, solid, rp, bq)
+            if bq[1] > best:
+                best = bq[1]
+                best_t = warm[0]
+                best_tri = tid[best_t]
+                best_piece = kind[p]
+                bx, by, bz = (px + bq[3] * e1x + bq[4] * e2x + bq[5] * ex,
+                              py + bq[3] * e1y + bq[4] * e2y + bq[5] * ey,
+                              pz + bq[3] * e1z + bq[4] * e2z + bq[5] * ez)
         pad = rmax + max(rp - best, 0.0) + 1e-9
         s0x, s0y, s0z = px + hlo * ex, py + hlo * ey, pz + hlo * ez
         L = hhi - hlo
@@ -949,11 +975,7 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
         nkeep = 0
         for q in range(k_c):
             t = cand[q]
-            for v in range(3):
-                dx, dy, dz = tv[t, v, 0] - px, tv[t, v, 1] - py, tv[t, v, 2] - pz
-                T[v, 0] = dx * e1x + dy * e1y + dz * e1z
-                T[v, 1] = dx * e2x + dy * e2y + dz * e2z
-                T[v, 2] = dx * ex + dy * ey + dz * ez
+            _to_frame(tv, t, px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, T)
             nx = tn[t, 0] * e1x + tn[t, 1] * e1y + tn[t, 2] * e1z
             ny = tn[t, 0] * e2x + tn[t, 1] * e2y + tn[t, 2] * e2z
             nz = tn[t, 0] * ex + tn[t, 1] * ey + tn[t, 2] * ez
@@ -995,6 +1017,7 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
             _lower(T, Pc, mc, cn, cc, nc, solid, rp, bq)
             if bq[1] > best:
                 best = bq[1]
+                best_t = t
                 best_tri = tid[t]
                 best_piece = kind[p]
                 bx, by, bz = (px + bq[3] * e1x + bq[4] * e2x + bq[5] * ex,
@@ -1010,6 +1033,7 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
                              buf_a, buf_b, wit)
             if val > best:
                 best = val
+                best_t = t
                 best_tri = tid[t]
                 best_piece = kind[p]
                 bx, by, bz = (px + wit[0] * e1x + wit[1] * e2x + wit[2] * ex,
@@ -1019,6 +1043,7 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
     out_piece[i] = best_piece if best > 0.0 else -1
     out_tri[i] = best_tri
     out_pt[i, 0], out_pt[i, 1], out_pt[i, 2] = bx, by, bz
+    warm[0] = best_t
     return cand, bnd, order
 
 
@@ -1054,12 +1079,13 @@ def _poses(node_lo, node_hi, node_left, node_right, node_start, node_count, tv, 
         bq = np.empty(NBOUND)
         ev = np.zeros(7)
         br = np.empty((NSTACK, NBR))
+        warm = np.full(1, -1, dtype=np.int64)
         for i in range(i0, i1):
             cand, bnd, order = _pose(
                 i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tn, tid,
                 mlo, mhi, prof, nprof, rho, kind, tool_ptr, pose_tool, tips, axes, floor, reach,
                 method, out_d, out_piece, out_tri, out_pt, stats, cand, bnd, order, stack, P, Pc,
-                cn, cc, T, W, A, lam, res, buf_a, buf_b, wit, ev, br, bq)
+                cn, cc, T, W, A, lam, res, buf_a, buf_b, wit, ev, br, bq, warm)
     return out_d, out_piece, out_tri, out_pt, stats
 
 
