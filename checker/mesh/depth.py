@@ -948,6 +948,7 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
             rmax = max(rmax, Pc[k, 0])
             hlo = min(hlo, Pc[k, 1])
             hhi = max(hhi, Pc[k, 1])
+        done = -1
         if warm[0] >= 0:  # a lower bound first: the previous pose's deepest triangle
             _to_frame(tv, warm[0], px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, T)
             _upper(T, cn, cc, nc, solid, rp, rmax, hlo, hhi, bq)
@@ -960,6 +961,22 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
                 bx, by, bz = (px + bq[3] * e1x + bq[4] * e2x + bq[5] * ex,
                               py + bq[3] * e1y + bq[4] * e2y + bq[5] * ey,
                               pz + bq[3] * e1z + bq[4] * e2z + bq[5] * ez)
+            if bq[0] > best + SLICE_EPS:  # its exact value, and it is not examined again
+                stats[i, 2] += 1
+                if method == 0:
+                    val = _exact_slice(T, Pc, mc, cn, cc, nc, solid, rp, best, ev, br, wit)
+                else:
+                    val = _exact(T, Pc, mc, cn, cc, nc, solid, rp, best, bq, W, A, lam, res,
+                                 buf_a, buf_b, wit)
+                if val > best:
+                    best = val
+                    best_t = warm[0]
+                    best_tri = tid[best_t]
+                    best_piece = kind[p]
+                    bx, by, bz = (px + wit[0] * e1x + wit[1] * e2x + wit[2] * ex,
+                                  py + wit[0] * e1y + wit[1] * e2y + wit[2] * ey,
+                                  pz + wit[0] * e1z + wit[1] * e2z + wit[2] * ez)
+            done = warm[0]
         pad = rmax + max(rp - best, 0.0) + 1e-9
         s0x, s0y, s0z = px + hlo * ex, py + hlo * ey, pz + hlo * ez
         L = hhi - hlo
@@ -975,6 +992,8 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
         nkeep = 0
         for q in range(k_c):
             t = cand[q]
+            if t == done:
+                continue
             _to_frame(tv, t, px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, T)
             nx = tn[t, 0] * e1x + tn[t, 1] * e1y + tn[t, 2] * e1z
             ny = tn[t, 0] * e2x + tn[t, 1] * e2y + tn[t, 2] * e2z
