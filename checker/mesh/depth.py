@@ -40,6 +40,9 @@ minus the best value so far, i.e. at most `reach` of clearance); each gets cheap
 distance from the axis to T's shadow along it; and T's plane against K's support function) and
 the exact value is computed only for triangles whose bound beats the best value so far, in order
 of that bound (the value at their point nearest the axis is computed first, as a lower bound).
+Poses come in runs along the moves: each pose starts from the exact value of the previous pose's
+deepest triangle (one of the triangles it would examine anyway), so the first query already
+uses a near-final best value (the maximum, hence the depth, is the same in any order).
 An unbounded piece is clipped per pose at a height above the mesh's box that keeps every
 distance within `reach` and every depth.
 
