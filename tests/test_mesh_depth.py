@@ -374,9 +374,10 @@ def test_bvh_equals_every_triangle(axis, name):
 
 @pytest.mark.parametrize("name", ["ball", "bull+shank+holder"])
 def test_a_run_of_poses_equals_each_pose_alone(name):
-    """Poses in one call start from the previous pose's deepest triangle: along a path that
-    crosses the triangles (small steps, and jumps), the depths equal those of each pose alone
-    (one pose per call: nothing to start from), and the triangle reported has that depth."""
+    """A pose's depth does not depend on the other poses of the call (a branch and bound that
+    carried anything from pose to pose would show here): along a path that crosses the
+    triangles (small steps, and jumps), the depths equal those of each pose alone, and the
+    triangle reported has that depth by itself."""
     cutter = CUTTERS.get(name) or HOLDERS[name]
     rng = np.random.default_rng(11)
     v, t = soup(rng, 400)

@@ -40,10 +40,6 @@ minus the best value so far, i.e. at most `reach` of clearance); each gets cheap
 distance from the axis to T's shadow along it; and T's plane against K's support function) and
 the exact value is computed only for triangles whose bound beats the best value so far, in order
 of that bound (the value at their point nearest the axis is computed first, as a lower bound).
-Poses come in runs along the moves: each pose prunes from the start below the value of the
-previous pose's deepest triangle at its point nearest the axis (less WARM_MARGIN, 1e-9 mm), so
-the first query already uses a near-final value; the triangles that reach it are examined as
-without it, in the same order, so the depth and the deepest triangle (at ties too) are the same.
 An unbounded piece is clipped per pose at a height above the mesh's box that keeps every
 distance within `reach` and every depth.
 
@@ -66,7 +62,6 @@ GJK_EPS = 1e-11     # mm: GJK stops when its upper and lower distance bounds are
 GJK_TOUCH = 1e-10   # mm: a distance below this counts as touching (t* then has this error)
 GJK_ITER = 100
 EPS_T = 1e-10       # mm: width of the final bracket on the erosion depth t*
-WARM_MARGIN = 1e-9  # mm: the warm start prunes this far below its value (ties still examined)
 NBOUND = 16         # per candidate: upper, lower bound, t* bound, point xyz, triangle (9)
 _PV = 24            # profile vertices after clipping, at most (MAXV + clips)
 EPS_H = 1e-9        # as checker.kernels.EPS_H: a normal this close to the axis is vertical
@@ -896,34 +891,17 @@ def _frame(ax, ay, az):
 
 
 @nb.njit(cache=True)
-def _to_frame(tv, t, px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, T):
-    """Triangle t's vertices in the pose's tool frame (tip (px, py, pz), axes e1, e2, e) into
-    T (3, 3)."""
-    for v in range(3):
-        dx, dy, dz = tv[t, v, 0] - px, tv[t, v, 1] - py, tv[t, v, 2] - pz
-        T[v, 0] = dx * e1x + dy * e1y + dz * e1z
-        T[v, 1] = dx * e2x + dy * e2y + dz * e2z
-        T[v, 2] = dx * ex + dy * ey + dz * ez
-
-
-@nb.njit(cache=True)
 def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tn, tid, mlo,
           mhi, prof, nprof, rho, kind, tool_ptr, pose_tool, tips, axes, floor, reach, method,
           out_d, out_piece, out_tri, out_pt, stats, cand, bnd, order, stack, P, Pc, cn, cc, T, W,
-          A, lam, res, buf_a, buf_b, wit, ev, br, bq, warm):
-    """One pose: the branch and bound over the pieces and the BVH's candidates, pruning below
-    the value at the point nearest the axis of triangle `warm[0]` (tree order; the previous
-    pose's deepest, -1: none) less WARM_MARGIN: the BVH query and the bounds cull more, while
-    the triangles that reach that value are still examined in the same order as without it
-    (the same deepest triangle at ties). Returns the candidate buffers (grown when needed); the
-    deepest triangle in `warm`."""
+          A, lam, res, buf_a, buf_b, wit, ev, br, bq):
+    """One pose: the branch and bound over the pieces and the BVH's candidates. Returns the
+    candidate buffers (grown when needed)."""
     px, py, pz = tips[i, 0], tips[i, 1], tips[i, 2]
     e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez = _frame(axes[i, 0], axes[i, 1], axes[i, 2])
     best = floor
     best_tri = -1
     best_piece = -1
-    best_t = -1
-    cut = -np.inf  # prune below this (a value some triangle is known to reach, less a margin)
     bx = by = bz = np.nan
     # highest point of the mesh's box above the tip
     hm = -np.inf
@@ -956,12 +934,7 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
             rmax = max(rmax, Pc[k, 0])
             hlo = min(hlo, Pc[k, 1])
             hhi = max(hhi, Pc[k, 1])
-        if warm[0] >= 0:  # a lower bound to prune with: the previous pose's deepest triangle
-            _to_frame(tv, warm[0], px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, T)
-            _upper(T, cn, cc, nc, solid, rp, rmax, hlo, hhi, bq)
-            _lower(T, Pc, mc, cn, cc, nc, solid, rp, bq)
-            cut = max(cut, bq[1] - WARM_MARGIN)
-        pad = rmax + max(rp - max(best, cut), 0.0) + 1e-9
+        pad = rmax + max(rp - best, 0.0) + 1e-9
         s0x, s0y, s0z = px + hlo * ex, py + hlo * ey, pz + hlo * ez
         L = hhi - hlo
         cand, k_c = query_capsule(node_lo, node_hi, node_left, node_right, node_start,
@@ -976,17 +949,21 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
         nkeep = 0
         for q in range(k_c):
             t = cand[q]
-            _to_frame(tv, t, px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, T)
+            for v in range(3):
+                dx, dy, dz = tv[t, v, 0] - px, tv[t, v, 1] - py, tv[t, v, 2] - pz
+                T[v, 0] = dx * e1x + dy * e1y + dz * e1z
+                T[v, 1] = dx * e2x + dy * e2y + dz * e2z
+                T[v, 2] = dx * ex + dy * ey + dz * ez
             nx = tn[t, 0] * e1x + tn[t, 1] * e1y + tn[t, 2] * e1z
             ny = tn[t, 0] * e2x + tn[t, 1] * e2y + tn[t, 2] * e2z
             nz = tn[t, 0] * ex + tn[t, 1] * ey + tn[t, 2] * ez
             up = min(_quick_upper(T, cn, cc, nc, solid, rp, rmax, hlo, hhi),
                      _plane_upper(T, nx, ny, nz, Pc, mc, rp))
-            if up <= max(best, cut):
+            if up <= best:
                 continue
             _upper(T, cn, cc, nc, solid, rp, rmax, hlo, hhi, bnd[nkeep])
             bnd[nkeep, 0] = min(bnd[nkeep, 0], up)
-            if bnd[nkeep, 0] <= max(best, cut):
+            if bnd[nkeep, 0] <= best:
                 continue
             for v in range(3):
                 bnd[nkeep, 6 + 3 * v] = T[v, 0]
@@ -1003,7 +980,7 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
             for j in range(1, nleft):
                 if bnd[j, 0] > ub:
                     ub, jb = bnd[j, 0], j
-            if ub <= max(best, cut) + EPS_T:
+            if ub <= best + EPS_T:
                 break
             t = order[jb]
             for c in range(NBOUND):
@@ -1018,24 +995,21 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
             _lower(T, Pc, mc, cn, cc, nc, solid, rp, bq)
             if bq[1] > best:
                 best = bq[1]
-                best_t = t
                 best_tri = tid[t]
                 best_piece = kind[p]
                 bx, by, bz = (px + bq[3] * e1x + bq[4] * e2x + bq[5] * ex,
                               py + bq[3] * e1y + bq[4] * e2y + bq[5] * ey,
                               pz + bq[3] * e1z + bq[4] * e2z + bq[5] * ez)
-            if ub <= max(best, cut) + SLICE_EPS:
+            if ub <= best + SLICE_EPS:
                 continue
             stats[i, 2] += 1
             if method == 0:
-                val = _exact_slice(T, Pc, mc, cn, cc, nc, solid, rp, max(best, cut), ev, br,
-                                   wit)
+                val = _exact_slice(T, Pc, mc, cn, cc, nc, solid, rp, best, ev, br, wit)
             else:
-                val = _exact(T, Pc, mc, cn, cc, nc, solid, rp, max(best, cut), bq, W, A, lam,
-                             res, buf_a, buf_b, wit)
+                val = _exact(T, Pc, mc, cn, cc, nc, solid, rp, best, bq, W, A, lam, res,
+                             buf_a, buf_b, wit)
             if val > best:
                 best = val
-                best_t = t
                 best_tri = tid[t]
                 best_piece = kind[p]
                 bx, by, bz = (px + wit[0] * e1x + wit[1] * e2x + wit[2] * ex,
@@ -1045,7 +1019,6 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
     out_piece[i] = best_piece if best > 0.0 else -1
     out_tri[i] = best_tri
     out_pt[i, 0], out_pt[i, 1], out_pt[i, 2] = bx, by, bz
-    warm[0] = best_t
     return cand, bnd, order
 
 
@@ -1081,13 +1054,12 @@ def _poses(node_lo, node_hi, node_left, node_right, node_start, node_count, tv, 
         bq = np.empty(NBOUND)
         ev = np.zeros(7)
         br = np.empty((NSTACK, NBR))
-        warm = np.full(1, -1, dtype=np.int64)
         for i in range(i0, i1):
             cand, bnd, order = _pose(
                 i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tn, tid,
                 mlo, mhi, prof, nprof, rho, kind, tool_ptr, pose_tool, tips, axes, floor, reach,
                 method, out_d, out_piece, out_tri, out_pt, stats, cand, bnd, order, stack, P, Pc,
-                cn, cc, T, W, A, lam, res, buf_a, buf_b, wit, ev, br, bq, warm)
+                cn, cc, T, W, A, lam, res, buf_a, buf_b, wit, ev, br, bq)
     return out_d, out_piece, out_tri, out_pt, stats
 
 
