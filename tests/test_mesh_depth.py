@@ -372,6 +372,33 @@ def test_bvh_equals_every_triangle(axis, name):
     assert (res.depth > 0).sum() >= 5 and (res.depth < 0).sum() >= 5
 
 
+@pytest.mark.parametrize("name", ["ball", "bull+shank+holder"])
+def test_a_run_of_poses_equals_each_pose_alone(name):
+    """A pose's depth does not depend on the other poses of the call (a branch and bound that
+    carried anything from pose to pose would show here): along a path that crosses the
+    triangles (small steps, and jumps), the depths equal those of each pose alone, and the
+    triangle reported has that depth by itself."""
+    cutter = CUTTERS.get(name) or HOLDERS[name]
+    rng = np.random.default_rng(11)
+    v, t = soup(rng, 400)
+    idx = MeshIndex.build(v, t)
+    pc = tool_pieces(cutter, with_holder=True)
+    s = np.linspace(0.0, 1.0, 300)[:, None]
+    tips = np.r_[(1 - s) * [-45.0, -30.0, -20.0] + s * [45.0, 35.0, 30.0],
+                 rng.uniform(-45, 45, (30, 3))]
+    axis = np.array([math.sin(0.4), 0.2, math.cos(0.4)])
+    run = pose_depths(idx, pc, tips, axis, reach=2.0)
+    alone = [pose_depths(idx, pc, tips[i:i + 1], axis, reach=2.0) for i in range(len(tips))]
+    assert np.allclose(run.depth, [a.depth[0] for a in alone], atol=1e-9, rtol=0)
+    hit = np.flatnonzero(run.triangle >= 0)
+    for i in hit[::7]:
+        k = run.triangle[i]
+        single = pose_depths(MeshIndex.build(v[t[k]], np.arange(3)[None, :]), pc, tips[i:i + 1],
+                             axis, reach=2.0)
+        assert single.depth[0] == pytest.approx(run.depth[i], abs=1e-9)
+    assert (run.depth > 0).sum() >= 20 and hit.size >= 60
+
+
 @pytest.mark.parametrize("name", ["flat", "ball", "bullnose", "tapered_bull", "drill",
                                   "bull+shank+holder"])
 def test_gjk_method_agrees_with_the_slice_method(name):
