@@ -19,7 +19,6 @@ from checker.four_axis.orientation import (
     greedy_smoothing,
     interval_optima,
     shortest_path_orientation,
-    total_rotation,
 )
 
 
@@ -31,10 +30,6 @@ class Orientations:
     best: BestB
     chosen: Orientation
     greedy: Orientation
-
-    @property
-    def original_rotation(self) -> float:
-        return total_rotation(self.original)
 
 
 def _take(a: np.ndarray | None, rows: np.ndarray) -> np.ndarray | None:

@@ -56,7 +56,7 @@ import numba as nb
 import numpy as np
 
 from checker.mesh.bvh import STACK, MeshIndex, query_capsule
-from checker.mesh.tool import ToolPieces, body_profiles, body_top
+from checker.mesh.tool import ToolPieces, body_profiles, body_top, drop_repeats
 
 GJK_EPS = 1e-11     # mm: GJK stops when its upper and lower distance bounds are this close
 GJK_TOUCH = 1e-10   # mm: a distance below this counts as touching (t* then has this error)
@@ -103,18 +103,7 @@ def _clip(P, m, nr, nh, c, out):
             out[k, 0] = P[i, 0] + s * (P[j, 0] - P[i, 0])
             out[k, 1] = P[i, 1] + s * (P[j, 1] - P[i, 1])
             k += 1
-    # drop consecutive duplicates (wrapping)
-    q = 0
-    for i in range(k):
-        if q > 0 and abs(out[i, 0] - out[q - 1, 0]) <= 1e-13 and \
-                abs(out[i, 1] - out[q - 1, 1]) <= 1e-13:
-            continue
-        out[q, 0], out[q, 1] = out[i, 0], out[i, 1]
-        q += 1
-    while q > 1 and abs(out[q - 1, 0] - out[0, 0]) <= 1e-13 and \
-            abs(out[q - 1, 1] - out[0, 1]) <= 1e-13:
-        q -= 1
-    return q
+    return drop_repeats(out, k, 1e-13)
 
 
 @nb.njit(cache=True)
@@ -158,18 +147,8 @@ def _erode(P, m, cn, cc, nc, t, buf_a, buf_b):
 
 
 @nb.njit(cache=True)
-def _sd(P, m, cn, cc, nc, solid, t, r, h):
-    """Signed distance from (r, h) (r >= 0) to the profile of K (-) tB (P[:m] is that profile;
-    cn, cc the sides of K): negative inside (minus the depth min_i (c_i - t - a_i r - b_i h)),
-    else the distance to the polygon; and the nearest profile point (the point itself inside)."""
-    if solid:
-        g = np.inf
-        for i in range(nc):
-            g = min(g, cc[i] - t - (cn[i, 0] * r + cn[i, 1] * h))
-        if g >= 0.0:
-            return -g, r, h
-    if m == 0:
-        return np.inf, r, h
+def _nearest_on_profile(P, m, r, h):
+    """The point (qr, qh) of the closed polygon P[:m] nearest (r, h), and its squared distance."""
     best = np.inf
     qr, qh = P[0, 0], P[0, 1]
     for i in range(m):
@@ -185,6 +164,23 @@ def _sd(P, m, cn, cc, nc, solid, t, r, h):
         d2 = (r - pr) ** 2 + (h - ph) ** 2
         if d2 < best:
             best, qr, qh = d2, pr, ph
+    return best, qr, qh
+
+
+@nb.njit(cache=True)
+def _sd(P, m, cn, cc, nc, solid, t, r, h):
+    """Signed distance from (r, h) (r >= 0) to the profile of K (-) tB (P[:m] is that profile;
+    cn, cc the sides of K): negative inside (minus the depth min_i (c_i - t - a_i r - b_i h)),
+    else the distance to the polygon; and the nearest profile point (the point itself inside)."""
+    if solid:
+        g = np.inf
+        for i in range(nc):
+            g = min(g, cc[i] - t - (cn[i, 0] * r + cn[i, 1] * h))
+        if g >= 0.0:
+            return -g, r, h
+    if m == 0:
+        return np.inf, r, h
+    best, qr, qh = _nearest_on_profile(P, m, r, h)
     return math.sqrt(best), qr, qh
 
 
@@ -643,21 +639,7 @@ def _sd_grad(P, m, cn, cc, nc, solid, r, h):
                 g, ia = gi, i
         if g >= 0.0:
             return -g, cn[ia, 0], cn[ia, 1]
-    best = np.inf
-    qr, qh = P[0, 0], P[0, 1]
-    for i in range(m):
-        j = i + 1 if i + 1 < m else 0
-        ar, ah = P[i, 0], P[i, 1]
-        er, eh = P[j, 0] - ar, P[j, 1] - ah
-        L2 = er * er + eh * eh
-        s = 0.0
-        if L2 > 0.0:
-            s = ((r - ar) * er + (h - ah) * eh) / L2
-            s = min(1.0, max(0.0, s))
-        pr, ph = ar + s * er, ah + s * eh
-        d2 = (r - pr) ** 2 + (h - ph) ** 2
-        if d2 < best:
-            best, qr, qh = d2, pr, ph
+    best, qr, qh = _nearest_on_profile(P, m, r, h)
     d = math.sqrt(best)
     if d > 0.0:
         return d, (r - qr) / d, (h - qh) / d

@@ -52,12 +52,22 @@ class ToolPieces:
     def __len__(self) -> int:
         return len(self.kind)
 
-    @property
-    def reach_up(self) -> float:
-        """Height (mm) above the tip of the highest point of the tool (UNBOUNDED and more when
-        the body is unbounded)."""
-        return float(max(self.prof[p, : self.nprof[p], 1].max() + self.rho[p]
-                         for p in range(len(self))))
+
+@nb.njit(cache=True)
+def drop_repeats(pts: np.ndarray, k: int, tol: float) -> int:
+    """Compact the closed polygon pts[:k] (2-D) in place: a vertex within `tol` (mm, in each
+    coordinate) of the one before it is dropped, also across the wrap; return the count left."""
+    q = 0
+    for i in range(k):
+        if q > 0 and abs(pts[i, 0] - pts[q - 1, 0]) <= tol and \
+                abs(pts[i, 1] - pts[q - 1, 1]) <= tol:
+            continue
+        pts[q, 0], pts[q, 1] = pts[i, 0], pts[i, 1]
+        q += 1
+    while q > 1 and abs(pts[q - 1, 0] - pts[0, 0]) <= tol and \
+            abs(pts[q - 1, 1] - pts[0, 1]) <= tol:
+        q -= 1
+    return q
 
 
 @nb.njit(cache=True)
@@ -69,22 +79,11 @@ def body_profile(r: float, R: float, psi: float, theta: float, top: float,
     h0 = r / math.cos(psi)                      # the lower side meets the axis
     ho = R * math.tan(psi) + h0                 # corner centre height
     top = max(top, ho)
-    cand = np.empty((4, 2))
-    cand[0, 0], cand[0, 1] = 0.0, h0
-    cand[1, 0], cand[1, 1] = R, ho
-    cand[2, 0], cand[2, 1] = R + (top - ho) * math.tan(theta), top
-    cand[3, 0], cand[3, 1] = 0.0, top
-    m = 0
-    for k in range(4):
-        if m > 0 and abs(cand[k, 0] - out[m - 1, 0]) <= 1e-12 and \
-                abs(cand[k, 1] - out[m - 1, 1]) <= 1e-12:
-            continue
-        out[m, 0], out[m, 1] = cand[k, 0], cand[k, 1]
-        m += 1
-    while m > 1 and abs(out[m - 1, 0] - out[0, 0]) <= 1e-12 and \
-            abs(out[m - 1, 1] - out[0, 1]) <= 1e-12:
-        m -= 1
-    return m
+    out[0, 0], out[0, 1] = 0.0, h0
+    out[1, 0], out[1, 1] = R, ho
+    out[2, 0], out[2, 1] = R + (top - ho) * math.tan(theta), top
+    out[3, 0], out[3, 1] = 0.0, top
+    return drop_repeats(out, 4, 1e-12)
 
 
 @nb.njit(cache=True)
