@@ -10,11 +10,11 @@ the process CPU time of that run (less sensitive to other load on the machine)."
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
+from benchmarks.timing import best_of
 from checker.apt import read_cl
 from checker.b_axis import axis_for_b
 from checker.cutter import parse_cutter
@@ -27,16 +27,6 @@ JOB = Path(__file__).resolve().parents[1] / "samples" / "compressor" / "compress
 CUTTER = "CUTTER/6,3"
 B_PAIRS = 6  # random B values per CC point in the best-B case
 PER_AXIS_ROWS = 60  # rows timed one call each
-
-
-def _best(fn, repeats: int) -> tuple[float, float]:
-    """(best wall s, CPU s of that run)."""
-    runs = []
-    for _ in range(repeats):
-        w, c = time.perf_counter(), time.process_time()
-        fn()
-        runs.append((time.perf_counter() - w, time.process_time() - c))
-    return min(runs)
 
 
 def main() -> None:
@@ -75,7 +65,7 @@ def main() -> None:
     run(all_rows[:8], axes[:8])()  # compile
     print(f"{'case':28} {'rows':>7} {'best s':>7} {'rows/s':>7} {'per CPU s':>9}")
     for name, rows, fn in cases:
-        wall, cpu = _best(fn, repeats)
+        wall, _, cpu = best_of(fn, repeats)
         print(f"{name:28} {rows:7d} {wall:7.2f} {rows / wall:7.0f} {rows / cpu:9.0f}")
 
 

@@ -8,13 +8,13 @@
 
 from __future__ import annotations
 
-import statistics
 import time
 from pathlib import Path
 
 import numpy as np
 from geomdl import NURBS
 
+from benchmarks.timing import best_of
 from checker.geometry.evaluate import evaluate, evaluate_mixed, principal_curvatures
 from checker.part import Part, Surface
 
@@ -29,18 +29,6 @@ def degree5_patch(seed: int = 0, n: int = 8) -> Surface:
     grid = np.stack(np.meshgrid(np.linspace(0, 100, n), np.linspace(0, 80, n), indexing="ij"), -1)
     ctrl = np.concatenate([grid, rng.normal(scale=5.0, size=(n, n, 1))], axis=2)
     return Surface(0, "patch", "nurbs", 5, 5, k, k, ctrl, rng.uniform(0.6, 1.6, (n, n)))
-
-
-def best_of(fn, repeat: int = 5) -> tuple[float, float, float]:
-    """(best wall s, median wall s, CPU s of the best run: all threads of the process)."""
-    runs = []
-    for _ in range(repeat):
-        t, c = time.perf_counter(), time.process_time()
-        fn()
-        runs.append((time.perf_counter() - t, time.process_time() - c))
-    walls = [w for w, _ in runs]
-    best = min(runs)
-    return best[0], statistics.median(walls), best[1]
 
 
 def geomdl_rate(s: Surface, u, v) -> float:
@@ -67,13 +55,14 @@ def main() -> None:
     evaluate(s, u[:10], v[:10])  # compile / load the cache outside the timing
     principal_curvatures(s, u[:10], v[:10])
     rows = []
-    rows.append(("points + normals, degree 5x5 rational", N, *best_of(lambda: evaluate(s, u, v))))
+    rows.append(("points + normals, degree 5x5 rational", N,
+                 *best_of(lambda: evaluate(s, u, v), 5)))
     n2 = N // 4
     rows.append(
         (
             "principal curvatures (order 2)",
             n2,
-            *best_of(lambda: principal_curvatures(s, u[:n2], v[:n2])),
+            *best_of(lambda: principal_curvatures(s, u[:n2], v[:n2]), 5),
         )
     )
     part = Part(surfaces=[degree5_patch(seed) for seed in range(50)])
@@ -81,7 +70,7 @@ def main() -> None:
         surf.id = i
     ids = rng.integers(0, 50, N)
     rows.append(
-        ("evaluate_mixed over 50 surfaces", N, *best_of(lambda: evaluate_mixed(part, ids, u, v)))
+        ("evaluate_mixed over 50 surfaces", N, *best_of(lambda: evaluate_mixed(part, ids, u, v), 5))
     )
     g_rate = geomdl_rate(s, u[:500], v[:500])
     rows.append(("geomdl 5.4 per point (derivatives + cross)", 500, *[500 / g_rate] * 3))

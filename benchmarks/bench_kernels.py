@@ -8,11 +8,10 @@ count used. Random CC points, normals and test points around them (mm); compile 
 
 from __future__ import annotations
 
-import time
-
 import numba
 import numpy as np
 
+from benchmarks.timing import best_of
 from checker.cutter import parse_cutter
 
 CUTTERS = {
@@ -32,16 +31,6 @@ def _normals(rng, m: int) -> np.ndarray:
     return np.stack([h * np.cos(a), h * np.sin(a), nz], axis=1)
 
 
-def _best(fn, runs: int = 3) -> float:
-    fn()
-    out = []
-    for _ in range(runs):
-        t0 = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t0)
-    return min(out)
-
-
 def main() -> None:
     rng = np.random.default_rng(0)
     p = rng.uniform(-15, 15, (K, 3))
@@ -51,7 +40,7 @@ def main() -> None:
     print(f"{'cutter':<14}{'pairs':>12}   (pairs per second)")
     for kind, text in CUTTERS.items():
         c = parse_cutter(text)
-        t_pairs = _best(lambda c=c: c.imaginary_size(p, cc, n))
+        t_pairs = best_of(lambda c=c: c.imaginary_size(p, cc, n), warm=True).wall
         print(f"{kind:<14}{K / t_pairs / 1e6:>12.1f} M")
 
 

@@ -22,6 +22,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from benchmarks.timing import best_of
 from checker.apt import read_cl
 from checker.cutter import parse_cutter
 from checker.geometry.stl_io import read_stl
@@ -32,16 +33,6 @@ REALDATA = Path(__file__).resolve().parents[2] / "shared" / "realdata" / "amorim
 MESHES = ("RotateThin", "Interface-glue")
 REACH = 1.0
 NEAR = 20_000
-
-
-def _best(fn, runs: int = 3) -> float:
-    fn()
-    out = []
-    for _ in range(runs):
-        t0 = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t0)
-    return min(out)
 
 
 def near_poses(mesh, axis: np.ndarray, n: int, rng) -> np.ndarray:
@@ -84,7 +75,8 @@ def ocl_rate(mesh, cutter, tips: np.ndarray, axis: np.ndarray):
     surf, _ = _surface(rt)
     xy = (tips @ Q.T)[:, :2]
     z0 = float(rt[..., 2].min()) - 100.0
-    dt = _best(lambda: drop_heights(surf, eroded_cutter(cutter, 0.0), xy, z0, threads=1), 1)
+    dt = best_of(lambda: drop_heights(surf, eroded_cutter(cutter, 0.0), xy, z0, threads=1), 1,
+                 warm=True).wall
     return len(tips) / dt
 
 
@@ -100,9 +92,9 @@ def run_case(index, cutter, tips, axis):
 
     threads = numba.config.NUMBA_NUM_THREADS
     numba.set_num_threads(1)
-    t1 = _best(call)
+    t1 = best_of(call, warm=True).wall
     numba.set_num_threads(threads)
-    tn = _best(call)
+    tn = best_of(call, warm=True).wall
     d, _, _, _, stats = call()
     return len(tips) / t1, len(tips) / tn, d, stats
 

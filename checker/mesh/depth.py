@@ -474,6 +474,22 @@ def _plane_upper(T, nx, ny, nz, P, m, rho):
 
 
 @nb.njit(cache=True)
+def _slack(T, cn, cc, nc, solid, rmin, rmax, hlo, hhi):
+    """min_i (c_i - min over T of (a_i r + b_i h)) with T's least distance `rmin` from the axis
+    (a degenerate core: the bounding cylinder's sides, at most 0), mm."""
+    hmin = min(T[0, 2], min(T[1, 2], T[2, 2]))
+    hmax = max(T[0, 2], max(T[1, 2], T[2, 2]))
+    if solid:
+        ub = np.inf
+        for i in range(nc):
+            a, b = cn[i, 0], cn[i, 1]
+            fmin = a * rmin + (b * hmin if b >= 0.0 else b * hmax)
+            ub = min(ub, cc[i] - fmin)
+        return ub
+    return min(0.0, min(rmax - rmin, min(hmax - hlo, hhi - hmin)))
+
+
+@nb.njit(cache=True)
 def _quick_upper(T, cn, cc, nc, solid, rho, rmax, hlo, hhi):
     """A cheaper, looser `_upper`: min r over T bounded below by the distance from the axis to
     the box of T's shadow."""
@@ -484,16 +500,7 @@ def _quick_upper(T, cn, cc, nc, solid, rho, rmax, hlo, hhi):
     dx = max(x0, max(-x1, 0.0))
     dy = max(y0, max(-y1, 0.0))
     rmin = math.sqrt(dx * dx + dy * dy)
-    hmin = min(T[0, 2], min(T[1, 2], T[2, 2]))
-    hmax = max(T[0, 2], max(T[1, 2], T[2, 2]))
-    if solid:
-        ub = np.inf
-        for i in range(nc):
-            a, b = cn[i, 0], cn[i, 1]
-            fmin = a * rmin + (b * hmin if b >= 0.0 else b * hmax)
-            ub = min(ub, cc[i] - fmin)
-        return rho + ub
-    return rho + min(0.0, min(rmax - rmin, min(hmax - hlo, hhi - hmin)))
+    return rho + _slack(T, cn, cc, nc, solid, rmin, rmax, hlo, hhi)
 
 
 @nb.njit(cache=True)
@@ -506,16 +513,7 @@ def _upper(T, cn, cc, nc, solid, rho, rmax, hlo, hhi, out):
     xx = u * T[0, 0] + v * T[1, 0] + w * T[2, 0]
     xy = u * T[0, 1] + v * T[1, 1] + w * T[2, 1]
     rmin = math.sqrt(xx * xx + xy * xy)
-    hmin = min(T[0, 2], min(T[1, 2], T[2, 2]))
-    hmax = max(T[0, 2], max(T[1, 2], T[2, 2]))
-    if solid:
-        ub = np.inf
-        for i in range(nc):
-            a, b = cn[i, 0], cn[i, 1]
-            fmin = a * rmin + (b * hmin if b >= 0.0 else b * hmax)
-            ub = min(ub, cc[i] - fmin)
-    else:
-        ub = min(0.0, min(rmax - rmin, min(hmax - hlo, hhi - hmin)))
+    ub = _slack(T, cn, cc, nc, solid, rmin, rmax, hlo, hhi)
     out[0] = rho + ub
     out[2] = ub
     out[3], out[4] = xx, xy
