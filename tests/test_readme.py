@@ -18,7 +18,7 @@ def test_the_readme_is_made_of_runnable_blocks():
     assert {b.kind for b in BLOCKS} == {"sh", "console"}
     for word in ("make demo", "pathcheck info", "pathcheck allowable", "pathcheck map",
                  "check-gcode", "pathcheck serve", "pathcheck call", "pathcheck batch",
-                 "pathcheck report", "pathcheck store prune"):
+                 "pathcheck report", "pathcheck store prune", "pathcheck flank"):
         assert word in commands, word
 
 

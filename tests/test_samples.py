@@ -29,10 +29,12 @@ ROUNDING = 2e-4  # mm: the APT files carry 4 decimals
 
 @pytest.fixture(scope="module")
 def rebuilt(tmp_path_factory):
-    """Both samples built afresh into a temporary folder."""
+    """Every sample built afresh into a temporary folder."""
     out = tmp_path_factory.mktemp("samples")
     make_samples.build_compressor(out / "compressor")
     make_samples.build_mould(out / "mould")
+    make_samples.build_impeller(out / "impeller")
+    make_samples.build_flank(out / "flank")
     return out
 
 
@@ -75,7 +77,9 @@ def test_numbers_compare_within_their_written_precision():
                                   "compressor/compressor_small.apt",
                                   "compressor/compressor_small_d12.json",
                                   "compressor/compressor_small_d12.apt", "compressor/cc.csv",
-                                  "mould/mould.json", "mould/mould.apt", "mould/cc.csv"])
+                                  "mould/mould.json", "mould/mould.apt", "mould/cc.csv",
+                                  "impeller/passage.json", "impeller/passage.apt",
+                                  "impeller/cc.csv", "flank/hypar.json", "flank/hypar.apt"])
 def test_committed_files_are_what_the_script_builds(repo, rebuilt, name):
     _same_numbers((repo / "samples" / name).read_text(), (rebuilt / name).read_text(),
                   fixed_decimals=name.endswith((".apt", ".csv")))
