@@ -231,17 +231,15 @@ def cam_b(job) -> np.ndarray:
     return np.where(j_ok, b_for_axis(job.m.axis), np.nan)
 
 
-def _five_plan(job, o: int, cutter, tolerance: float, mach, strategy: str):
+def _five_plan(job, o: int, cutter, tolerance: float, strategy: str):
     """The 5-axis plan of multi-axis operation o by `strategy` ("allowable": `five_axis.plan`,
     "contact-order": `five_axis.contact_plan`), or None."""
     from checker.five_axis.contact_plan import plan_contact_order
     from checker.five_axis.plan import plan_operation
 
     op_rows = np.flatnonzero(job.m.op == o)
+    # the job's 5-axis motion carries the machine's chain (None: fewer than two rotary axes)
     chain = job.motion.chain if getattr(job, "motion", None) is not None else None
-    if chain is None and mach is not None and len(mach.rotary_axes) >= 2:
-        from postproc.kinematics import Chain
-        chain = Chain(mach)
     planner = plan_contact_order if strategy == "contact-order" else plan_operation
     return planner(job, cutting_rows(job, op_rows), op_rows, cutter, tolerance, chain, job.cfg)
 
@@ -265,7 +263,7 @@ def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, 
         if p is not None:
             plans[o] = p
     for o in sorted(reoriented):
-        p = _five_plan(job, o, cutters[o], float(tol.value[o]), mach, strategy)
+        p = _five_plan(job, o, cutters[o], float(tol.value[o]), strategy)
         if p is not None:
             fives[o] = p
     if not plans and not fives:
