@@ -64,6 +64,7 @@ class FiveAxisConfig(_Section):
     preference_weight: float = Field(0.05, ge=0)
     fairing_passes: int = Field(6, ge=0)
     contact_gap: PositiveFloat = 0.05
+    scallop_height: PositiveFloat = 0.01
 
 
 class ServiceConfig(_Section):

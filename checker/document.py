@@ -2,9 +2,9 @@
 (`checker.written.Program`): a point per pose at a CL record or a canned-cycle hole, a point per
 move that penetrates somewhere along its length (at its deepest pose), the advice at the
 cutting poses (contact, allowable cutter, margin; 4-axis: best B and feasible B; re-oriented
-multi-axis: the axis's lead and tilt and the feasible set as bits of the operation's grid), per
-operation what was done with it, and the summary whose status is the one answer. mm, degrees,
-part frame."""
+multi-axis: the axis's lead and tilt and, by the allowable planner, the feasible set as bits of
+the operation's grid), per operation what was done with it (and how a multi-axis one was
+planned), and the summary whose status is the one answer. mm, degrees, part frame."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ import numpy as np
 from checker import verdict as vd
 from checker.moves import RAPID
 from checker.results import (
+    ContactOrder,
     FeasibleGrid,
     Finding,
     JobInfo,
@@ -204,26 +205,36 @@ def _five_points(program) -> dict[int, dict]:
 
     out: dict[int, dict] = {}
     for p in _reoriented(program).values():
+        for k, row in enumerate(p.rows.tolist()):
+            out[row] = dict(lead=float(np.degrees(p.lead[k])), tilt=float(np.degrees(p.tilt[k])))
+        if p.region is None:  # the contact-order planner: no feasible sets
+            continue
         packed = p.region.packed()
         crossings = np.bincount(p.region.edge_point, minlength=len(p.rows))
         for k, row in enumerate(p.rows.tolist()):
-            out[row] = dict(lead=float(np.degrees(p.lead[k])), tilt=float(np.degrees(p.tilt[k])),
-                            feasible_mask=base64.b64encode(packed[k].tobytes()).decode("ascii"),
+            out[row].update(feasible_mask=base64.b64encode(packed[k].tobytes()).decode("ascii"),
                             feasible_crossings=int(crossings[k]))
     return out
 
 
-def _feasible_grid(program, o: int, chain) -> FeasibleGrid | None:
-    """The grid and the planner of re-oriented multi-axis operation o (None otherwise)."""
+def _rotary_motion(p, chain) -> tuple[float | None, float | None]:
+    """Total motion of the machine's rotary words (degrees) along a multi-axis plan's contact
+    points at its chosen axes and at the CAM's (None without a 5-axis chain)."""
     from checker.five_axis.plan import rotary_metrics
 
+    if chain is None:
+        return None, None
+    return (rotary_metrics(chain, p, p.chosen.axis).total_motion_deg,
+            rotary_metrics(chain, p, p.cam_axis).total_motion_deg)
+
+
+def _feasible_grid(program, o: int, chain) -> FeasibleGrid | None:
+    """The grid and the planner of multi-axis operation o re-oriented by the allowable planner
+    (None otherwise)."""
     p = _reoriented(program).get(o)
-    if p is None:
+    if p is None or p.region is None:
         return None
-    motion = cam_motion = None
-    if chain is not None:
-        motion = rotary_metrics(chain, p, p.chosen.axis).total_motion_deg
-        cam_motion = rotary_metrics(chain, p, p.cam_axis).total_motion_deg
+    motion, cam_motion = _rotary_motion(p, chain)
     return FeasibleGrid(
         leads=np.degrees(p.region.leads).round(9).tolist(),
         tilts=np.degrees(p.region.tilts).round(9).tolist(),
@@ -232,6 +243,26 @@ def _feasible_grid(program, o: int, chain) -> FeasibleGrid | None:
         infeasible_points=int((~p.chosen.feasible).sum()),
         cam_infeasible_points=int((~p.cam_feasible).sum()),
         rotary_motion=motion, rotary_motion_cam=cam_motion)
+
+
+def _contact_order(program, o: int, chain, scallop: float) -> ContactOrder | None:
+    """The poses, widths (at `scallop` mm) and planner of multi-axis operation o re-oriented by
+    the contact-order planner (None otherwise)."""
+    p = _reoriented(program).get(o)
+    if p is None or p.contact is None:
+        return None
+    c = p.contact
+    motion, cam_motion = _rotary_motion(p, chain)
+    width = c.width[np.isfinite(c.width)]
+    return ContactOrder(
+        method=f"{p.planned.method}, then {p.chosen.method}", points=len(p.rows),
+        infeasible_points=int((~p.chosen.feasible).sum()),
+        cam_infeasible_points=int((~p.cam_feasible).sum()),
+        raised_points=int((np.nan_to_num(c.raised) > 0).sum()),
+        order=np.bincount(c.order, minlength=4).tolist(), scallop=scallop,
+        width_min=_opt(width.min()) if width.size else None,
+        width_median=_opt(np.median(width)) if width.size else None,
+        ball_width_max=_opt(np.max(c.ball)), rotary_motion=motion, rotary_motion_cam=cam_motion)
 
 
 def build_document(job, program, cutters: dict, classes: dict, tol, ppath: Path,
@@ -353,7 +384,8 @@ def _operations(job, program, cutters, classes, tol) -> list[OperationResult]:
             tolerance=float(tol.value[o]), tolerance_source=tol.source[o],
             counts=_op_counts(program.written, o, job),
             counts_cam=None if program.cam is None else _op_counts(program.cam, o, job),
-            feasible_grid=_feasible_grid(program, o, chain)))
+            feasible_grid=_feasible_grid(program, o, chain),
+            contact_order=_contact_order(program, o, chain, job.cfg.five_axis.scallop_height)))
     return out
 
 

@@ -51,8 +51,8 @@ def operation_class(axes: np.ndarray, j_tol: float) -> str:
 
 def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
               output=None, *, b_range: tuple[float, float] | None = None,
-              reorient: bool = False, part_transform: str | None = None,
-              cutter_units: str | None = None,
+              reorient: bool = False, strategy: str = "allowable",
+              part_transform: str | None = None, cutter_units: str | None = None,
               on_findings: str = "refuse") -> ResultsDocument:
     """Check a job: `apt_path` the CL file; `part_path` the part (default: the file beside the
     job with the same stem); `cutter` a `Cutter` or "CUTTER/..." overriding the file's; `config`
@@ -60,8 +60,10 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
     file's `PPRINT/MACHINE`, else fanuc-hmc; multi-axis operations move as a 5-axis machine
     moves them, joints linear, and on a machine with fewer rotary axes in the part frame);
     `output` the G-code to write; `b_range` (degrees) the B range searched for 4-axis
-    operations; `reorient` plans B for 3-axis operations too and re-orients multi-axis ones
-    (`five_axis.plan`);
+    operations; `reorient` plans B for 3-axis operations too and re-orients multi-axis ones by
+    `strategy` ("allowable": inside the feasible sets, `five_axis.plan`; "contact-order":
+    flat-end and bull-nose cutters at seed 003's contact order, `five_axis.contact_plan`; it
+    changes multi-axis operations only, 4-axis ones are planned by the allowable engine);
     `part_transform` moves a part exported in another frame (`geometry.transform`);
     `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's);
     `on_findings` what posting does when the program as written has findings or points
@@ -71,7 +73,7 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
         toolpath = read_cl(Path(apt_path), require_cutter=cutter is None)
     return check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=machine,
                           config=config, output=output, b_range=b_range, reorient=reorient,
-                          part_transform=part_transform, started=t0,
+                          strategy=strategy, part_transform=part_transform, started=t0,
                           cutter_units=cutter_units, on_findings=on_findings)
 
 
@@ -83,6 +85,18 @@ def _machine_motion(mach, ops: set[int], cfg: Config):
         return None
     tol = float(np.degrees(np.arcsin(min(cfg.four_axis.axis_j_tolerance, 1.0)))) + 1e-9
     return MachineMotion(Chain(mach), bool(mach.tcp.enabled), tol, frozenset(ops))
+
+
+def _flat_bottomed(toolpath, cutters: dict, ops: list[int], apt_path: Path) -> None:
+    """The contact-order strategy positions flat-end and bull-nose cutters: a multi-axis
+    operation `ops` with another cutter is a usage error naming it."""
+    for o in ops:
+        c = cutters[o]
+        if c.ball_family or not c.flat_bottomed:
+            raise PathcheckError(
+                f"--strategy contact-order positions flat-end and bull-nose cutters; operation "
+                f"{o + 1} ({toolpath.operations[o].name}) has {c.to_apt()} ({c.kind}): use "
+                f"--strategy allowable", path=apt_path, code="usage")
 
 
 @dataclass
@@ -108,15 +122,16 @@ class _Job:
 
 def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=None,
                    output=None, *, b_range: tuple[float, float] | None = None,
-                   reorient: bool = False, part_transform: str | None = None,
-                   started: float | None = None, cutter_units: str | None = None,
+                   reorient: bool = False, strategy: str = "allowable",
+                   part_transform: str | None = None, started: float | None = None,
+                   cutter_units: str | None = None,
                    on_findings: str = "refuse") -> ResultsDocument:
     """`check_job` on a tool path already in memory (read from a CL file, or from a G-code
     program by `pathcheck check-gcode`); `toolpath.path` names the job. With `output`, the
     checked program is posted there (`posting.post_checked`)."""
     checked = check_program(toolpath, part_path=part_path, cutter=cutter, machine=machine,
                             config=config, b_range=b_range, reorient=reorient,
-                            part_transform=part_transform, started=started,
+                            strategy=strategy, part_transform=part_transform, started=started,
                             cutter_units=cutter_units, to_post=output is not None)
     if output is not None:
         post_checked(checked, output, on_findings)
@@ -125,12 +140,16 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
 
 def check_program(toolpath, part_path=None, cutter=None, machine=None, config=None, *,
                   b_range: tuple[float, float] | None = None, reorient: bool = False,
-                  part_transform: str | None = None, started: float | None = None,
-                  cutter_units: str | None = None, to_post: bool = False) -> written.Checked:
+                  strategy: str = "allowable", part_transform: str | None = None,
+                  started: float | None = None, cutter_units: str | None = None,
+                  to_post: bool = False) -> written.Checked:
     """The check of `check_toolpath` without posting: the results document and what is to be
     written (the program, its machine, cutters and finding counts). `to_post`: the program will
     be posted, so its machine is resolved even when no operation is planned."""
     t0 = time.perf_counter() if started is None else started
+    if strategy not in written.STRATEGIES:
+        raise PathcheckError(f"strategy '{strategy}': expected one of "
+                             f"{', '.join(written.STRATEGIES)}", code="usage")
     cfg = job_config(config)
     apt_path = Path(toolpath.path)
     m = toolpath.motion_arrays(arc_chord_tol=cfg.check.arc_chord_tolerance)
@@ -169,9 +188,11 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
         mach = machine_for_toolpath(toolpath, machine)
         job.motion = _machine_motion(mach, multi, cfg)
     reoriented = multi if reorient else set()
+    if strategy == "contact-order":
+        _flat_bottomed(toolpath, cutters, sorted(reoriented), apt_path)
     with step("plan and check the program"):
         program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach,
-                                       reoriented)
+                                       reoriented, strategy)
     with step("advice at the cutting poses"):
         doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
     doc.summary.time_s = time.perf_counter() - t0

@@ -134,6 +134,34 @@ class FeasibleGrid(_Model):
     rotary_motion_cam: float | None = Field(None, description="the same at the CAM's axes")
 
 
+class ContactOrder(_Model):
+    """How a multi-axis operation re-oriented by `--strategy contact-order` was planned
+    (`checker.five_axis.contact_plan`, docs/MATH.md §11): flat-end and bull-nose poses of the
+    highest-order contact, their lead raised where the real tool or the machine rejects them,
+    then faired."""
+
+    method: str = Field(description="the planner of the chosen axes")
+    points: int = Field(description="contact points planned")
+    infeasible_points: int = Field(description="of them, with no accepted pose (the CAM's kept)")
+    cam_infeasible_points: int = Field(description="of them, infeasible at the CAM's axis")
+    raised_points: int = Field(description="of them, with the lead raised to clear the part or "
+                               "reach the machine")
+    order: list[int] = Field(description="points by the order of contact reached: "
+                             "[0, 1, 2, 3] (3: the third order, seed eq. 7)")
+    scallop: float = Field(description="scallop height of the widths, mm")
+    width_min: float | None = Field(
+        None, description="smallest effective cutting width of the derived poses (order >= "
+        "2), mm")
+    width_median: float | None = Field(None, description="their median width, mm")
+    ball_width_max: float | None = Field(
+        None, description="largest width of a ball end mill of the same diameter at the same "
+        "points and scallop, mm")
+    rotary_motion: float | None = Field(
+        None, description="total motion of the machine's rotary words along the contact "
+        "points, written program, degrees")
+    rotary_motion_cam: float | None = Field(None, description="the same at the CAM's axes")
+
+
 class OperationResult(_Model):
     """What was done with one operation of the job."""
 
@@ -153,8 +181,10 @@ class OperationResult(_Model):
     counts: VerdictCounts
     counts_cam: VerdictCounts | None = None
     feasible_grid: FeasibleGrid | None = Field(
-        None, description="re-oriented multi-axis operations: the grid of the points' "
-        "`feasible_mask`")
+        None, description="multi-axis operations re-oriented by the allowable planner: the grid "
+        "of the points' `feasible_mask`")
+    contact_order: ContactOrder | None = Field(
+        None, description="multi-axis operations re-oriented by the contact-order planner")
 
 
 class Finding(_Model):

@@ -4,11 +4,12 @@ Per operation, by its axis class: 3-axis and indexed operations are written as p
 indexed operation keeps its one B). A 4-axis operation (or a 3-axis one asked to be
 re-oriented) gets a B per cutting pose from the allowable-cutter engine (`checker.four_axis`:
 best B, feasible intervals, shortest path), its other moves following the nearest cutting pose;
-A multi-axis operation asked to be re-oriented gets an axis per contact pose inside its feasible
-set (`checker.five_axis.plan`), its other moves following the nearest contact pose. That
-program is checked, and where it does not have fewer findings than the CAM's own angles,
-the CAM's are written instead: a corrected program is never worse. What is written is what is
-checked, verdicted and reported. Part frame, mm, degrees."""
+A multi-axis operation asked to be re-oriented gets an axis per contact pose, by the strategy
+asked: inside its feasible set (`allowable`, `checker.five_axis.plan`) or the flat-end's
+highest-order contact (`contact-order`, `checker.five_axis.contact_plan`), its other moves
+following the nearest contact pose. That program is checked, and where it does not have fewer
+findings than the CAM's own angles, the CAM's are written instead: a corrected program is never
+worse. What is written is what is checked, verdicted and reported. Part frame, mm, degrees."""
 
 from __future__ import annotations
 
@@ -25,6 +26,8 @@ from checker.geometry.contact import cl_to_cc, contact_from_toolpath
 from checker.mesh.tool import tool_pieces
 from checker.moves import RAPID, START, Moves, machine_moves
 from checker.verify import Depths, MoveDepths, PoseProbe, along_moves
+
+STRATEGIES = ("allowable", "contact-order")  # the multi-axis planners of --reorient
 
 
 @dataclass
@@ -228,23 +231,24 @@ def cam_b(job) -> np.ndarray:
     return np.where(j_ok, b_for_axis(job.m.axis), np.nan)
 
 
-def _five_plan(job, o: int, cutter, tolerance: float, mach):
-    """The 5-axis plan of multi-axis operation o (`five_axis.plan`), or None."""
+def _five_plan(job, o: int, cutter, tolerance: float, strategy: str):
+    """The 5-axis plan of multi-axis operation o by `strategy` ("allowable": `five_axis.plan`,
+    "contact-order": `five_axis.contact_plan`), or None."""
+    from checker.five_axis.contact_plan import plan_contact_order
     from checker.five_axis.plan import plan_operation
 
     op_rows = np.flatnonzero(job.m.op == o)
+    # the job's 5-axis motion carries the machine's chain (None: fewer than two rotary axes)
     chain = job.motion.chain if getattr(job, "motion", None) is not None else None
-    if chain is None and mach is not None and len(mach.rotary_axes) >= 2:
-        from postproc.kinematics import Chain
-        chain = Chain(mach)
-    return plan_operation(job, cutting_rows(job, op_rows), op_rows, cutter, tolerance, chain,
-                          job.cfg)
+    planner = plan_contact_order if strategy == "contact-order" else plan_operation
+    return planner(job, cutting_rows(job, op_rows), op_rows, cutter, tolerance, chain, job.cfg)
 
 
 def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, mach,
-                 reoriented: set = frozenset()) -> Program:
+                 reoriented: set = frozenset(), strategy: str = "allowable") -> Program:
     """The program to write and the real tool along it (see the module docstring); `planned`
-    the 4-axis operations to plan B for, `reoriented` the multi-axis ones to re-orient."""
+    the 4-axis operations to plan B for, `reoriented` the multi-axis ones to re-orient by
+    `strategy` (`STRATEGIES`)."""
     m = job.m
     center = _center(mach)
     b_cam = cam_b(job)
@@ -259,7 +263,7 @@ def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, 
         if p is not None:
             plans[o] = p
     for o in sorted(reoriented):
-        p = _five_plan(job, o, cutters[o], float(tol.value[o]), mach)
+        p = _five_plan(job, o, cutters[o], float(tol.value[o]), strategy)
         if p is not None:
             fives[o] = p
     if not plans and not fives:

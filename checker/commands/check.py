@@ -127,7 +127,17 @@ def record(doc, store_path: Path | None = None) -> None:
 @click.option("--b-range", "b_range", default=None, metavar="LO:HI",
               help="B range searched for the best table angle, degrees (default from config)")
 @click.option("--reorient", is_flag=True,
-              help="plan the table angle B for a 3-axis path (run it on the 4-axis machine)")
+              help="re-orient the tool: a 3-axis operation gets a table angle B per cutting "
+                   "pose (run it on the 4-axis machine; a 4-axis operation's B is planned with "
+                   "or without this flag), a multi-axis (5-axis) operation a tool axis per "
+                   "contact pose by --strategy; where that does not remove the findings the "
+                   "CAM's angles are written")
+@click.option("--strategy", type=click.Choice(["allowable", "contact-order"]),
+              default="allowable", show_default=True,
+              help="with --reorient, the planner of multi-axis operations: allowable (inside "
+                   "each pose's feasible set, nearest the CAM's axis, least turn) or "
+                   "contact-order (flat-end and bull-nose finishing at the highest-order "
+                   "contact, seed 003); 3-axis and 4-axis operations are planned as before")
 @click.option("--part-transform", default=None, metavar="RX,RY,RZ,DX,DY,DZ|3x4",
               help="place a part exported in another frame: rotations about X, Y, Z (degrees) "
                    "then an offset (mm), or a 3x4 matrix row by row")
@@ -143,8 +153,8 @@ def record(doc, store_path: Path | None = None) -> None:
               help="post -o without checking (no part read); the program's header says NOT "
                    "CHECKED")
 def check(job, part_path, cutter_text, units, tool_name, tool_library, config_path, json_out,
-          output, machine, b_range, reorient, part_transform, store_path, no_store, on_findings,
-          no_check) -> None:
+          output, machine, b_range, reorient, strategy, part_transform, store_path, no_store,
+          on_findings, no_check) -> None:
     """Check JOB (APT-CL or NX CLSF) against its part: allowable cutter, verdict and margin at
     every CC point.
 
@@ -157,6 +167,9 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     from checker.errors import PathcheckError
     from checker.job import check_job
 
+    if strategy != "allowable" and not reorient:
+        raise PathcheckError(f"--strategy {strategy} plans the re-orientation: add --reorient",
+                             code="usage")
     if not job.is_file():
         raise PathcheckError("job file not found: expected an existing CL file", path=job)
     files = [(output, "G-code")]
@@ -176,7 +189,8 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     try:
         doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
                         output=output, machine=machine, b_range=parse_b_range(b_range),
-                        reorient=reorient, part_transform=part_transform, cutter_units=units,
+                        reorient=reorient, strategy=strategy, part_transform=part_transform,
+                        cutter_units=units,
                         on_findings=on_findings)
     except PostRefusedError as refused:
         try:

@@ -19,8 +19,9 @@ elsewhere is.
 
 The other rows of the operation (approach, retract, rapids, feed moves in the air) follow their
 nearest contact row as the 4-axis plan makes them follow: their offset from that row's CAM tip
-and their axis turned by the least rotation that takes its CAM axis to the chosen one. Part
-frame, mm; radians inside, degrees in the config."""
+and their axis turned by the least rotation that takes its CAM axis to the chosen one. The
+contact rows, the judge, the reach and the fairing are shared with the contact-order planner
+(`contact_plan`, flat-end finishing). Part frame, mm; radians inside, degrees in the config."""
 
 from __future__ import annotations
 
@@ -40,19 +41,21 @@ from checker.five_axis.posture import Candidates, Posture, mb_spline_fairing, sh
 class FivePlan:
     """The plan of one multi-axis operation. Per contact row (N): `rows` (motion rows),
     `contacts` (CL -> CC at the CAM's axis), `frames` (feed, normal, side), `s` path length
-    along the CC points (mm), `starts` rows that begin a segment, `region` the feasible sets,
-    `cam_axis` and `cam_feasible` (the CAM's pose judged), `planned` (least turn) and `chosen`
-    (faired) postures, `lead`, `tilt` (rad) of the chosen axis in the CC frame. Per row of the
-    operation (M): `op_rows`, `tip_rows`, `axis_rows` the program to write. `feasible_at(k,
-    axes)`: whether contact rows `k` may be cut at `axes` (the machine reaches them and the
-    judge finds nothing), the fairing's oracle."""
+    along the CC points (mm), `starts` rows that begin a segment, `region` the feasible sets
+    (None: the contact-order planner), `cam_axis` and `cam_feasible` (the CAM's pose judged),
+    `planned` (least turn, or the contact-order poses) and `chosen` (faired) postures, `lead`,
+    `tilt` (rad) of the chosen axis in the CC frame. Per row of the operation (M): `op_rows`,
+    `tip_rows`, `axis_rows` the program to write. `feasible_at(k, axes)`: whether contact rows
+    `k` may be cut at `axes` (the machine reaches them and the judge finds nothing), the
+    fairing's oracle. `contact`: the contact-order planner's poses (`contact_order.ContactPlan`;
+    None: the allowable planner)."""
 
     rows: np.ndarray
     contacts: object
     frames: Frames
     s: np.ndarray
     starts: np.ndarray
-    region: FeasibleRegion
+    region: FeasibleRegion | None
     cam_axis: np.ndarray
     cam_feasible: np.ndarray
     planned: Posture
@@ -63,6 +66,7 @@ class FivePlan:
     tip_rows: np.ndarray
     axis_rows: np.ndarray
     feasible_at: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    contact: object = None
 
 
 def machine_reach(chain, *, cone: float, tolerance: float = 1e-3) -> Machine:
@@ -135,12 +139,36 @@ def candidates(region: FeasibleRegion, frames: Frames, cam_axis: np.ndarray,
     return Candidates(axes, feasible, score, (nl, nt))
 
 
-def plan_operation(job, rows: np.ndarray, op_rows: np.ndarray, cutter, tolerance: float,
-                   chain, cfg) -> FivePlan | None:
-    """The plan of one multi-axis operation (module docstring): `rows` its cutting rows,
-    `op_rows` all its rows, `tolerance` its penetration allowed (mm), `chain` the machine's
-    (None: any axis is reached), `cfg` the config. None where no cutting row touches the
-    part (a NURBS part is needed for CL -> CC)."""
+@dataclass
+class Setting:
+    """What every planner of one multi-axis operation shares: the contact `rows` (N,), their
+    `cam_axis` (N, 3) unit, `contacts` (CL -> CC at the CAM's axis: cc, normal, surface, uv),
+    `starts` (rows that begin a segment), `feeds` (N, 3), `frames`, `s` path length along the
+    CC points (mm), the real tool's `judge`, the machine's `reach` (None: any axis),
+    `accepted(cc, normals, axes)` (M,) bool (the machine reaches `axes` and the judge finds
+    nothing at those CC points), `feasible_at(k, axes)` the same at contact rows `k`, and
+    `cam_ok` (the CAM's axis so judged). Part frame, mm, rad."""
+
+    rows: np.ndarray
+    cam_axis: np.ndarray
+    contacts: object
+    starts: np.ndarray
+    feeds: np.ndarray
+    frames: Frames
+    s: np.ndarray
+    judge: PoseJudge
+    reach: Machine | None
+    accepted: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+    feasible_at: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    cam_ok: np.ndarray
+
+
+def operation_setting(job, rows: np.ndarray, cutter, tolerance: float, chain,
+                      cfg) -> Setting | None:
+    """The contact rows of a multi-axis operation and what is judged at them (module
+    docstring): `rows` its cutting rows, `tolerance` its penetration allowed (mm), `chain` the
+    machine's (None: any axis is reached). None where no cutting row touches the part (a NURBS
+    part is needed for CL -> CC)."""
     from checker.geometry.contact import cl_to_cc, contact_from_toolpath
 
     m, fa = job.m, cfg.five_axis
@@ -161,35 +189,65 @@ def plan_operation(job, rows: np.ndarray, op_rows: np.ndarray, cutter, tolerance
                     con.gap[keep])
     starts = contact_segments(rows)
     feeds = feed_directions(con.cc, starts)
-    frames = local_frames(con.normal, feeds)
     judge = PoseJudge(job.index, cutter, float(tolerance), job.triangles.deviation,
                       gouge_neighbourhood=cfg.check.gouge_neighbourhood)
     reach = None if chain is None else machine_reach(chain, cone=fa.singular_cone_deg)
-    lim_l, lim_t = math.radians(fa.lead_limit_deg), math.radians(fa.tilt_limit_deg)
-    region = feasible_region(judge, con.cc, con.normal, feeds, lead_range=(-lim_l, lim_l),
-                             tilt_range=(-lim_t, lim_t), step=math.radians(fa.grid_step_deg),
-                             tolerance=math.radians(fa.boundary_tolerance_deg), machine=reach)
 
-    def oracle(k: np.ndarray, axes: np.ndarray) -> np.ndarray:
-        ok = np.ones(len(k), bool) if reach is None else np.asarray(reach(axes), bool)
+    def accepted(cc: np.ndarray, normals: np.ndarray, axes: np.ndarray) -> np.ndarray:
+        ok = np.ones(len(cc), bool) if reach is None else np.asarray(reach(axes), bool)
         at = np.flatnonzero(ok)
-        ok[at] = judge(con.cc[k[at]], con.normal[k[at]], axes[at])
+        ok[at] = judge(cc[at], normals[at], axes[at])
         return ok
 
-    cam_ok = oracle(np.arange(len(rows)), cam_axis)
+    def feasible_at(k: np.ndarray, axes: np.ndarray) -> np.ndarray:
+        return accepted(con.cc[k], con.normal[k], axes)
+
     s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(con.cc, axis=0), axis=1))]
-    cand = candidates(region, frames, cam_axis, cam_ok, with_cam=True)
-    planned = shortest_posture(cand, s, cam_axis,
+    return Setting(rows, cam_axis, con, starts, feeds, local_frames(con.normal, feeds), s,
+                   judge, reach, accepted, feasible_at,
+                   feasible_at(np.arange(len(rows)), cam_axis))
+
+
+def plan_operation(job, rows: np.ndarray, op_rows: np.ndarray, cutter, tolerance: float,
+                   chain, cfg) -> FivePlan | None:
+    """The plan of one multi-axis operation (module docstring): `rows` its cutting rows,
+    `op_rows` all its rows, `tolerance` its penetration allowed (mm), `chain` the machine's
+    (None: any axis is reached), `cfg` the config. None where no cutting row touches the
+    part (a NURBS part is needed for CL -> CC)."""
+    fa = cfg.five_axis
+    st = operation_setting(job, rows, cutter, tolerance, chain, cfg)
+    if st is None:
+        return None
+    lim_l, lim_t = math.radians(fa.lead_limit_deg), math.radians(fa.tilt_limit_deg)
+    region = feasible_region(st.judge, st.contacts.cc, st.contacts.normal, st.feeds,
+                             lead_range=(-lim_l, lim_l), tilt_range=(-lim_t, lim_t),
+                             step=math.radians(fa.grid_step_deg),
+                             tolerance=math.radians(fa.boundary_tolerance_deg), machine=st.reach)
+    cand = candidates(region, st.frames, st.cam_axis, st.cam_ok, with_cam=True)
+    planned = shortest_posture(cand, st.s, st.cam_axis,
                                max_turn_per_mm=math.radians(fa.max_turn_per_mm_deg),
-                               w_pref=fa.preference_weight, starts=starts)
-    chosen = mb_spline_fairing(planned, oracle, passes=fa.fairing_passes, starts=starts)
-    lead, tilt = angles_from_axes(frames, chosen.axis)
+                               w_pref=fa.preference_weight, starts=st.starts)
+    return finish_plan(job, st, op_rows, cutter, planned, cfg, region=region)
+
+
+def finish_plan(job, st: Setting, op_rows: np.ndarray, cutter, planned: Posture, cfg, *,
+                region: FeasibleRegion | None = None, contact: object = None) -> FivePlan:
+    """Seed 004's MB-spline fairing of a planned posture with `st.feasible_at` as the oracle,
+    the tips that touch the contacts at the chosen axes (the CAM tip's offset from its
+    touching tip kept, turned with the axis) and every row of the operation following its
+    nearest contact row; `region` the feasible sets (allowable planner), `contact` the
+    contact-order poses (`contact_order.ContactPlan`)."""
+    m, con = job.m, st.contacts
+    chosen = mb_spline_fairing(planned, st.feasible_at, passes=cfg.five_axis.fairing_passes,
+                               starts=st.starts)
+    lead, tilt = angles_from_axes(st.frames, chosen.axis)
+    cam_tips = cutter.tip_from_contact(con.cc, con.normal, st.cam_axis)
     tips = cutter.tip_from_contact(con.cc, con.normal, chosen.axis) + least_rotation(
-        cam_axis, chosen.axis, m.tip[rows] - cutter.tip_from_contact(con.cc, con.normal,
-                                                                      cam_axis))
-    tip_rows, axis_rows = _follow(m, rows, op_rows, cam_axis, chosen.axis, tips)
-    return FivePlan(rows, con, frames, s, starts, region, cam_axis, cam_ok, planned, chosen,
-                    lead, tilt, op_rows, tip_rows, axis_rows, oracle)
+        st.cam_axis, chosen.axis, m.tip[st.rows] - cam_tips)
+    tip_rows, axis_rows = _follow(m, st.rows, op_rows, st.cam_axis, chosen.axis, tips)
+    return FivePlan(st.rows, con, st.frames, st.s, st.starts, region, st.cam_axis, st.cam_ok,
+                    planned, chosen, lead, tilt, op_rows, tip_rows, axis_rows, st.feasible_at,
+                    contact)
 
 
 def _follow(m, rows, op_rows, cam_axis, axis, tips):

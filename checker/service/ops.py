@@ -116,6 +116,7 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
             doc = check_toolpath(toolpath, part_path=part_path, cutter=req.cutter,
                                  machine=machine, config=config, output=gcode_path,
                                  b_range=req.b_range, reorient=req.reorient,
+                                 strategy=req.strategy,
                                  part_transform=req.part_transform, started=t0,
                                  on_findings=req.on_findings)
         except PostRefusedError as err:

@@ -97,7 +97,8 @@ class AllowableRequest(_Request):
 class CheckRequest(_Request):
     """Check a job: the CL file as text (`apt`) or as a path on the service's machine
     (`apt_path`), with optional part, cutter override (`CUTTER/...`), machine name, config
-    options, the B range searched (degrees) and `reorient` (plan B for a 3-axis path too);
+    options, the B range searched (degrees), `reorient` (plan B for a 3-axis path too,
+    re-orient multi-axis operations) and its `strategy`;
     `post: true` also returns the corrected G-code; `on_findings` what posting does when the
     program as written has findings or points without a feasible B (as `pathcheck check
     --on-findings`: `refuse` returns no `gcode` but `refused`, the reason)."""
@@ -117,6 +118,9 @@ class CheckRequest(_Request):
     options: dict[str, float | int | str | bool] = Field(default_factory=dict)
     b_range: tuple[float, float] | None = None
     reorient: bool = False
+    strategy: Literal["allowable", "contact-order"] = Field(
+        "allowable", description="with `reorient`, the planner of multi-axis operations (as "
+        "`pathcheck check --strategy`)")
     part_transform: str | None = Field(
         None, max_length=400, description="'rx,ry,rz,dx,dy,dz' or a 3x4 matrix: the part's "
         "placement in the CL frame (as `pathcheck --part-transform`)")
