@@ -170,3 +170,14 @@ def test_mech491_multi_axis_jobs_post_and_read_back(realdata, tmp_path, job, mac
     out = post_unchecked(apt, tmp_path / "x.nc", machine=mach)
     tip_err, axis_err = _round_trip(apt, out, mach)
     assert tip_err <= ROUND_TRIP and axis_err <= ROUND_TRIP
+
+
+@pytest.mark.parametrize("machine", ["linuxcnc-xyzac-trt", "fanuc-trunnion-ac"])
+def test_the_flank_sample_posts_and_reads_back(repo, tmp_path, machine):
+    """The 5-axis flank pass (samples/flank/hypar.apt: the axis turns along the rulings) posted
+    for a 5-axis machine reads back as its CL poses."""
+    apt = repo / "samples" / "flank" / "hypar.apt"
+    mach = _fine(machine)
+    out = post_unchecked(apt, tmp_path / "hypar.nc", machine=mach)
+    tip_err, axis_err = _round_trip(apt, out, mach)
+    assert tip_err <= ROUND_TRIP and axis_err <= ROUND_TRIP
