@@ -183,7 +183,7 @@ def _impeller_case(folder):
 
     parts = sorted(folder.glob("*.json")) + sorted(folder.glob("*.stl"))
     rows = np.loadtxt(folder / "cc.csv", delimiter=",", skiprows=1)
-    pick = np.linspace(0, len(rows) - 2, 4).astype(int)
+    pick = np.linspace(0, len(rows) - 2, 2).astype(int)
     cc, n = rows[pick, :3], rows[pick, 3:6]
     return _triangles(load_part(parts[0])), cc, n, rows[pick + 1, :3] - cc
 
