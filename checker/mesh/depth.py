@@ -146,7 +146,7 @@ def _erode(P, m, cn, cc, nc, t, buf_a, buf_b):
     return src, cnt
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _nearest_on_profile(P, m, r, h):
     """The point (qr, qh) of the closed polygon P[:m] nearest (r, h), and its squared distance."""
     best = np.inf
@@ -473,7 +473,7 @@ def _plane_upper(T, nx, ny, nz, P, m, rho):
     return rho - max(-hm - c, c - hp)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _slack(T, cn, cc, nc, solid, rmin, rmax, hlo, hhi):
     """min_i (c_i - min over T of (a_i r + b_i h)) with T's least distance `rmin` from the axis
     (a degenerate core: the bounding cylinder's sides, at most 0), mm."""
