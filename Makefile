@@ -27,10 +27,12 @@ demo: setup
 		--json out/compressor_d12.json -o out/compressor_d12.nc --on-findings stop; test $$? -le 1
 	PATHCHECK_STORE=out/results.sqlite $(BIN)/pathcheck report -o out/report.html
 
+# two processes (the CI machines have two cores; much of the suite is single-threaded:
+# subprocesses, sockets, parsing), a test file's tests kept together in one of them
 test: setup
 	bash tools/test-setup.sh
 	$(BIN)/ruff check checker postproc tests benchmarks samples tools
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile --durations=15
 	bash tools/wheel-check.sh
 
 lint: setup
