@@ -325,9 +325,9 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     if pairs is not None:
         lrow, lsize, lsid, luv = at_cc
         _keep_smaller(best, lrow, lsize, cc_part[lrow], lsid, luv)
-    if pairs is not None and limits.applies(cutter):
+    if pairs is not None:
         prow, psid, puv = pairs
-        lim = limits.flat_contour_limit(part, frame, Q, prow, psid, puv)
+        lim = limits.curvature_limit(cutter, part, frame, Q, prow, psid, puv)
         _keep_smaller(best, prow, lim, cc_part[prow], psid, puv)
     return size, lim_p, lim_s, lim_uv, evals
 

@@ -1,17 +1,29 @@
-"""The allowable size in the limit P -> Pcc, for flat end-mills (r = 0, psi = 0), in closed form.
+"""The allowable size in the limit P -> Pcc, in closed form: the curvature limit.
 
-A flat end-mill touching at Pcc has its bottom plane through Pcc, so the part's contour line at
-that height passes through Pcc, along the horizontal tangent t = z x e (tool frame). On it
-dz = 0 and k = 0, so R(P) = |d|^2 / (2 e.d) with d = P_h - Pcc_h. Along the contour
-d = s t + s^2/2 kappa + O(s^3), kappa the contour's curvature vector (horizontal, along e), so
-R -> 1 / (e.kappa). Meusnier: the surface's normal curvature along t is
-k_n(t) = n.kappa = |n_h| (e.kappa), hence
+Near Pcc the cutter and the surface share the tangent plane; both bend away from it by their
+normal curvatures (positive towards the tool, tool frame). No point near Pcc is cut while the
+cutter bends at least as much as the surface in every tangent direction, i.e. while
+K_tool(s) - K_surf is positive semidefinite (2x2 second fundamental forms in one orthonormal
+tangent basis). The smallest such s is the infimum of the size at Pcc, which no sample and no
+local step reaches (the points within the exclusion radius are the CC point itself), and which
+the rings of refinement starts only approach when its direction is not sharp.
 
-    R_lim = |n_h| / k_n(t),   k_n(t) = n . S''(t, t)   (inf when k_n <= 0),
+Ball family (sphere of radius s):  K_tool = I / s, so s_lim = 1 / k_max (inf when k_max <= 0).
 
-the infimum over the points of the contour next to Pcc, which no sample and no local step
-reaches (the points within the exclusion radius are the CC point). Everywhere else (balls,
-bull-noses) the rings of refinement starts around Pcc reach the curvature limit.
+R family on the corner (fillet contact, `sin(theta) <= n_z <= cos(psi)`; flat end-mills with
+r = 0 on their bottom edge): a torus of tube radius r about a circle of radius R = s. In the basis
+(t_m, t_c), t_c = z x e horizontal and t_m = t_c x n in the plane of the axis and n, its normal
+curvatures are 1/r (meridian) and h / (R + r h) (parallel circle, Meusnier; h = |n_h|), no
+twist. With K_surf = [[a, b], [b, c]] in that basis, PSD means 1 - a r >= 0 and
+
+    h / (R + r h) >= c + b^2 r / (1 - a r) =: k,   so   R_lim = h / k - r h,
+
+inf when k <= 0, 0 when 1 - a r <= 0 (the corner alone bends less than the surface). For r = 0
+this is R_lim = h / k_n(t_c): the bottom plane's contour through Pcc (docs/MATH.md §3.7).
+Tip contact (psi > 0, n_z > cos(psi)) and rows without a direction e have no limit here. The
+limit is kept only where the surface's own normal is the row's (not the other side of a crease:
+there the size tends to 0 or inf, not to a curvature limit) and its direction, +t or -t, leads
+into the surface's parameter box.
 (docs/MATH.md §3.7)"""
 
 from __future__ import annotations
@@ -23,32 +35,97 @@ from checker.engine.sizes import RowFrame
 from checker.geometry.evaluate import evaluate_mixed
 from checker.part import Part
 
-
-def applies(cutter) -> bool:
-    """True for the cutters whose bottom plane passes through the CC point (flat, r = 0)."""
-    return cutter.flat_end
+_EPS_H = 1e-9  # |n_h| below this: the normal is along the axis (no parallel circle)
+_COS_SAME = np.cos(1e-4)  # the surface's normal within 1e-4 rad of the row's: tangent contact
 
 
-def flat_contour_limit(part: Part, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
-                       sid: np.ndarray, uv: np.ndarray) -> np.ndarray:
-    """R_lim (K,) mm for (row, surface, uv) pairs: the CC point of row `rows[k]` lies on
-    surface `sid[k]` at `uv[k]`; that surface's second derivatives give k_n along the row's
-    horizontal tangent (tool frames `Q (N, 3, 3)`, normals and e of `frame`)."""
+def curvature_limit(cutter, part: Part, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
+                    sid: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """s_lim (K,) mm for (row, surface, uv) pairs: the CC point of row `rows[k]` lies on
+    surface `sid[k]` at `uv[k]`; that surface's second derivatives, seen in the row's tool
+    frame (`Q (N, 3, 3)`, normals and e of `frame`), give the limit (module docstring); inf
+    where none applies."""
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1], order=2)
     su, sv = rotate_rows(Q, ev.du, rows), rotate_rows(Q, ev.dv, rows)
-    suu, suv, svv = (rotate_rows(Q, d, rows) for d in (ev.duu, ev.duv, ev.dvv))
-    n, e = frame.n[rows], frame.e[rows]
-    t = np.column_stack([-e[:, 1], e[:, 0], np.zeros(len(rows))])  # z x e
-    # t = a su + b sv (least squares through the first fundamental form)
+    second = [rotate_rows(Q, d, rows) for d in (ev.duu, ev.duv, ev.dvv)]
+    n = frame.n[rows]
+    to_uv = _tangent_to_uv(su, sv)
+    if cutter.ball_family:
+        t1 = su - np.einsum("ij,ij->i", su, n)[:, None] * n
+        t1 /= np.maximum(np.linalg.norm(t1, axis=1, keepdims=True), 1e-300)
+        t2 = np.cross(n, t1)
+        a, b, c = _second_form(n, second, to_uv, t1, t2)
+        half = np.sqrt((0.5 * (a - c)) ** 2 + b * b)
+        k_max = 0.5 * (a + c) + half
+        with np.errstate(divide="ignore"):
+            lim = np.where(k_max > 0.0, 1.0 / k_max, np.inf)
+        angle = 0.5 * np.arctan2(2.0 * b, a - c)  # the direction of k_max from t1
+        t = np.cos(angle)[:, None] * t1 + np.sin(angle)[:, None] * t2
+    else:
+        lim, t = _corner_limit(float(cutter.r), n, frame.e[rows], second, to_uv)
+        fillet = (n[:, 2] <= np.cos(float(cutter.psi)) + 1e-12) & \
+            (n[:, 2] >= np.sin(float(cutter.theta)) - 1e-12)
+        lim = np.where(fillet, lim, np.inf)
+    tangent = np.einsum("ij,ij->i", rotate_rows(Q, ev.normals, rows), n) >= _COS_SAME
+    ok = np.isfinite(lim) & tangent & _leads_inside(part, sid, uv, to_uv(t))
+    return np.where(ok, np.maximum(lim, 0.0), np.inf)
+
+
+def _corner_limit(r: float, n: np.ndarray, e: np.ndarray, second: list, to_uv):
+    """(R_lim (K,), its direction (K, 3)) for the R family's corner of radius r (module
+    docstring); inf where the normal is along the axis or e is undefined."""
+    h = np.hypot(n[:, 0], n[:, 1])
+    tc = np.column_stack([-e[:, 1], e[:, 0], np.zeros(len(e))])  # z x e
+    tm = np.cross(tc, n)
+    a, b, c = _second_form(n, second, to_uv, tm, tc)
+    den = 1.0 - a * r
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = c + b * b * r / den
+        lim = np.where(den <= 0.0, 0.0, np.where(k > 0.0, h / k - r * h, np.inf))
+    defined = (h > _EPS_H) & (np.linalg.norm(e, axis=1) > 0.5)
+    direction = (b * r)[:, None] * tm + np.where(den > 0.0, den, 0.0)[:, None] * tc
+    direction = np.where((den > 0.0)[:, None], direction, tm)
+    return np.where(defined, lim, np.inf), direction
+
+
+def _tangent_to_uv(su: np.ndarray, sv: np.ndarray):
+    """`f(t (K, 3)) -> (K, 2)`: the (u, v) step whose image t' = du su + dv sv is the least-squares
+    fit of the tangent t (through the first fundamental form)."""
     E, F, G = (np.einsum("ij,ij->i", x, y) for x, y in ((su, su), (su, sv), (sv, sv)))
-    tu, tv = np.einsum("ij,ij->i", t, su), np.einsum("ij,ij->i", t, sv)
     det = E * G - F * F
     ok = det > 1e-24 * np.maximum(E * G, 1e-300)
-    det = np.where(ok, det, 1.0)
-    a, b = (G * tu - F * tv) / det, (E * tv - F * tu) / det
-    second = suu * (a * a)[:, None] + 2.0 * suv * (a * b)[:, None] + svv * (b * b)[:, None]
-    kn = np.einsum("ij,ij->i", n, second)
-    nh = np.hypot(n[:, 0], n[:, 1])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        lim = np.where(ok & (kn > 0.0) & (np.linalg.norm(e, axis=1) > 0.5), nh / kn, np.inf)
-    return np.where(np.isfinite(lim) & (lim >= 0.0), lim, np.inf)
+    det = np.where(ok, det, np.inf)
+
+    def f(t: np.ndarray) -> np.ndarray:
+        tu, tv = np.einsum("ij,ij->i", t, su), np.einsum("ij,ij->i", t, sv)
+        return np.column_stack([(G * tu - F * tv) / det, (E * tv - F * tu) / det])
+
+    return f
+
+
+def _second_form(n: np.ndarray, second: list, to_uv, t1: np.ndarray, t2: np.ndarray):
+    """(a, b, c) (K,): the surface's second fundamental form II(t1, t1), II(t1, t2), II(t2, t2)
+    with normal `n`, second derivatives `second` = (S_uu, S_uv, S_vv) (K, 3) each."""
+    suu, suv, svv = second
+    (u1, v1), (u2, v2) = to_uv(t1).T, to_uv(t2).T
+
+    def form(pu, pv, qu, qv):
+        d2 = (suu * (pu * qu)[:, None] + suv * (pu * qv + pv * qu)[:, None]
+              + svv * (pv * qv)[:, None])
+        return np.einsum("ij,ij->i", n, d2)
+
+    return form(u1, v1, u1, v1), form(u1, v1, u2, v2), form(u2, v2, u2, v2)
+
+
+def _leads_inside(part: Part, sid: np.ndarray, uv: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """(K,) whether +step or -step from uv (K, 2) stays in the parameter box of surface sid."""
+    dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
+    lo, hi = dom[sid, :, 0], dom[sid, :, 1]
+    unit = step / np.maximum(np.abs(step).max(axis=1, keepdims=True), 1e-300)
+    tiny = 1e-9 * (hi - lo)
+
+    def inside(p):
+        return ((p >= lo - tiny) & (p <= hi + tiny)).all(axis=1)
+
+    eps = 1e-6 * (hi - lo).max(axis=1, keepdims=True)
+    return inside(uv + eps * unit) | inside(uv - eps * unit)
