@@ -12,13 +12,15 @@ from checker.config import Config, default_config
 from checker.engine import limits
 from checker.engine.bins import binned_scan, part_tops
 from checker.engine.bound import warm_bounds
+from checker.engine.contour_walk import contour_evaluations, contour_minimum
 from checker.engine.family import family_bounds
-from checker.engine.frames import group_axes, rotate_rows, tool_rotations
-from checker.engine.refine import refine
+from checker.engine.frames import group_axes, heights, rotate_rows, tool_rotations
+from checker.engine.refine import Objective, refine
 from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes, size_args
 from checker.engine.verdict import verdicts
 from checker.errors import PathcheckError
 from checker.geometry.evaluate import evaluate_mixed
+from checker.geometry.fundamental import uv_of_tangents
 from checker.geometry.inverse import invert_points
 from checker.geometry.sampling import TestPoints
 from checker.part import Part
@@ -32,6 +34,8 @@ _FIRST_TRIAL = 4.0  # first trial size of the scan at most this many times s0
 _HINT_MARGIN = 0.1  # a hinted first trial: this fraction above the hint and the slack
 _FIRST_RING = 16  # directions on the first ring around a CC point
 _RING_RATIO = 3.0  # the wider rings' radii grow by at most this
+_ON_CONTOUR = 1e-6  # mm: a best point this near its row's bottom plane lies on its contour
+_CONTOUR_REACH = 2.0  # test-point spacings searched along the contour either way
 _BOUND_POINTS = 256  # test points (evenly spread over their order) that start `upper_bounds`
 _BOUND_BLOCK = 1 << 19  # (row, start point) pairs per call of `upper_bounds`' kernel
 
@@ -329,7 +333,29 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
         prow, psid, puv = pairs
         lim = limits.curvature_limit(cutter, part, frame, Q, prow, psid, puv)
         _keep_smaller(best, prow, lim, cc_part[prow], psid, puv)
+    if cutter.flat_bottomed:
+        _along_contours(part, cutter, frame, Q, best, cc_part, spacing, evals)
     return size, lim_p, lim_s, lim_uv, evals
+
+
+def _along_contours(part: Part, cutter, frame: RowFrame, Q: np.ndarray, best: tuple,
+                    cc_part: np.ndarray, spacing: float, evals: np.ndarray) -> None:
+    """Flat-bottomed cutters: where a row's best point lies on its bottom plane's contour (or
+    is Pcc itself, the curvature limit), the contour searched in one dimension from there
+    (contour_walk.py) may lower it (in place)."""
+    size, point, sid, uv = best
+    height = np.full(len(size), np.inf)
+    ok = np.isfinite(size) & (sid >= 0) & np.isfinite(uv).all(axis=1)
+    rows = np.flatnonzero(ok)
+    height[rows] = heights(Q, point[rows], rows) - frame.fam.z0[rows]
+    at_cc = np.linalg.norm(point - cc_part, axis=1) <= frame.exclusion
+    rows = np.flatnonzero(ok & ((np.abs(height) <= _ON_CONTOUR) | at_cc))
+    if not rows.size:
+        return
+    obj = Objective(part, cutter, frame, Q)
+    f, p, q = contour_minimum(obj, rows, sid[rows], uv[rows], _CONTOUR_REACH * spacing)
+    evals[rows] += contour_evaluations(spacing * _CONTOUR_REACH)
+    _keep_smaller(best, rows, f, p, sid[rows], q)
 
 
 def _keep_smaller(best: tuple, rows: np.ndarray, size: np.ndarray, point: np.ndarray,
@@ -501,16 +527,11 @@ def _tangent_to_uv(du: np.ndarray, dv: np.ndarray):
     t1 = du / np.maximum(np.linalg.norm(du, axis=1, keepdims=True), 1e-300)
     nrm = np.cross(du, dv)
     t2 = np.cross(nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300), t1)
-    J = np.stack([du, dv], axis=2)  # (K, 3, 2)
-    G = np.einsum("kia,kib->kab", J, J)
-    det = G[:, 0, 0] * G[:, 1, 1] - G[:, 0, 1] ** 2
-    Ginv = np.stack([np.stack([G[:, 1, 1], -G[:, 0, 1]], 1),
-                     np.stack([-G[:, 0, 1], G[:, 0, 0]], 1)], 1) / \
-        np.where(det > 0, det, np.inf)[:, None, None]
+    to_uv = uv_of_tangents(du, dv)
 
     def f(angles: np.ndarray) -> np.ndarray:
-        w = np.cos(angles)[..., None] * t1[:, None] + np.sin(angles)[..., None] * t2[:, None]
-        return np.einsum("kab,kmb->kma", Ginv, np.einsum("kia,kmi->kma", J, w))
+        return to_uv(np.cos(angles)[..., None] * t1[:, None]
+                     + np.sin(angles)[..., None] * t2[:, None])
 
     return f
 

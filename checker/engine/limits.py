@@ -33,6 +33,7 @@ import numpy as np
 from checker.engine.frames import rotate_rows
 from checker.engine.sizes import RowFrame
 from checker.geometry.evaluate import evaluate_mixed
+from checker.geometry.fundamental import second_form, uv_of_tangents
 from checker.part import Part
 
 _EPS_H = 1e-9  # |n_h| below this: the normal is along the axis (no parallel circle)
@@ -49,12 +50,12 @@ def curvature_limit(cutter, part: Part, frame: RowFrame, Q: np.ndarray, rows: np
     su, sv = rotate_rows(Q, ev.du, rows), rotate_rows(Q, ev.dv, rows)
     second = [rotate_rows(Q, d, rows) for d in (ev.duu, ev.duv, ev.dvv)]
     n = frame.n[rows]
-    to_uv = _tangent_to_uv(su, sv)
+    to_uv = uv_of_tangents(su, sv)
     if cutter.ball_family:
         t1 = su - np.einsum("ij,ij->i", su, n)[:, None] * n
         t1 /= np.maximum(np.linalg.norm(t1, axis=1, keepdims=True), 1e-300)
         t2 = np.cross(n, t1)
-        a, b, c = _second_form(n, second, to_uv, t1, t2)
+        a, b, c = _forms(n, second, to_uv, t1, t2)
         half = np.sqrt((0.5 * (a - c)) ** 2 + b * b)
         k_max = 0.5 * (a + c) + half
         with np.errstate(divide="ignore"):
@@ -77,7 +78,7 @@ def _corner_limit(r: float, n: np.ndarray, e: np.ndarray, second: list, to_uv):
     h = np.hypot(n[:, 0], n[:, 1])
     tc = np.column_stack([-e[:, 1], e[:, 0], np.zeros(len(e))])  # z x e
     tm = np.cross(tc, n)
-    a, b, c = _second_form(n, second, to_uv, tm, tc)
+    a, b, c = _forms(n, second, to_uv, tm, tc)
     den = 1.0 - a * r
     with np.errstate(divide="ignore", invalid="ignore"):
         k = c + b * b * r / den
@@ -88,33 +89,11 @@ def _corner_limit(r: float, n: np.ndarray, e: np.ndarray, second: list, to_uv):
     return np.where(defined, lim, np.inf), direction
 
 
-def _tangent_to_uv(su: np.ndarray, sv: np.ndarray):
-    """`f(t (K, 3)) -> (K, 2)`: the (u, v) step whose image t' = du su + dv sv is the least-squares
-    fit of the tangent t (through the first fundamental form)."""
-    E, F, G = (np.einsum("ij,ij->i", x, y) for x, y in ((su, su), (su, sv), (sv, sv)))
-    det = E * G - F * F
-    ok = det > 1e-24 * np.maximum(E * G, 1e-300)
-    det = np.where(ok, det, np.inf)
-
-    def f(t: np.ndarray) -> np.ndarray:
-        tu, tv = np.einsum("ij,ij->i", t, su), np.einsum("ij,ij->i", t, sv)
-        return np.column_stack([(G * tu - F * tv) / det, (E * tv - F * tu) / det])
-
-    return f
-
-
-def _second_form(n: np.ndarray, second: list, to_uv, t1: np.ndarray, t2: np.ndarray):
-    """(a, b, c) (K,): the surface's second fundamental form II(t1, t1), II(t1, t2), II(t2, t2)
-    with normal `n`, second derivatives `second` = (S_uu, S_uv, S_vv) (K, 3) each."""
-    suu, suv, svv = second
-    (u1, v1), (u2, v2) = to_uv(t1).T, to_uv(t2).T
-
-    def form(pu, pv, qu, qv):
-        d2 = (suu * (pu * qu)[:, None] + suv * (pu * qv + pv * qu)[:, None]
-              + svv * (pv * qv)[:, None])
-        return np.einsum("ij,ij->i", n, d2)
-
-    return form(u1, v1, u1, v1), form(u1, v1, u2, v2), form(u2, v2, u2, v2)
+def _forms(n: np.ndarray, second: list, to_uv, t1: np.ndarray, t2: np.ndarray):
+    """(a, b, c) (K,): II(t1, t1), II(t1, t2), II(t2, t2) for tangents t1, t2 (K, 3)."""
+    w1, w2 = to_uv(t1), to_uv(t2)
+    return (second_form(n, second, w1, w1), second_form(n, second, w1, w2),
+            second_form(n, second, w2, w2))
 
 
 def _leads_inside(part: Part, sid: np.ndarray, uv: np.ndarray, step: np.ndarray) -> np.ndarray:

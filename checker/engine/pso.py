@@ -12,7 +12,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from checker.config import EngineConfig
-from checker.engine.refine import _Objective
+from checker.engine.refine import Objective
 from checker.engine.sizes import RowFrame
 from checker.part import Part
 
@@ -34,7 +34,7 @@ def pso_search(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rng: np.rando
     """PSO + Nelder-Mead for every row of `frame` (tool frames `Q (N, 3, 3)`, one per row);
     returns per row (size, limiting point (part frame), surface, uv, evaluations) like the exact
     engine."""
-    obj = _Objective(part, cutter, frame, Q)
+    obj = Objective(part, cutter, frame, Q)
     n, npart = len(frame.cc), cfg.pso_particles
     ns = len(part.surfaces)
     hi = np.array([float(ns), 1.0])

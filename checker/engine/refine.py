@@ -40,6 +40,8 @@ from checker.part import Part
 _ABOVE = 1e-9  # mm above the bottom plane: on it the kernels already count a point as uncut
 _ON_FLOOR = 1e-6  # mm: points this close above the bottom plane lie on its contour
 _FLOOR_STEPS = 3
+_CONTOUR_STEPS = 8  # the same, for points predicted along the contour (contour_walk.py)
+_ON_PLANE = 1e-11  # mm: a point moved onto the plane from either side is on it within this
 _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125])
 _REACH = 4.0  # longest Newton step, stencil half-widths
 _PRUNE_AFTER = 2  # iterations before starts far above their row's best are dropped
@@ -433,7 +435,7 @@ def _steps(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, 
     backtracking to the first of _FRACTIONS that improves, and for flat-bottomed cutters, where
     the start's best point lies on the bottom plane, the steps along its contour, elsewhere,
     where the stencil stalled, a `_walk`; all on the start's Taylor model (the model arguments
-    from `_Objective.model_args`). `radius (S, 3)` per start: the walk's trust radius, its
+    from `Objective.model_args`). `radius (S, 3)` per start: the walk's trust radius, its
     reach and their cap, mm (a negative trust radius: the walk has arrived). Writes the best
     point found, `cand[s]`, the distance walked `walked[s]` mm, and `flags[s]` (columns
     `_F_*`)."""
@@ -457,7 +459,7 @@ class _Taylor:
         self.d[starts] = np.stack([ev.points, ev.du, ev.dv, ev.duu, ev.duv, ev.dvv], axis=1)
 
 
-class _Objective:
+class Objective:
     """Imaginary size of surface points (surface id, u, v) for given rows; trims honoured.
 
     Flat-bottomed cutters (R family, psi = 0) cut nothing below their bottom plane, so the
@@ -504,11 +506,23 @@ class _Objective:
                 f[sel[out]] = np.inf
         return f, pts, np.column_stack([u, v])
 
-    def _onto_floor(self, rows, sid, u, v, ev, order: int) -> None:
-        """Move points below their row's bottom plane onto it (in place: u, v, ev)."""
-        for _ in range(_FLOOR_STEPS):
+    def on_contour(self, rows, sid, u, v):
+        """(f (K,), points (K, 3) part frame, uv (K, 2), order-1 evaluation): the points moved
+        onto their row's bottom plane from either side (its contour), and their sizes."""
+        u, v = u.copy(), v.copy()
+        ev = evaluate_mixed(self.part, sid, u, v)
+        self._onto_floor(rows, sid, u, v, ev, 1, both_sides=True, steps=_CONTOUR_STEPS)
+        return (*self._sizes(rows, sid, u, v, ev.points), ev)
+
+    def _onto_floor(self, rows, sid, u, v, ev, order: int, both_sides: bool = False,
+                    steps: int = _FLOOR_STEPS) -> None:
+        """Move points below their row's bottom plane (with `both_sides`, also those above it)
+        onto it in up to `steps` Newton steps (in place: u, v, ev)."""
+        for _ in range(steps):
             z = heights(self.Q, ev.points, rows)
-            low = np.flatnonzero(z < self.floor[rows])
+            off = (np.abs(z - self.floor[rows]) > _ON_PLANE if both_sides
+                   else z < self.floor[rows])
+            low = np.flatnonzero(off)
             if low.size == 0:
                 return
             d = self.dom[sid[low]]
@@ -531,7 +545,7 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
     """Refine S starts: `rows (S,)` CC rows of `frame` (tool frames `Q (N, 3, 3)`, one per row),
     `sid (S,)` surfaces, `uv (S, 2)` start parameters, `step (S, 2)` initial stencil half-widths
     in parameter units."""
-    obj = _Objective(part, cutter, frame, Q)
+    obj = Objective(part, cutter, frame, Q)
     dom = obj.dom
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
     width = hi - lo

@@ -20,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from checker.geometry.evaluate import SurfaceEval, curvatures_of, evaluate_mixed
+from checker.geometry.fundamental import second_form, uv_of_tangents
 from checker.part import Part
 
 
@@ -91,24 +92,13 @@ def _section_third(ev: SurfaceEval, p: np.ndarray) -> np.ndarray:
     `w = q - J^-1 Q(q) / 2`, `q = J^-1 p`, so `6 Z3(p) = C(q) - 3 II(q, J^-1 Q(q))`, where
     `J^-1 x = G^-1 [S_u S_v]^T x` for tangent vectors (`G` the first fundamental form) and
     `II`, `C` the normal parts of the second and third derivatives."""
-    n = ev.normals
-    E = np.einsum("ij,ij->i", ev.du, ev.du)
-    F = np.einsum("ij,ij->i", ev.du, ev.dv)
-    G = np.einsum("ij,ij->i", ev.dv, ev.dv)
-    det = E * G - F * F
-
-    def solve(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        bu, bv = np.einsum("ij,ij->i", ev.du, x), np.einsum("ij,ij->i", ev.dv, x)
-        return (G * bu - F * bv) / det, (E * bv - F * bu) / det
-
-    qu, qv = solve(p)
-    second = (qu * qu)[:, None] * ev.duu + (2.0 * qu * qv)[:, None] * ev.duv + \
+    to_uv = uv_of_tangents(ev.du, ev.dv)
+    q = to_uv(p)
+    qu, qv = q.T
+    second = (ev.duu, ev.duv, ev.dvv)
+    quad = (qu * qu)[:, None] * ev.duu + (2.0 * qu * qv)[:, None] * ev.duv + \
         (qv * qv)[:, None] * ev.dvv
-    mu, mv = solve(second)
     third = (qu ** 3)[:, None] * ev.duuu + (3.0 * qu * qu * qv)[:, None] * ev.duuv + \
         (3.0 * qu * qv * qv)[:, None] * ev.duvv + (qv ** 3)[:, None] * ev.dvvv
-    Luu = np.einsum("ij,ij->i", ev.duu, n)
-    Luv = np.einsum("ij,ij->i", ev.duv, n)
-    Lvv = np.einsum("ij,ij->i", ev.dvv, n)
-    two = qu * mu * Luu + (qu * mv + qv * mu) * Luv + qv * mv * Lvv
-    return np.einsum("ij,ij->i", third, n) - 3.0 * two
+    return (np.einsum("ij,ij->i", third, ev.normals)
+            - 3.0 * second_form(ev.normals, second, q, to_uv(quad)))

@@ -1,0 +1,93 @@
+"""The smallest size along the bottom-plane contour, for flat-bottomed cutters (R family, psi = 0).
+
+Above the bottom plane a flat end-mill's size depends on the horizontal position only (R =
+|d|^2 / (2 e.d)), and its level lines are circles through Pcc tangent to the contour there; the
+part's points above the plane that a cutter can reach lie between the contour and that tangent,
+where R is larger than on the contour at the same distance. So the minimum lies on the contour,
+a curve along which R is smooth, while across it R jumps to inf just below and rises steeply
+just above: a two-dimensional search near the contour stalls, most of all next to Pcc, where
+every level circle passes (docs/MATH.md §6.4). Here the contour is searched in one dimension:
+from a start on it (a row's best point on the plane, or Pcc itself), in both directions, the
+points `contour(sigma)` (the start's contour tangent, sigma mm along it, moved onto the plane
+by Newton steps on the height) at sigma growing by doubling up to `reach`, then golden-section
+search between the neighbours of the smallest. Exact sizes of real surface points throughout,
+so a result can only lower a row's answer soundly. Tool frame through Q; mm."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from checker.engine.frames import heights
+from checker.engine.refine import Objective
+
+FIRST_STEP = 0.005  # mm along the contour: the first probe from the start
+GOLDEN_ROUNDS = 12  # shrinks the bracket 320-fold: sigma to ~1 micrometre near Pcc, R to ~1e-6 mm
+_GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
+
+
+def _sigmas(reach: float) -> np.ndarray:
+    """0 and the doubling steps up to `reach` mm."""
+    count = max(1, int(np.ceil(np.log2(max(reach, FIRST_STEP) / FIRST_STEP))) + 1)
+    return np.concatenate([[0.0], FIRST_STEP * 2.0 ** np.arange(count)])
+
+
+def contour_evaluations(reach: float) -> int:
+    """Exact size evaluations per start of `contour_minimum` (both directions)."""
+    return 2 * (len(_sigmas(reach)) + GOLDEN_ROUNDS + 3)
+
+
+def contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.ndarray,
+                    reach: float):
+    """(size (K,), point (K, 3) part frame, uv (K, 2)): the smallest size found on the contour
+    through each start (rows, surfaces, uv (K, 2)), up to `reach` mm from it either way."""
+    rows2, sid2 = np.tile(rows, 2), np.tile(sid, 2)
+    f0, p0, uv0, ev = obj.on_contour(rows2, sid2, np.tile(uv[:, 0], 2), np.tile(uv[:, 1], 2))
+    tangent = _contour_tangent(obj, rows2, ev) * np.repeat([1.0, -1.0], len(rows))[:, None]
+    sigma = _sigmas(reach)  # (m,)
+
+    lo, hi = obj.dom[sid2, :, 0], obj.dom[sid2, :, 1]
+
+    def at(s: np.ndarray, walkers: np.ndarray | None = None):
+        """Sizes, points and uv at sigma `s` along the contours of `walkers` (all: one each)."""
+        k = np.arange(len(rows2)) if walkers is None else walkers
+        w = np.clip(uv0[k] + s[:, None] * tangent[k], lo[k], hi[k])
+        f, p, q, _ = obj.on_contour(rows2[k], sid2[k], w[:, 0], w[:, 1])
+        return f, p, q
+
+    k2, m = len(rows2), len(sigma)
+    f_grid = np.column_stack([f0, at(np.tile(sigma[1:], k2),
+                                     np.repeat(np.arange(k2), m - 1))[0].reshape(k2, m - 1)])
+    j = np.argmin(f_grid, axis=1)
+    a, b = sigma[np.maximum(j - 1, 0)], sigma[np.minimum(j + 1, m - 1)]
+    c, d = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
+    fc, fd = at(c)[0], at(d)[0]
+    for _ in range(GOLDEN_ROUNDS):
+        left = fc <= fd
+        b, a = np.where(left, d, b), np.where(left, a, c)
+        probe = np.where(left, b - _GOLDEN * (b - a), a + _GOLDEN * (b - a))
+        fp = at(probe)[0]
+        c, fc, d, fd = (np.where(left, probe, d), np.where(left, fp, fd),
+                        np.where(left, c, probe), np.where(left, fc, fp))
+    s_best = np.where(fc <= fd, c, d)
+    f, p, q = at(s_best)
+    grid_best = f_grid[np.arange(k2), j]
+    use_grid = grid_best < f
+    if use_grid.any():
+        g = at(sigma[j])
+        f, p, q = (np.where(use_grid[:, None] if x.ndim == 2 else use_grid, y, x)
+                   for x, y in zip((f, p, q), g, strict=True))
+    half = len(rows)
+    first = f[:half] <= f[half:]
+    pick = np.where(first, np.arange(half), np.arange(half) + half)
+    return f[pick], p[pick], q[pick]
+
+
+def _contour_tangent(obj: Objective, rows: np.ndarray, ev) -> np.ndarray:
+    """(K, 2) the (u, v) step per mm along the contour (the height's level line) at points of
+    order-1 evaluation `ev`: (-h_v, h_u) scaled to unit length in space."""
+    hu = heights(obj.Q, ev.du, rows)
+    hv = heights(obj.Q, ev.dv, rows)
+    w = np.column_stack([-hv, hu])
+    length = np.linalg.norm(w[:, :1] * ev.du + w[:, 1:] * ev.dv, axis=1)
+    return w / np.maximum(length, 1e-300)[:, None]
+
