@@ -10,8 +10,9 @@ every level circle passes (docs/MATH.md §6.4). Here the contour is searched in 
 from a start on it (a row's best point on the plane, or Pcc itself), in both directions, the
 points `contour(sigma)` (the start's contour tangent, sigma mm along it, moved onto the plane
 by Newton steps on the height) at sigma growing by doubling up to `reach`, then golden-section
-search between the neighbours of the smallest. Exact sizes of real surface points throughout,
-so a result can only lower a row's answer soundly. Tool frame through Q; mm."""
+search between the neighbours of the smallest, on the side whose samples reach lower. Exact
+sizes of real surface points throughout, so a result can only lower a row's answer soundly.
+Tool frame through Q; mm."""
 
 from __future__ import annotations
 
@@ -32,8 +33,8 @@ def _sigmas(reach: float) -> np.ndarray:
 
 
 def contour_evaluations(reach: float) -> int:
-    """Exact size evaluations per start of `contour_minimum` (both directions)."""
-    return 2 * (len(_sigmas(reach)) + GOLDEN_ROUNDS + 3)
+    """Exact size evaluations per start of `contour_minimum` (at most)."""
+    return 2 * len(_sigmas(reach)) + GOLDEN_ROUNDS + 3
 
 
 def contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.ndarray,
@@ -54,32 +55,32 @@ def contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.nd
         f, p, q, _ = obj.on_contour(rows2[k], sid2[k], w[:, 0], w[:, 1])
         return f, p, q
 
-    k2, m = len(rows2), len(sigma)
-    f_grid = np.column_stack([f0, at(np.tile(sigma[1:], k2),
-                                     np.repeat(np.arange(k2), m - 1))[0].reshape(k2, m - 1)])
+    k2, m, half = len(rows2), len(sigma), len(rows)
+    fg, pg, qg = at(np.tile(sigma[1:], k2), np.repeat(np.arange(k2), m - 1))
+    f_grid = np.column_stack([f0, fg.reshape(k2, m - 1)])
+    p_grid = np.concatenate([p0[:, None], pg.reshape(k2, m - 1, 3)], axis=1)
+    q_grid = np.concatenate([uv0[:, None], qg.reshape(k2, m - 1, 2)], axis=1)
     j = np.argmin(f_grid, axis=1)
-    a, b = sigma[np.maximum(j - 1, 0)], sigma[np.minimum(j + 1, m - 1)]
+    # per start the direction whose samples reach lower, refined by golden section there
+    ar = np.arange(half)
+    side = np.where(f_grid[ar, j[:half]] <= f_grid[ar + half, j[half:]], ar, ar + half)
+    f, p, q = f_grid[side, j[side]], p_grid[side, j[side]], q_grid[side, j[side]]
+    go = np.flatnonzero(np.isfinite(f))
+    walkers, jg = side[go], j[side[go]]
+    a, b = sigma[np.maximum(jg - 1, 0)], sigma[np.minimum(jg + 1, m - 1)]
     c, d = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
-    fc, fd = at(c)[0], at(d)[0]
+    fc, fd = at(c, walkers)[0], at(d, walkers)[0]
     for _ in range(GOLDEN_ROUNDS):
         left = fc <= fd
         b, a = np.where(left, d, b), np.where(left, a, c)
         probe = np.where(left, b - _GOLDEN * (b - a), a + _GOLDEN * (b - a))
-        fp = at(probe)[0]
+        fp = at(probe, walkers)[0]
         c, fc, d, fd = (np.where(left, probe, d), np.where(left, fp, fd),
                         np.where(left, c, probe), np.where(left, fc, fp))
-    s_best = np.where(fc <= fd, c, d)
-    f, p, q = at(s_best)
-    grid_best = f_grid[np.arange(k2), j]
-    use_grid = grid_best < f
-    if use_grid.any():
-        g = at(sigma[j])
-        f, p, q = (np.where(use_grid[:, None] if x.ndim == 2 else use_grid, y, x)
-                   for x, y in zip((f, p, q), g, strict=True))
-    half = len(rows)
-    first = f[:half] <= f[half:]
-    pick = np.where(first, np.arange(half), np.arange(half) + half)
-    return f[pick], p[pick], q[pick]
+    fg, pg, qg = at(np.where(fc <= fd, c, d), walkers)
+    better = fg < f[go]
+    f[go[better]], p[go[better]], q[go[better]] = fg[better], pg[better], qg[better]
+    return f, p, q
 
 
 def _contour_tangent(obj: Objective, rows: np.ndarray, ev) -> np.ndarray:
