@@ -98,7 +98,7 @@ def test_the_closed_form_is_the_size_at_radius_zero(rows, cutter_text, tilted):
     axis = np.array([np.sin(TILT), 0.0, np.cos(TILT)]) if tilted else np.array([0.0, 0.0, 1.0])
     cutter = parse_cutter(cutter_text)
     Q, frame = _frame(cc, normals, axis)
-    closed = curvature_limit(cutter, part, frame, Q, np.arange(len(cc)), sid, uv)
+    closed = curvature_limit(cutter, part, frame, Q, np.arange(len(cc)), sid, uv).size
     assert np.isfinite(closed).sum() >= 4, closed
     for i in np.flatnonzero(np.isfinite(closed)):
         far = _ring_minimum(cutter, part, Q, frame, i, sid, uv, RHO)

@@ -314,7 +314,9 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     if uv_own is not None:
         pairs = _contact_pairs(tp, part, knn, own, uv_own, cc_part)
         radii = _ring_radii(eng.ring, spacing)
-        ring, at_cc = _ring_starts(part, cutter, frame, Q, *pairs, radii)
+        closed = limits.curvature_limit(cutter, part, frame, Q, *pairs)
+        toward = rotate_rows(Q.transpose(0, 2, 1), closed.direction, pairs[0])  # part frame
+        ring, at_cc = _ring_starts(part, cutter, frame, Q, *pairs, radii, toward)
         srow, ssid, suv, sstep = (np.concatenate([a, b]) for a, b in
                                   zip((srow, ssid, suv, sstep), ring, strict=True))
         np.add.at(evals, pairs[0], _FIRST_RING + 10 * (len(radii) - 1))
@@ -331,8 +333,7 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
         _keep_smaller(best, lrow, lsize, cc_part[lrow], lsid, luv)
     if pairs is not None:
         prow, psid, puv = pairs
-        lim = limits.curvature_limit(cutter, part, frame, Q, prow, psid, puv)
-        _keep_smaller(best, prow, lim, cc_part[prow], psid, puv)
+        _keep_smaller(best, prow, closed.size, cc_part[prow], psid, puv)
     if cutter.flat_bottomed:
         _along_contours(part, cutter, frame, Q, best, cc_part, spacing, evals)
     return size, lim_p, lim_s, lim_uv, evals
@@ -458,18 +459,20 @@ def _ring_radii(ring: float, spacing: float) -> list[float]:
 
 
 def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
-                 sid: np.ndarray, uv: np.ndarray, radii: list[float]):
+                 sid: np.ndarray, uv: np.ndarray, radii: list[float], toward: np.ndarray):
     """Around each CC point, on each surface it lies on (pairs rows (K,), sid (K,), uv (K, 2)),
     points on rings of `radii` (mm) in directions even in the tangent plane (not in (u, v)):
-    _FIRST_RING of them on the first ring, which probes the curvature limit at the CC point; its
-    best direction (interpolated between the samples) and the opposite one, with 8 even ones, on
-    every wider ring: the narrow valleys near the CC point that the samples do not resolve leave
-    it along that direction. The best point of each ring is a refinement start (stencil
-    half-width: the first ring's radius, then half the ring's). Returns the starts (rows, sid,
-    uv, half-widths) and the limits at the CC points themselves (rows, size, sid, uv): along
-    the best direction the size is s0 + b rho + O(rho^2) (third-order contact); where b > 0 the
-    infimum is s0, at the CC point, which no point reaches: extrapolated from rho and rho/2
-    (Richardson), the curvature limit for every cutter family (docs/MATH.md §6.2, §6.3)."""
+    _FIRST_RING of them on the first ring, which probes the curvature limit at the CC point; the
+    direction of the closed-form limit (`toward (K, 3)`, part frame, NaN where none: limits.py),
+    else the first ring's best (interpolated between the samples), and the opposite one, with 8
+    even ones, on every wider ring: the narrow valleys near the CC point that the samples do not
+    resolve leave it along that direction (a sector a few degrees wide at 0.01 mm). The best
+    point of each ring is a refinement start (stencil half-width: the first ring's radius, then
+    half the ring's). Returns the starts (rows, sid, uv, half-widths) and the limits at the CC
+    points themselves (rows, size, sid, uv): along the best direction the size is
+    s0 + b rho + O(rho^2) (third-order contact); where b > 0 the infimum is s0, at the CC point,
+    which no point reaches: extrapolated from rho and rho/2 (Richardson), the curvature limit
+    for every cutter family (docs/MATH.md §6.2, §6.3)."""
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
     dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
@@ -494,19 +497,23 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.nd
         half = radius * per_mm * (1.0 if j == 0 else 0.5)
         out.append((rows[ok], sid[ok], ring[ar, k][ok], half[ok]))
         if j == 0:
-            best = _best_angle(f, first)
+            t1, t2 = _tangent_basis(ev.du, ev.dv)
+            known = np.isfinite(toward).all(axis=1)  # the closed form's direction (limits.py)
+            best = np.where(known, np.arctan2(np.einsum("ij,ij->i", toward, t2),
+                                              np.einsum("ij,ij->i", toward, t1)),
+                            _best_angle(f, first))
             at_cc = _limit_at_cc(cutter, frame, Q, part, rows, sid, uv, lo, hi, to_uv, best,
-                                 radius)
+                                 radius, ~known)
             angles = np.column_stack([best, best + np.pi, np.broadcast_to(even, (len(rows), 8))])
     return tuple(np.concatenate([o[t] for o in out]) for t in range(4)), at_cc
 
 
 def _limit_at_cc(cutter, frame: RowFrame, Q: np.ndarray, part: Part, rows, sid, uv, lo, hi,
-                 to_uv, angle: np.ndarray, radius: float):
-    """(rows, size, sid, uv): the size's limit at the CC points (`_ring_starts`) along
-    `angle`, 2 s(rho/2) - s(rho) with rho = `radius`; the opposite direction where that one
-    leaves the surface's domain (a CC point on its boundary; the curvature is the same);
-    docs/MATH.md §6.3."""
+                 to_uv, angle: np.ndarray, radius: float, wanted: np.ndarray):
+    """(rows, size, sid, uv): the size's limit at the `wanted` CC points (`_ring_starts`;
+    the others have it in closed form) along `angle`, 2 s(rho/2) - s(rho) with rho = `radius`;
+    the opposite direction where that one leaves the surface's domain (a CC point on its
+    boundary; the curvature is the same); docs/MATH.md §6.3."""
     step = radius * to_uv(angle[:, None])[:, 0]
     out = (uv + step < lo) | (uv + step > hi)
     step = np.where(out.any(axis=1)[:, None], -step, step)
@@ -516,17 +523,23 @@ def _limit_at_cc(cutter, frame: RowFrame, Q: np.ndarray, part: Part, rows, sid, 
                          np.r_[near[:, 1], far[:, 1]]).points
     f = pair_sizes(cutter, frame, np.tile(rows, 2), rotate_rows(Q, pts, np.tile(rows, 2)))
     f_near, f_far = f[:len(rows)], f[len(rows):]
-    ok = np.isfinite(f_near) & np.isfinite(f_far)
+    ok = np.isfinite(f_near) & np.isfinite(f_far) & wanted
     limit = np.maximum(np.minimum(2.0 * f_near[ok] - f_far[ok], f_near[ok]), 0.0)
     return rows[ok], limit, sid[ok], uv[ok]
+
+
+def _tangent_basis(du: np.ndarray, dv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Orthonormal tangent vectors (K, 3) at K surface points: du's direction, and the normal
+    cross it."""
+    t1 = du / np.maximum(np.linalg.norm(du, axis=1, keepdims=True), 1e-300)
+    nrm = np.cross(du, dv)
+    return t1, np.cross(nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300), t1)
 
 
 def _tangent_to_uv(du: np.ndarray, dv: np.ndarray):
     """`f(angles (K, m)) -> (K, m, 2)`: the (u, v) steps of unit length in the tangent plane at
     K surface points (derivatives du, dv (K, 3)), at `angles` (rad) from du's direction."""
-    t1 = du / np.maximum(np.linalg.norm(du, axis=1, keepdims=True), 1e-300)
-    nrm = np.cross(du, dv)
-    t2 = np.cross(nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300), t1)
+    t1, t2 = _tangent_basis(du, dv)
     to_uv = uv_of_tangents(du, dv)
 
     def f(angles: np.ndarray) -> np.ndarray:

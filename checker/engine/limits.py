@@ -28,6 +28,8 @@ into the surface's parameter box.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from checker.engine.frames import rotate_rows
@@ -40,12 +42,20 @@ _EPS_H = 1e-9  # |n_h| below this: the normal is along the axis (no parallel cir
 _COS_SAME = np.cos(1e-4)  # the surface's normal within 1e-4 rad of the row's: tangent contact
 
 
+class CurvatureLimit(NamedTuple):
+    """Per (row, surface, uv) pair: the limit `size` (K,) mm (inf where none applies) and the
+    tangent `direction` (K, 3) (tool frame; its sign free) along which the size tends to it
+    (NaN where none applies)."""
+
+    size: np.ndarray
+    direction: np.ndarray
+
+
 def curvature_limit(cutter, part: Part, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
-                    sid: np.ndarray, uv: np.ndarray) -> np.ndarray:
-    """s_lim (K,) mm for (row, surface, uv) pairs: the CC point of row `rows[k]` lies on
-    surface `sid[k]` at `uv[k]`; that surface's second derivatives, seen in the row's tool
-    frame (`Q (N, 3, 3)`, normals and e of `frame`), give the limit (module docstring); inf
-    where none applies."""
+                    sid: np.ndarray, uv: np.ndarray) -> CurvatureLimit:
+    """The limit for (row, surface, uv) pairs: the CC point of row `rows[k]` lies on surface
+    `sid[k]` at `uv[k]`; that surface's second derivatives, seen in the row's tool frame
+    (`Q (N, 3, 3)`, normals and e of `frame`), give it (module docstring)."""
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1], order=2)
     su, sv = rotate_rows(Q, ev.du, rows), rotate_rows(Q, ev.dv, rows)
     second = [rotate_rows(Q, d, rows) for d in (ev.duu, ev.duv, ev.dvv)]
@@ -69,7 +79,8 @@ def curvature_limit(cutter, part: Part, frame: RowFrame, Q: np.ndarray, rows: np
         lim = np.where(fillet, lim, np.inf)
     tangent = np.einsum("ij,ij->i", rotate_rows(Q, ev.normals, rows), n) >= _COS_SAME
     ok = np.isfinite(lim) & tangent & _leads_inside(part, sid, uv, to_uv(t))
-    return np.where(ok, np.maximum(lim, 0.0), np.inf)
+    return CurvatureLimit(np.where(ok, np.maximum(lim, 0.0), np.inf),
+                          np.where(ok[:, None], t, np.nan))
 
 
 def _corner_limit(r: float, n: np.ndarray, e: np.ndarray, second: list, to_uv):
