@@ -471,8 +471,8 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.nd
     half the ring's). Returns the starts (rows, sid, uv, half-widths) and the limits at the CC
     points themselves (rows, size, sid, uv): along the best direction the size is
     s0 + b rho + O(rho^2) (third-order contact); where b > 0 the infimum is s0, at the CC point,
-    which no point reaches: extrapolated from rho and rho/2 (Richardson), the curvature limit
-    for every cutter family (docs/MATH.md §6.2, §6.3)."""
+    which no point reaches: extrapolated from rho and rho/2 (Richardson) where the closed form
+    does not apply (docs/MATH.md §6.2, §6.3)."""
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
     dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
