@@ -138,6 +138,11 @@ class Part:
         return self.surfaces[surface_id]
 
     @property
+    def domains(self) -> np.ndarray:
+        """(S, 2, 2) the surfaces' parameter boxes: [[u0, u1], [v0, v1]] per surface id."""
+        return np.array([s.domain for s in self.surfaces], dtype=np.float64).reshape(-1, 2, 2)
+
+    @property
     def bbox(self) -> np.ndarray:
         """(2, 3) [min, max] corners in mm of the kept (trimmed) part, from an evaluated grid."""
         if self._bbox is None:

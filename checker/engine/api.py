@@ -474,7 +474,7 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.nd
     which no point reaches: extrapolated from rho and rho/2 (Richardson) where the closed form
     does not apply (docs/MATH.md §6.2, §6.3)."""
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
-    dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
+    dom = part.domains
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
     per_mm = 1.0 / np.maximum(np.column_stack([np.linalg.norm(ev.du, axis=1),
                                                np.linalg.norm(ev.dv, axis=1)]), 1e-12)

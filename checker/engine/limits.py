@@ -109,7 +109,7 @@ def _forms(n: np.ndarray, second: list, to_uv, t1: np.ndarray, t2: np.ndarray):
 
 def _leads_inside(part: Part, sid: np.ndarray, uv: np.ndarray, step: np.ndarray) -> np.ndarray:
     """(K,) whether +step or -step from uv (K, 2) stays in the parameter box of surface sid."""
-    dom = np.array([part.surfaces[s].domain for s in range(len(part.surfaces))])
+    dom = part.domains
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
     unit = step / np.maximum(np.abs(step).max(axis=1, keepdims=True), 1e-300)
     tiny = 1e-9 * (hi - lo)

@@ -21,7 +21,7 @@ def _to_surface(part: Part, X: np.ndarray):
     """Compound coordinates (K, 2) -> (surface id (K,), u (K,), v (K,))."""
     ns = len(part.surfaces)
     sid = np.clip(np.floor(X[:, 0]).astype(np.int64), 0, ns - 1)
-    dom = np.array([s.domain for s in part.surfaces], dtype=np.float64)
+    dom = part.domains
     fu = np.clip(X[:, 0] - sid, 0.0, 1.0)
     fv = np.clip(X[:, 1], 0.0, 1.0)
     u = dom[sid, 0, 0] + fu * (dom[sid, 0, 1] - dom[sid, 0, 0])

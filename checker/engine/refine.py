@@ -471,7 +471,7 @@ class Objective:
     def __init__(self, part: Part, cutter, frame: RowFrame, Q: np.ndarray) -> None:
         self.part, self.cutter, self.frame, self.Q = part, cutter, frame, Q
         self.trimmed = [s.id for s in part.surfaces if s.trim is not None]
-        self.dom = np.array([s.domain for s in part.surfaces], dtype=np.float64)
+        self.dom = part.domains
         flat = cutter.flat_bottomed
         self.floor = frame.fam.z0 + _ABOVE if flat else None
         self.sz = size_args(cutter, frame, np.arange(len(frame.cc)))
