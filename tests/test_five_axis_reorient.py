@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
+from verdict_counts import findings_in
 
 from checker.apt import read_cl
 from checker.five_axis.frames import axes_from_angles
@@ -32,7 +33,6 @@ from postproc.reader import read_gcode
 from postproc.replay import part_motions, toolpath_of
 
 ROUND_TRIP = 1e-4  # mm and rad
-FINDINGS = ("gouge", "interference", "holder", "crash")
 
 
 @pytest.fixture(scope="module")
@@ -49,17 +49,13 @@ def reoriented(job, tmp_path_factory):
     return checked, out
 
 
-def _n(counts) -> int:
-    return sum(getattr(counts, v) for v in FINDINGS)
-
-
 def test_reorientation_removes_the_findings(reoriented):
     checked, _ = reoriented
     doc = checked.document
     assert doc.operations[0].axis_class == "multi-axis"
     assert doc.operations[0].handling == "re-oriented"
-    assert _n(doc.summary.counts_cam) >= 20  # the body on blade 0, the retract's crash
-    assert _n(doc.summary.counts) == 0 and doc.summary.status == "ok"
+    assert findings_in(doc.summary.counts_cam) >= 20  # the body on blade 0, the retract's crash
+    assert findings_in(doc.summary.counts) == 0 and doc.summary.status == "ok"
     grid = doc.operations[0].feasible_grid
     assert grid.infeasible_points == 0 and grid.cam_infeasible_points >= 10
     assert all(v == 0 for v in checked.counts.values())
@@ -124,7 +120,7 @@ def test_the_posted_program_reads_back_as_written_and_checks_clean(reoriented, j
     cutter = read_cl(job).operations[0].cutter
     tp = toolpath_of(pm, path=program, units="mm", cutter=cutter)
     again = check_toolpath(tp, part_path=job.with_suffix(".json"), cutter=cutter, machine=mach)
-    assert again.summary.status == "ok" and _n(again.summary.counts) == 0
+    assert again.summary.status == "ok" and findings_in(again.summary.counts) == 0
 
 
 def test_the_planner_moves_the_rotary_axes_less_than_seed_002(reoriented):
