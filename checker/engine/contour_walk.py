@@ -48,9 +48,8 @@ def contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.nd
 
     lo, hi = obj.dom[sid2, :, 0], obj.dom[sid2, :, 1]
 
-    def at(s: np.ndarray, walkers: np.ndarray | None = None):
-        """Sizes, points and uv at sigma `s` along the contours of `walkers` (all: one each)."""
-        k = np.arange(len(rows2)) if walkers is None else walkers
+    def at(s: np.ndarray, k: np.ndarray):
+        """Sizes, points and uv at sigma `s` along the contours of walkers `k`."""
         w = np.clip(uv0[k] + s[:, None] * tangent[k], lo[k], hi[k])
         f, p, q, _ = obj.on_contour(rows2[k], sid2[k], w[:, 0], w[:, 1])
         return f, p, q

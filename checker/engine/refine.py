@@ -520,24 +520,23 @@ class Objective:
         onto it in up to `steps` Newton steps (in place: u, v, ev)."""
         for _ in range(steps):
             z = heights(self.Q, ev.points, rows)
-            off = (np.abs(z - self.floor[rows]) > _ON_PLANE if both_sides
-                   else z < self.floor[rows])
-            low = np.flatnonzero(off)
-            if low.size == 0:
+            off = np.flatnonzero(np.abs(z - self.floor[rows]) > _ON_PLANE if both_sides
+                                 else z < self.floor[rows])
+            if off.size == 0:
                 return
-            d = self.dom[sid[low]]
-            a = np.column_stack([heights(self.Q, ev.du[low], rows[low]),
-                                 heights(self.Q, ev.dv[low], rows[low])])  # height gradient
-            excess = z[low] - self.floor[rows[low]]
+            d = self.dom[sid[off]]
+            a = np.column_stack([heights(self.Q, ev.du[off], rows[off]),
+                                 heights(self.Q, ev.dv[off], rows[off])])  # height gradient
+            excess = z[off] - self.floor[rows[off]]
             step = newton_steps(excess[:, None] * a, a[:, :, None] * a[:, None, :],
-                                np.column_stack([u[low], v[low]]), d[:, :, 0], d[:, :, 1])
+                                np.column_stack([u[off], v[off]]), d[:, :, 0], d[:, :, 1])
             ok = (step != 0.0).any(axis=1)
-            low, step, d = low[ok], step[ok], d[ok]
-            u[low] = np.clip(u[low] + step[:, 0], d[:, 0, 0], d[:, 0, 1])
-            v[low] = np.clip(v[low] + step[:, 1], d[:, 1, 0], d[:, 1, 1])
-            sub = evaluate_mixed(self.part, sid[low], u[low], v[low], order=order)
+            off, step, d = off[ok], step[ok], d[ok]
+            u[off] = np.clip(u[off] + step[:, 0], d[:, 0, 0], d[:, 0, 1])
+            v[off] = np.clip(v[off] + step[:, 1], d[:, 1, 0], d[:, 1, 1])
+            sub = evaluate_mixed(self.part, sid[off], u[off], v[off], order=order)
             for name in ("points", "du", "dv", "duu", "duv", "dvv")[:3 * order]:
-                getattr(ev, name)[low] = getattr(sub, name)
+                getattr(ev, name)[off] = getattr(sub, name)
 
 
 def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray, sid: np.ndarray,
