@@ -21,7 +21,7 @@ from checker.part import Part, Surface
 
 _CHUNK = 512
 _NO_IDS = np.zeros(0, dtype=np.int64)
-_PARALLEL_MIN = 50_000  # fewer points: one thread (thread start-up costs more than it saves)
+_PARALLEL_MIN = 4_000  # fewer points: one thread (thread start-up costs more than it saves)
 _MAXDEG = 32
 _SLOTS = (1, 3, 6, 10)  # derivatives S, Su, Sv, ... up to each order
 
