@@ -6,7 +6,12 @@ import numpy as np
 import pytest
 from geomdl import NURBS
 
-from checker.geometry.evaluate import evaluate, evaluate_mixed, principal_curvatures
+from checker.geometry.evaluate import (
+    evaluate,
+    evaluate_mixed,
+    points_mixed,
+    principal_curvatures,
+)
 from checker.geometry.inverse import invert_points
 from checker.geometry.primitives import flat_patch, nurbs_cylinder, nurbs_sphere
 from checker.part import Part, Surface
@@ -101,6 +106,22 @@ def test_evaluate_mixed_equals_per_surface_evaluation():
             assert np.array_equal(getattr(mixed, f)[sel], getattr(ev, f))
 
 
+def test_points_alone_match_geomdl_and_the_full_evaluation():
+    """`points_mixed` (no derivatives) on two rational surfaces, 6,000 points (the parallel
+    path): geomdl's points to 1e-10, and the points of `evaluate_mixed` exactly."""
+    rng = np.random.default_rng(17)
+    gs = [_random_geomdl(rng), _random_geomdl(rng, p=2, q=3, nu=6, nv=7)]
+    part = Part(surfaces=[_ours(g) for g in gs])
+    part.surfaces[1].id = 1
+    ids = rng.integers(0, 2, 6000)
+    u, v = rng.uniform(0, 1, 6000), rng.uniform(0, 1, 6000)
+    pts = points_mixed(part, ids, u, v)
+    assert np.array_equal(pts, evaluate_mixed(part, ids, u, v).points)
+    some = rng.choice(6000, 60, replace=False)
+    want = np.array([gs[ids[k]].evaluate_single((u[k], v[k])) for k in some])
+    assert np.max(np.abs(pts[some] - want) / np.maximum(1.0, np.abs(want))) < 1e-10
+
+
 def test_out_of_domain_parameters_are_clipped():
     s = flat_patch([0, 0, 0], [10, 0, 0], [0, 5, 0])
     ev = evaluate(s, [-1.0, 2.0], [0.5, 3.0])
@@ -121,3 +142,5 @@ def test_invert_points_recovers_parameters():
 def test_bad_order_rejected():
     with pytest.raises(ValueError, match="order"):
         evaluate(flat_patch([0, 0, 0], [1, 0, 0], [0, 1, 0]), [0.5], [0.5], order=4)
+    with pytest.raises(ValueError, match="order"):  # points alone: points_mixed
+        evaluate(flat_patch([0, 0, 0], [1, 0, 0], [0, 1, 0]), [0.5], [0.5], order=0)

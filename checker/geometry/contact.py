@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from checker.cutter_core import Core, project_to_core, signed_distance, tool_coordinates
-from checker.geometry.evaluate import evaluate_mixed
+from checker.geometry.evaluate import evaluate_mixed, points_mixed
 from checker.geometry.newton_uv import newton_steps
 from checker.geometry.sampling import TestPoints
 from checker.part import Part
@@ -235,7 +235,7 @@ def _descend(part, core, tips, axes, sid, lo, hi, closed, uv, rows, model) -> np
                 break
             ap = a[p]
             trial = _inside(uv[ap] + t[p, None] * step[p], lo[ap], hi[ap], closed[ap])
-            pts = evaluate_mixed(part, sid[ap], trial[:, 0], trial[:, 1]).points
+            pts = points_mixed(part, sid[ap], trial[:, 0], trial[:, 1])
             f_new = model(core, pts, tips[ap], axes[ap])[0]
             ok = f_new <= f[p]
             uv[ap[ok]] = trial[ok]
@@ -254,10 +254,10 @@ def _closed(part: Part) -> np.ndarray:
     for s in part.surfaces:
         (u0, u1), (v0, v1) = s.domain
         vv, uu = v0 + (v1 - v0) * t, u0 + (u1 - u0) * t
-        pu = evaluate_mixed(part, np.full(14, s.id), np.r_[np.full(7, u0), np.full(7, u1)],
-                            np.r_[vv, vv]).points
-        pv = evaluate_mixed(part, np.full(14, s.id), np.r_[uu, uu],
-                            np.r_[np.full(7, v0), np.full(7, v1)]).points
+        pu = points_mixed(part, np.full(14, s.id), np.r_[np.full(7, u0), np.full(7, u1)],
+                          np.r_[vv, vv])
+        pv = points_mixed(part, np.full(14, s.id), np.r_[uu, uu],
+                          np.r_[np.full(7, v0), np.full(7, v1)])
         size = np.ptp(s.ctrlpts.reshape(-1, 3), axis=0).max()
         out[s.id] = [np.abs(pu[:7] - pu[7:]).max() < 1e-9 * size,
                      np.abs(pv[:7] - pv[7:]).max() < 1e-9 * size]
