@@ -36,6 +36,7 @@ _FIRST_RING = 16  # directions on the first ring around a CC point
 _RING_RATIO = 3.0  # the wider rings' radii grow by at most this
 _ON_CONTOUR = 1e-6  # mm: a best point this near its row's bottom plane lies on its contour
 _CONTOUR_REACH = 2.0  # test-point spacings searched along the contour either way
+_UNBOUNDED_REACH = 8.0  # the same from Pcc, for a row with no size at all
 _BOUND_POINTS = 256  # test points (evenly spread over their order) that start `upper_bounds`
 _BOUND_BLOCK = 1 << 19  # (row, start point) pairs per call of `upper_bounds`' kernel
 
@@ -335,28 +336,38 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
         prow, psid, puv = pairs
         _keep_smaller(best, prow, closed.size, cc_part[prow], psid, puv)
     if cutter.flat_bottomed:
-        _along_contours(part, cutter, frame, Q, best, cc_part, spacing, evals)
+        _along_contours(part, cutter, frame, Q, best, cc_part, spacing, evals, own, uv_own)
     return size, lim_p, lim_s, lim_uv, evals
 
 
 def _along_contours(part: Part, cutter, frame: RowFrame, Q: np.ndarray, best: tuple,
-                    cc_part: np.ndarray, spacing: float, evals: np.ndarray) -> None:
+                    cc_part: np.ndarray, spacing: float, evals: np.ndarray, own: np.ndarray,
+                    uv_own: np.ndarray | None) -> None:
     """Flat-bottomed cutters: where a row's best point lies on its bottom plane's contour (or
     is Pcc itself, the curvature limit), the contour searched in one dimension from there
-    (contour_walk.py) may lower it (in place)."""
+    (contour_walk.py) may lower it (in place). A row with no size at all searches the contour
+    through Pcc (surface `own`, `uv_own`) further: where the part rises above the plane only
+    in a sliver narrower than the samples (at a surface's edge), no sample is cut, and the
+    contour leads there (docs/MATH.md §6.4)."""
     size, point, sid, uv = best
     height = np.full(len(size), np.inf)
     ok = np.isfinite(size) & (sid >= 0) & np.isfinite(uv).all(axis=1)
     rows = np.flatnonzero(ok)
     height[rows] = heights(Q, point[rows], rows) - frame.fam.z0[rows]
     at_cc = np.linalg.norm(point - cc_part, axis=1) <= frame.exclusion
-    rows = np.flatnonzero(ok & ((np.abs(height) <= _ON_CONTOUR) | at_cc))
-    if not rows.size:
-        return
-    obj = Objective(part, cutter, frame, Q)
-    f, p, q = contour_minimum(obj, rows, sid[rows], uv[rows], _CONTOUR_REACH * spacing)
-    evals[rows] += contour_evaluations(spacing * _CONTOUR_REACH)
-    _keep_smaller(best, rows, f, p, sid[rows], q)
+    walks = [(np.flatnonzero(ok & ((np.abs(height) <= _ON_CONTOUR) | at_cc)), sid, uv,
+              _CONTOUR_REACH)]
+    if uv_own is not None:
+        walks.append((np.flatnonzero(~np.isfinite(size) & (own >= 0)), own, uv_own,
+                      _UNBOUNDED_REACH))
+    obj = None
+    for rows, start_sid, start_uv, reach in walks:
+        if not rows.size:
+            continue
+        obj = obj or Objective(part, cutter, frame, Q)
+        f, p, q = contour_minimum(obj, rows, start_sid[rows], start_uv[rows], reach * spacing)
+        evals[rows] += contour_evaluations(reach * spacing)
+        _keep_smaller(best, rows, f, p, start_sid[rows], q)
 
 
 def _keep_smaller(best: tuple, rows: np.ndarray, size: np.ndarray, point: np.ndarray,
