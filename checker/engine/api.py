@@ -19,7 +19,7 @@ from checker.engine.refine import Objective, refine
 from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes, size_args
 from checker.engine.verdict import verdicts
 from checker.errors import PathcheckError
-from checker.geometry.evaluate import evaluate_mixed
+from checker.geometry.evaluate import evaluate_mixed, points_mixed
 from checker.geometry.fundamental import uv_of_tangents
 from checker.geometry.inverse import invert_points
 from checker.geometry.sampling import TestPoints
@@ -498,8 +498,7 @@ def _ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.nd
         m = angles.shape[1]
         step = radius * to_uv(angles)  # (K, m, 2)
         ring = np.clip(uv[:, None, :] + step, lo[:, None], hi[:, None])
-        pts = evaluate_mixed(part, np.repeat(sid, m), ring[..., 0].ravel(),
-                             ring[..., 1].ravel()).points
+        pts = points_mixed(part, np.repeat(sid, m), ring[..., 0].ravel(), ring[..., 1].ravel())
         f = pair_sizes(cutter, frame, np.repeat(rows, m),
                        rotate_rows(Q, pts, np.repeat(rows, m))).reshape(-1, m)
         k = np.argmin(f, axis=1)
@@ -530,8 +529,8 @@ def _limit_at_cc(cutter, frame: RowFrame, Q: np.ndarray, part: Part, rows, sid, 
     step = np.where(out.any(axis=1)[:, None], -step, step)
     near = np.clip(uv + 0.5 * step, lo, hi)
     far = np.clip(uv + step, lo, hi)
-    pts = evaluate_mixed(part, np.tile(sid, 2), np.r_[near[:, 0], far[:, 0]],
-                         np.r_[near[:, 1], far[:, 1]]).points
+    pts = points_mixed(part, np.tile(sid, 2), np.r_[near[:, 0], far[:, 0]],
+                       np.r_[near[:, 1], far[:, 1]])
     f = pair_sizes(cutter, frame, np.tile(rows, 2), rotate_rows(Q, pts, np.tile(rows, 2)))
     f_near, f_far = f[:len(rows)], f[len(rows):]
     ok = np.isfinite(f_near) & np.isfinite(f_far) & wanted
