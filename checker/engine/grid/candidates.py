@@ -13,7 +13,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from checker.engine.family import FamilyBounds
+from checker.engine.grid.family import FamilyBounds
 
 SERIAL_ROWS = 64  # below this many rows a kernel runs serially (thread start-up costs more)
 _EPS_MM = 1e-9  # mm added to a tilted search disc against rounding

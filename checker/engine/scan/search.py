@@ -1,11 +1,11 @@
 """The global scan: the exact minimum of the imaginary size over all test points of the part
-per CC row, with sound pruning (family.py), then up to m seed points per row in distinct basins
+per CC row, with sound pruning (grid/family.py), then up to m seed points per row in distinct basins
 for the local refinement. Tool frame of each row, mm.
 
 The result is that of a plain growing scan: trial sizes s_goal, 4 s_goal, ... (capped at s_cap;
 s_goal = s_start kept within [_MIN_TRIAL_MM, s_cap]) until the smallest size B over the
 candidates C(s) of a trial (the test points of the region where a size <= s can lie, grown by
-the slack; candidates.py) is <= s, at the trial size G(B). The seeds are the sampled local
+the slack; grid/candidates.py) is <= s, at the trial size G(B). The seeds are the sampled local
 minima (basins.py) up to the limit L(B) = (1 + rel) B + slack among C(G); the contour crossings
 (contour.py) come from C(G). As C(s) holds every point of size <= s, when G >= L the seeds are
 those among all points up to L.
@@ -27,12 +27,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.engine.bound import coarse_bounds, warm_bounds
-from checker.engine.candidates import CellGrid, region_rows
-from checker.engine.contour import edge_data
-from checker.engine.frames import identity_rows
+from checker.engine.grid.candidates import CellGrid, region_rows
+from checker.engine.grid.frames import identity_rows
+from checker.engine.scan.bound import coarse_bounds, warm_bounds
+from checker.engine.scan.contour import edge_data
+from checker.engine.scan.sweep import Pass, sweep
 from checker.engine.sizes import RowFrame, size_args, untouchable
-from checker.engine.sweep import Pass, sweep
 
 _GROW = 4.0
 _REL_MARGIN = 0.05
@@ -82,7 +82,7 @@ class _Rows:
     crossings: tuple | None
 
     def region(self, rows: np.ndarray, s: np.ndarray, margin: float) -> np.ndarray:
-        """Region arrays (candidates.py) of finite trial sizes `s` (mm) for `rows`, every bound
+        """Region arrays (grid/candidates.py) of finite trial sizes `s` (mm) for `rows`, every bound
         grown by `margin` mm."""
         fr = self.frame
         plane = np.column_stack([fr.n[rows], np.einsum("ij,ij->i", fr.n[rows], fr.cc[rows])

@@ -5,7 +5,7 @@ the minimum often lies on the contour line where the part crosses that plane, be
 Every edge of the sample graph (a test point and one of its nearest test points on the same
 surface) that straddles the plane gives a crossing point by linear interpolation; the best few
 crossings per row (by their size) start the local refinement, which then follows the exact
-contour (refine.py). Tool frame, mm."""
+contour (refine/steps.py). Tool frame, mm."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ import numba as nb
 import numpy as np
 
 from checker import kernels
-from checker.engine.candidates import CellGrid, cell_heights
-from checker.engine.frames import rotated
+from checker.engine.grid.candidates import CellGrid, cell_heights
+from checker.engine.grid.frames import rotated
 
 _EPS_Z = 1e-6  # mm by which a cell must clear the bottom plane to be passed over
 
@@ -61,7 +61,7 @@ def edge_data(grid: CellGrid, knn: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
 @nb.njit(cache=True, inline="always")
 def straddles(view, grid, nb_lo, nb_hi, c, floor):
     """Whether cell c can hold a point at or above `floor` (row frame, mm) with a neighbour
-    below it (`view`: candidates.grid_view of the row; boxes from `edge_data`)."""
+    below it (`view`: `grid_view` of the row, grid/candidates.py; boxes from `edge_data`)."""
     if view[0] == 0.0 and view[1] == 0.0 and view[2] == 1.0:  # the grid's own z axis
         return grid.box_hi[c, 2] + _EPS_Z >= floor and nb_lo[c, 2] - _EPS_Z < floor
     top = cell_heights(view, grid.box_lo, grid.box_hi, c)[1]

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from checker.engine.frames import heights, rotate_rows, rotated
+from checker.engine.grid.frames import heights, rotate_rows, rotated
 from checker.engine.sizes import RowFrame, pair_sizes, point_size, size_args
 from checker.geometry.evaluate import SurfaceEval, evaluate_mixed
 from checker.geometry.newton_uv import newton_step, newton_steps

@@ -10,8 +10,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from checker.engine.basins import row_seeds
-from checker.engine.candidates import (
+from checker.engine.grid.candidates import (
     SERIAL_ROWS,
     CellGrid,
     cell_misses,
@@ -20,8 +19,9 @@ from checker.engine.candidates import (
     grid_view,
     inside,
 )
-from checker.engine.contour import row_crossings, straddles
-from checker.engine.frames import rotated
+from checker.engine.grid.frames import rotated
+from checker.engine.scan.basins import row_seeds
+from checker.engine.scan.contour import row_crossings, straddles
 from checker.engine.sizes import point_size
 
 _BLOCKS_PER_THREAD = 4  # rows are dealt round-robin to this many blocks per thread
@@ -126,7 +126,7 @@ def _sweep_ser(nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, fo
 def sweep(grid: CellGrid, rot: np.ndarray, reg: np.ndarray, lim: np.ndarray, sz: tuple,
           knn: np.ndarray, m: int, rel: float, slack: float,
           crossings: tuple | None = None) -> Pass:
-    """One pass over N rows: the test points of each row's region `reg` (candidates.py region
+    """One pass over N rows: the test points of each row's region `reg` (grid/candidates.py region
     array) are its candidates, and those also in the region `lim` are evaluated (sizes.py, `sz`
     from `size_args`); seeds up to m per row within `rel * best + slack` mm of the best.
     `rot (N, 3, 3)`: each row's frame seen from the grid's. `crossings` (count, separation mm,

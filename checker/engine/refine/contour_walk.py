@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.engine.frames import heights
-from checker.engine.refine import Objective
+from checker.engine.grid.frames import heights
+from checker.engine.refine.steps import Objective
 
 FIRST_STEP = 0.005  # mm along the contour: the first probe from the start
 GOLDEN_ROUNDS = 12  # shrinks the bracket 320-fold: sigma to ~1 micrometre near Pcc, R to ~1e-6 mm

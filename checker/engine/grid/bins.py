@@ -33,9 +33,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from checker.engine.candidates import CellGrid, build_grid
-from checker.engine.frames import group_axes, tool_rotation
-from checker.engine.search import Scan, scan
+from checker.engine.grid.candidates import CellGrid, build_grid
+from checker.engine.grid.frames import group_axes, tool_rotation
+from checker.engine.scan.search import Scan, scan
 from checker.engine.sizes import RowFrame
 from checker.geometry.sampling import TestPoints
 

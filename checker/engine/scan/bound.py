@@ -12,7 +12,7 @@ import math
 import numba as nb
 import numpy as np
 
-from checker.engine.candidates import (
+from checker.engine.grid.candidates import (
     SERIAL_ROWS,
     CellGrid,
     cell_misses,
@@ -20,7 +20,7 @@ from checker.engine.candidates import (
     grid_view,
     inside,
 )
-from checker.engine.frames import rotated
+from checker.engine.grid.frames import rotated
 from checker.engine.sizes import point_size
 
 _COARSE_POINTS = 512  # at most about this many cells per row are sampled by `coarse_bounds`
@@ -125,7 +125,7 @@ def coarse_bounds(grid: CellGrid, rot: np.ndarray, reg: np.ndarray, sz: tuple,
                   knn: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per row (N,): an upper bound (mm, inf: none found) of the smallest size over all test
     points, from about one point per cell (at most about `_COARSE_POINTS` cells) of the region
-    array `reg` (candidates.py) and a descent along the sample graph `knn`; and the kernel
+    array `reg` (grid/candidates.py) and a descent along the sample graph `knn`; and the kernel
     evaluations spent. `rot (N, 3, 3)`: each row's frame seen from the grid's; `sz`:
     sizes.size_args of the rows."""
     n = len(reg)
