@@ -9,13 +9,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.config import Config, default_config
-from checker.engine.grid.bins import binned_scan, part_tops
+from checker.engine.grid.bins import part_tops
 from checker.engine.grid.family import family_bounds
 from checker.engine.grid.frames import group_axes, heights, rotate_rows, tool_rotations
 from checker.engine.refine import limits
 from checker.engine.refine.contour_walk import contour_evaluations, contour_minimum
 from checker.engine.refine.steps import Objective, refine
 from checker.engine.scan.bound import warm_bounds
+from checker.engine.scan.search import binned_scan
 from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes, size_args
 from checker.engine.verdict import verdicts
 from checker.errors import PathcheckError

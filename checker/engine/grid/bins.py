@@ -35,8 +35,6 @@ from scipy.spatial import ConvexHull, QhullError
 
 from checker.engine.grid.candidates import CellGrid, build_grid
 from checker.engine.grid.frames import group_axes, tool_rotation
-from checker.engine.scan.search import Scan, scan
-from checker.engine.sizes import RowFrame
 from checker.geometry.sampling import TestPoints
 
 _BIN_DEG = 2.0  # lattice step on the unit sphere, degrees
@@ -135,29 +133,3 @@ def axis_bins(axes: np.ndarray, Q: np.ndarray):
             out.append((rows, rep[rows[0]], Qb, Q[rows] @ Qb.T))
     return out
 
-
-def binned_scan(tp: TestPoints, cutter, frame: RowFrame, Q: np.ndarray, axes: np.ndarray,
-                s_start: np.ndarray, s_cap: float, slack: float, m: int, knn: np.ndarray,
-                crossings: tuple[int, float] | None = None,
-                first: np.ndarray | None = None) -> Scan:
-    """`search.scan` for rows of any tool axes `axes (N, 3)` (part frame, unit) with tool frames
-    `Q (N, 3, 3)`, one scan per bin of nearby axes (`first`: see `scan`); the merged result."""
-    n = len(s_start)
-    best = np.full(n, np.inf)
-    arg = np.full(n, -1, dtype=np.int64)
-    seeds = np.full((n, m), -1, dtype=np.int64)
-    seed_size = np.full((n, m), np.inf)
-    evals = np.zeros(n, dtype=np.int64)
-    cross: list[tuple] = []
-    for rows, axis, Qb, D in axis_bins(axes, Q):
-        sub = RowFrame(frame.cc[rows], frame.n[rows], frame.e[rows], frame.fam.take(rows),
-                       frame.exclusion)
-        sc = scan(cutter, sub, tool_grid(tp, axis, Qb), s_start[rows], s_cap, slack, m, knn,
-                  crossings, rot=D, first=None if first is None else first[rows])
-        best[rows], arg[rows], evals[rows] = sc.best, sc.arg, sc.evaluations
-        seeds[rows], seed_size[rows] = sc.seeds, sc.seed_size
-        if sc.crossings is not None:
-            r, p, q, f = sc.crossings
-            cross.append((rows[r], p, q, f))
-    found = tuple(np.concatenate([c[t] for c in cross]) for t in range(4)) if cross else None
-    return Scan(best, arg, seeds, seed_size, evals, found)

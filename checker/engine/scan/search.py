@@ -19,6 +19,9 @@ row's result unless G(B) < L(B) or crossings are wanted, and G(B) != G(u); then 
 G(B) and L(B) gives it. Rows without a bound take a pass at s_cap. Rows that no cutter of the
 family can touch (every size 0: no sound region) take the plain growing scan itself.
 (docs/MATH.md §5.2)
+
+Rows of many tool axes (`binned_scan`) take one scan per bin of nearby axes, each on the cell
+grid of its bin (grid/bins.py).
 """
 
 from __future__ import annotations
@@ -27,12 +30,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from checker.engine.grid.bins import axis_bins, tool_grid
 from checker.engine.grid.candidates import CellGrid, region_rows
 from checker.engine.grid.frames import identity_rows
 from checker.engine.scan.bound import coarse_bounds, warm_bounds
 from checker.engine.scan.contour import edge_data
 from checker.engine.scan.sweep import Pass, sweep
 from checker.engine.sizes import RowFrame, size_args, untouchable
+from checker.geometry.sampling import TestPoints
 
 _GROW = 4.0
 _REL_MARGIN = 0.05
@@ -237,3 +242,30 @@ def scan(cutter, frame: RowFrame, grid: CellGrid, s_start: np.ndarray, s_cap: fl
     if st.cross:
         out.crossings = tuple(np.concatenate([c[t] for c in st.cross]) for t in range(4))
     return out
+
+
+def binned_scan(tp: TestPoints, cutter, frame: RowFrame, Q: np.ndarray, axes: np.ndarray,
+                s_start: np.ndarray, s_cap: float, slack: float, m: int, knn: np.ndarray,
+                crossings: tuple[int, float] | None = None,
+                first: np.ndarray | None = None) -> Scan:
+    """`scan` for rows of any tool axes `axes (N, 3)` (part frame, unit) with tool frames
+    `Q (N, 3, 3)`, one scan per bin of nearby axes (`first`: see `scan`); the merged result."""
+    n = len(s_start)
+    best = np.full(n, np.inf)
+    arg = np.full(n, -1, dtype=np.int64)
+    seeds = np.full((n, m), -1, dtype=np.int64)
+    seed_size = np.full((n, m), np.inf)
+    evals = np.zeros(n, dtype=np.int64)
+    cross: list[tuple] = []
+    for rows, axis, Qb, D in axis_bins(axes, Q):
+        sub = RowFrame(frame.cc[rows], frame.n[rows], frame.e[rows], frame.fam.take(rows),
+                       frame.exclusion)
+        sc = scan(cutter, sub, tool_grid(tp, axis, Qb), s_start[rows], s_cap, slack, m, knn,
+                  crossings, rot=D, first=None if first is None else first[rows])
+        best[rows], arg[rows], evals[rows] = sc.best, sc.arg, sc.evaluations
+        seeds[rows], seed_size[rows] = sc.seeds, sc.seed_size
+        if sc.crossings is not None:
+            r, p, q, f = sc.crossings
+            cross.append((rows[r], p, q, f))
+    found = tuple(np.concatenate([c[t] for c in cross]) for t in range(4)) if cross else None
+    return Scan(best, arg, seeds, seed_size, evals, found)
