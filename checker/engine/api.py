@@ -16,6 +16,7 @@ from checker.engine.refine import limits
 from checker.engine.refine.contour_walk import contour_evaluations, contour_minimum
 from checker.engine.refine.steps import Objective, refine
 from checker.engine.scan.bound import warm_bounds
+from checker.engine.scan.contour import ContourSeeds
 from checker.engine.scan.search import binned_scan
 from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes, size_args
 from checker.engine.verdict import verdicts
@@ -204,8 +205,8 @@ def upper_bounds(test_points: TestPoints, part: Part, cutter, cc, normals, axes,
     per = max(1, _BOUND_BLOCK // starts.size)
     for a in range(0, len(rows), per):
         r = np.arange(a, min(a + per, len(rows)))
-        u, _ = warm_bounds(tp.points, Q[r], np.broadcast_to(starts, (r.size, starts.size)),
-                           size_args(cutter, frame, r), knn)
+        u = warm_bounds(tp.points, Q[r], np.broadcast_to(starts, (r.size, starts.size)),
+                        size_args(cutter, frame, r), knn).upper
         bound[rows[r]] = np.where(u <= cfg.engine.max_size, u, np.inf)
     return bound
 
@@ -287,7 +288,7 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
     s0 = max(float(cutter.size), 4.0 * spacing, 1e-3)
     s_start = np.where(np.isfinite(s_ub), s_ub, s0)
     flat = cutter.flat_bottomed
-    cross = (_CONTOUR_SEEDS, 0.5 * spacing) if flat and part.surfaces else None
+    cross = ContourSeeds(_CONTOUR_SEEDS, 0.5 * spacing) if flat and part.surfaces else None
     # s_start can be far above the minimum (a convex spot); a small first trial finds the same
     # answer from fewer candidates (scan: `first`). Contour crossings need the full disc.
     first = None if cross is not None else np.minimum(s_start, _FIRST_TRIAL * s0)
@@ -296,14 +297,14 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
         first = np.where(np.isfinite(near) & (near > 0.0), np.minimum(first, near), first)
     sc = binned_scan(tp, cutter, frame, Q, axes, s_start, eng.max_size, slack, eng.refine_seeds,
                      _neighbours(tp), cross, first)
-    size, arg = sc.best.copy(), sc.arg
+    size, arg = sc.minima.best.copy(), sc.minima.arg
     has = arg >= 0
     lim_p = np.full((n, 3), np.nan)
     lim_p[has] = tp.points[arg[has]]
     lim_s = np.where(has, tp.surface[np.maximum(arg, 0)], -1).astype(np.int64)
     lim_uv = np.full((n, 2), np.nan)
     lim_uv[has] = tp.uv[arg[has]]
-    evals = sc.evaluations + k
+    evals = sc.minima.evaluations + k
     if not part.surfaces:
         return size, lim_p, lim_s, lim_uv, evals
     srow, ssid, suv, sstep = _seed_starts(tp, part, sc, spacing)
@@ -376,8 +377,8 @@ def _keep_smaller(best: tuple, rows: np.ndarray, size: np.ndarray, point: np.nda
 
 def _seed_starts(tp: TestPoints, part: Part, sc, spacing: float):
     """Refinement starts from the scan's seeds: rows, surfaces, uv and stencil half-widths."""
-    srow, col = np.nonzero(sc.seeds >= 0)
-    idx = sc.seeds[srow, col]
+    srow, col = np.nonzero(sc.minima.seeds >= 0)
+    idx = sc.minima.seeds[srow, col]
     keep = tp.surface[idx] >= 0
     srow, idx = srow[keep], idx[keep]
     sid = tp.surface[idx].astype(np.int64)

@@ -30,6 +30,8 @@ as before and costs only memory.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
@@ -41,6 +43,17 @@ _BIN_DEG = 2.0  # lattice step on the unit sphere, degrees
 _OWN_GRID_ROWS = 64  # rows that share an axis exactly and get a grid of their own
 _GRIDS_MAX = 32  # cached grids per set of test points, besides the table lattice's
 _TOP_CHUNK = 1 << 21  # (row, hull vertex) products per block in `part_tops`
+
+
+class AxisBin(NamedTuple):
+    """Rows that share one cell grid: `rows (B,)`, the bin's unit `axis (3,)` (part frame) and
+    its tool frame `rotation (3, 3)`; `relative (B, 3, 3)` each row's tool frame seen from the
+    bin's (D), None when every row of the bin has the bin's own frame."""
+
+    rows: np.ndarray
+    axis: np.ndarray
+    rotation: np.ndarray
+    relative: np.ndarray | None
 
 
 def tool_grid(tp: TestPoints, axis: np.ndarray, Q: np.ndarray | None = None) -> CellGrid:
@@ -110,10 +123,8 @@ def _lattice(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return (k * most + j).astype(np.int64), rep
 
 
-def axis_bins(axes: np.ndarray, Q: np.ndarray):
-    """Bins of rows with unit `axes (N, 3)` and their tool frames `Q (N, 3, 3)`: a list of
-    (rows (B,), bin axis (3,), bin rotation (3, 3), D (B, 3, 3) or None when every row of the
-    bin has the bin's own frame)."""
+def axis_bins(axes: np.ndarray, Q: np.ndarray) -> list[AxisBin]:
+    """Bins of rows with unit `axes (N, 3)` and their tool frames `Q (N, 3, 3)`."""
     keys, group = group_axes(axes)
     counts = np.bincount(group, minlength=len(keys))
     cell, rep = _lattice(axes)
@@ -127,9 +138,9 @@ def axis_bins(axes: np.ndarray, Q: np.ndarray):
         if rows.size == 0:
             continue
         if (group[rows] == group[rows[0]]).all() and not kept[rows[0]]:
-            out.append((rows, axes[rows[0]], Q[rows[0]], None))
+            out.append(AxisBin(rows, axes[rows[0]], Q[rows[0]], None))
         else:
             Qb = tool_rotation(rep[rows[0]])
-            out.append((rows, rep[rows[0]], Qb, Q[rows] @ Qb.T))
+            out.append(AxisBin(rows, rep[rows[0]], Qb, Q[rows] @ Qb.T))
     return out
 
