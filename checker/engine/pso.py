@@ -12,6 +12,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from checker.config import EngineConfig
+from checker.engine.refine.best import RowBest
 from checker.engine.refine.steps import Objective
 from checker.engine.sizes import RowFrame
 from checker.part import Part
@@ -30,10 +31,9 @@ def _to_surface(part: Part, X: np.ndarray):
 
 
 def pso_search(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rng: np.random.Generator,
-               cfg: EngineConfig):
+               cfg: EngineConfig) -> RowBest:
     """PSO + Nelder-Mead for every row of `frame` (tool frames `Q (N, 3, 3)`, one per row);
-    returns per row (size, limiting point (part frame), surface, uv, evaluations) like the exact
-    engine."""
+    the rows' best like the exact engine's."""
     obj = Objective(part, cutter, frame, Q)
     n, npart = len(frame.cc), cfg.pso_particles
     ns = len(part.surfaces)
@@ -94,4 +94,4 @@ def pso_search(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rng: np.rando
     pts[~found] = np.nan
     sid = np.where(found, sid, -1)
     uv = np.where(found[:, None], np.column_stack([u, v]), np.nan)
-    return size, pts, sid, uv, evals
+    return RowBest(size, pts, sid, uv, evals)

@@ -19,11 +19,37 @@ from __future__ import annotations
 import numpy as np
 
 from checker.engine.grid.frames import heights
+from checker.engine.refine.best import RowBest
 from checker.engine.refine.steps import Objective
+from checker.engine.sizes import RowFrame
+from checker.part import Part
 
 FIRST_STEP = 0.005  # mm along the contour: the first probe from the start
 GOLDEN_ROUNDS = 12  # shrinks the bracket 320-fold: sigma to ~1 micrometre near Pcc, R to ~1e-6 mm
 _GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
+_ON_CONTOUR = 1e-6  # mm: a best point this near its row's bottom plane lies on its contour
+_CONTOUR_REACH = 2.0  # test-point spacings searched along the contour either way
+
+
+def along_contours(part: Part, cutter, frame: RowFrame, Q: np.ndarray, best: RowBest,
+                   cc_part: np.ndarray, spacing: float) -> None:
+    """Flat-bottomed cutters: where a row's best point lies on its bottom plane's contour (or
+    is Pcc itself, the curvature limit; `cc_part (N, 3)` part frame), the contour searched in
+    one dimension from there, up to `_CONTOUR_REACH` test-point `spacing`s either way, may
+    lower it (in place)."""
+    height = np.full(len(best.size), np.inf)
+    ok = np.isfinite(best.size) & (best.surface >= 0) & np.isfinite(best.uv).all(axis=1)
+    rows = np.flatnonzero(ok)
+    height[rows] = heights(Q, best.point[rows], rows) - frame.fam.z0[rows]
+    at_cc = np.linalg.norm(best.point - cc_part, axis=1) <= frame.exclusion
+    rows = np.flatnonzero(ok & ((np.abs(height) <= _ON_CONTOUR) | at_cc))
+    if not rows.size:
+        return
+    obj = Objective(part, cutter, frame, Q)
+    sid, uv = best.surface[rows], best.uv[rows]
+    f, p, q = _contour_minimum(obj, rows, sid, uv, _CONTOUR_REACH * spacing)
+    best.evaluations[rows] += _contour_evaluations(spacing * _CONTOUR_REACH)
+    best.lower(rows, f, p, sid, q)
 
 
 def _sigmas(reach: float) -> np.ndarray:
@@ -32,13 +58,13 @@ def _sigmas(reach: float) -> np.ndarray:
     return np.concatenate([[0.0], FIRST_STEP * 2.0 ** np.arange(count)])
 
 
-def contour_evaluations(reach: float) -> int:
-    """Exact size evaluations per start of `contour_minimum` (at most)."""
+def _contour_evaluations(reach: float) -> int:
+    """Exact size evaluations per start of `_contour_minimum` (at most)."""
     return 2 * len(_sigmas(reach)) + GOLDEN_ROUNDS + 3
 
 
-def contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.ndarray,
-                    reach: float):
+def _contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.ndarray,
+                     reach: float):
     """(size (K,), point (K, 3) part frame, uv (K, 2)): the smallest size found on the contour
     through each start (rows, surfaces, uv (K, 2)), up to `reach` mm from it either way."""
     rows2, sid2 = np.tile(rows, 2), np.tile(sid, 2)
