@@ -20,7 +20,7 @@ import numpy as np
 
 from checker.engine.grid.frames import heights
 from checker.engine.refine.best import RowBest
-from checker.engine.refine.steps import Objective
+from checker.engine.refine.objective import Objective, SurfaceSizes
 from checker.engine.sizes import RowFrame
 from checker.part import Part
 
@@ -68,20 +68,21 @@ def _contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.n
     """(size (K,), point (K, 3) part frame, uv (K, 2)): the smallest size found on the contour
     through each start (rows, surfaces, uv (K, 2)), up to `reach` mm from it either way."""
     rows2, sid2 = np.tile(rows, 2), np.tile(sid, 2)
-    f0, p0, uv0, ev = obj.on_contour(rows2, sid2, np.tile(uv[:, 0], 2), np.tile(uv[:, 1], 2))
-    tangent = _contour_tangent(obj, rows2, ev) * np.repeat([1.0, -1.0], len(rows))[:, None]
+    start = obj.on_contour(rows2, sid2, np.tile(uv[:, 0], 2), np.tile(uv[:, 1], 2))
+    f0, p0, uv0 = start.size, start.point, start.uv
+    tangent = _contour_tangent(obj, rows2, start.ev) * np.repeat([1.0, -1.0], len(rows))[:, None]
     sigma = _sigmas(reach)  # (m,)
 
     lo, hi = obj.dom[sid2, :, 0], obj.dom[sid2, :, 1]
 
-    def at(s: np.ndarray, k: np.ndarray):
-        """Sizes, points and uv at sigma `s` along the contours of walkers `k`."""
+    def at(s: np.ndarray, k: np.ndarray) -> SurfaceSizes:
+        """The sizes at sigma `s` along the contours of walkers `k`."""
         w = np.clip(uv0[k] + s[:, None] * tangent[k], lo[k], hi[k])
-        f, p, q, _ = obj.on_contour(rows2[k], sid2[k], w[:, 0], w[:, 1])
-        return f, p, q
+        return obj.on_contour(rows2[k], sid2[k], w[:, 0], w[:, 1])
 
     k2, m, half = len(rows2), len(sigma), len(rows)
-    fg, pg, qg = at(np.tile(sigma[1:], k2), np.repeat(np.arange(k2), m - 1))
+    grid = at(np.tile(sigma[1:], k2), np.repeat(np.arange(k2), m - 1))
+    fg, pg, qg = grid.size, grid.point, grid.uv
     f_grid = np.column_stack([f0, fg.reshape(k2, m - 1)])
     p_grid = np.concatenate([p0[:, None], pg.reshape(k2, m - 1, 3)], axis=1)
     q_grid = np.concatenate([uv0[:, None], qg.reshape(k2, m - 1, 2)], axis=1)
@@ -94,15 +95,16 @@ def _contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.n
     walkers, jg = side[go], j[side[go]]
     a, b = sigma[np.maximum(jg - 1, 0)], sigma[np.minimum(jg + 1, m - 1)]
     c, d = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
-    fc, fd = at(c, walkers)[0], at(d, walkers)[0]
+    fc, fd = at(c, walkers).size, at(d, walkers).size
     for _ in range(GOLDEN_ROUNDS):
         left = fc <= fd
         b, a = np.where(left, d, b), np.where(left, a, c)
         probe = np.where(left, b - _GOLDEN * (b - a), a + _GOLDEN * (b - a))
-        fp = at(probe, walkers)[0]
+        fp = at(probe, walkers).size
         c, fc, d, fd = (np.where(left, probe, d), np.where(left, fp, fd),
                         np.where(left, c, probe), np.where(left, fc, fp))
-    fg, pg, qg = at(np.where(fc <= fd, c, d), walkers)
+    last = at(np.where(fc <= fd, c, d), walkers)
+    fg, pg, qg = last.size, last.point, last.uv
     better = fg < f[go]
     f[go[better]], p[go[better]], q[go[better]] = fg[better], pg[better], qg[better]
     return f, p, q
