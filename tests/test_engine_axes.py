@@ -151,7 +151,7 @@ def test_four_axis_rows_close_in_b_across_bins_agree_with_direct(compressor):
 
 
 def test_small_first_trial_gives_the_same_answer_from_fewer_candidates(compressor, monkeypatch):
-    """(CC point, B) rows far from the CAM's B: the scan's small first trial (search.scan
+    """(CC point, B) rows far from the CAM's B: the scan's small first trial (scan.search.scan
     `first`) finds the same seeds (refinement starts) and bit-identical sizes, limiting points
     and verdicts as a start at the nearest points' upper bound, with fewer kernel evaluations."""
     import checker.engine.api as api

@@ -60,7 +60,7 @@ def tool_grid(tp: TestPoints, axis: np.ndarray, Q: np.ndarray | None = None) -> 
     """Cell grid of the test points rotated by `Q` (default `tool_rotation(axis)`) into the tool
     frame of the unit `axis` (part frame); cached per axis: kept for the part on the table
     lattice (module docstring), else one of the last `_GRIDS_MAX`."""
-    cache = tp.cache("engine.bins")
+    cache = tp.cache("engine.grid.bins")
     key = tuple(np.round(axis, 12).tolist())
     table = cache.setdefault("table", {})
     grids = cache.setdefault("grids", {})
@@ -79,7 +79,7 @@ def tool_grid(tp: TestPoints, axis: np.ndarray, Q: np.ndarray | None = None) -> 
 
 def drop_table_grids(tp: TestPoints) -> None:
     """Free the table lattice's grids of `tp` (after a best-B search: the memory goes back)."""
-    tp.cache("engine.bins").pop("table", None)
+    tp.cache("engine.grid.bins").pop("table", None)
 
 
 def _on_table_lattice(axis: np.ndarray) -> bool:
@@ -92,7 +92,7 @@ def part_tops(tp: TestPoints, Q: np.ndarray) -> np.ndarray:
     """(N,) height of the highest test point in each row's tool frame `Q (N, 3, 3)`, mm: the
     maximum over the vertices of the points' convex hull (cached; all points when the hull is
     flat)."""
-    cache = tp.cache("engine.bins")
+    cache = tp.cache("engine.grid.bins")
     ext = cache.get("extreme")
     if ext is None:
         try:
