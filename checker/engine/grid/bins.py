@@ -84,8 +84,8 @@ def drop_table_grids(tp: TestPoints) -> None:
 
 def _on_table_lattice(axis: np.ndarray) -> bool:
     """Whether the unit `axis` (3,) is a lattice axis perpendicular to Y (to 12 decimals)."""
-    rep = _lattice(axis[None, :])[1][0]
-    return abs(axis[1]) < 1e-12 and bool(np.all(np.round(rep - axis, 12) == 0.0))
+    _, rep = _lattice(axis[None, :])
+    return abs(axis[1]) < 1e-12 and bool(np.all(np.round(rep[0] - axis, 12) == 0.0))
 
 
 def part_tops(tp: TestPoints, Q: np.ndarray) -> np.ndarray:

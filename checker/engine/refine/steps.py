@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from checker.engine.grid.frames import rotated
+from checker.engine.grid.frames import rotated, row_height
 from checker.engine.refine.objective import FLOOR_STEPS, Objective
 from checker.engine.sizes import RowFrame, SizeArgs, point_size
 from checker.geometry.evaluate import SurfaceEval
@@ -139,10 +139,10 @@ def _model_value(M, s, r, sd, u, v, snap, e):
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
     _taylor_at(d, uv0, s, u, v, e)
     for _ in range(FLOOR_STEPS if floor.shape[0] else 0):
-        z = rotated(Q, r, e, _POINT)[2]
+        z = row_height(Q, r, e, _POINT)
         if z >= floor[r] and not (snap and z - floor[r] > _ON_FLOOR):
             break
-        du, dv = _onto_level(z - floor[r], rotated(Q, r, e, _DU)[2], rotated(Q, r, e, _DV)[2], u,
+        du, dv = _onto_level(z - floor[r], row_height(Q, r, e, _DU), row_height(Q, r, e, _DV), u,
                              v, lo_u, hi_u, lo_v, hi_v)
         if du == 0.0 and dv == 0.0:
             break
@@ -158,8 +158,8 @@ def _model_value(M, s, r, sd, u, v, snap, e):
 def _near_floor(Q, r, d, s, best_p, floor, hu, hv):
     """Whether start s's best point lies on row r's bottom plane or within the height range of
     its stencil (half-widths hu, hv) above it: the contour steps apply."""
-    span = abs(rotated(Q, r, d[s], _DU)[2]) * hu + abs(rotated(Q, r, d[s], _DV)[2]) * hv
-    return rotated(Q, r, best_p, s)[2] - floor[r] <= max(_ON_FLOOR, span)
+    span = abs(row_height(Q, r, d[s], _DU)) * hu + abs(row_height(Q, r, d[s], _DV)) * hv
+    return row_height(Q, r, best_p, s) - floor[r] <= max(_ON_FLOOR, span)
 
 
 @nb.njit(cache=True, inline="always")
@@ -428,8 +428,8 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     count."""
     d, uv0, Q, dom = M.terms, M.centres, M.Q, M.domains
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
-    gu = rotated(Q, r, d[s], _DU)[2]  # the height's derivatives in u and v
-    gv = rotated(Q, r, d[s], _DV)[2]
+    gu = row_height(Q, r, d[s], _DU)  # the height's derivatives in u and v
+    gv = row_height(Q, r, d[s], _DV)
     mm = 0.0
     for m in range(3):
         mm += (-gv * d[s, _DU, m] + gu * d[s, _DV, m]) ** 2  # the contour tangent, mm per unit
