@@ -1,5 +1,6 @@
-"""`allowable(...)`: the allowable cutter size at many CC points (any tool axes): global scan with
-sound pruning over the test points, batched local refinement in (u, v), verdicts.
+"""`allowable(...)`: the allowable cutter size at many CC points (any tool axes). The inputs
+checked, the rows' tool frames (grid/), the global scan with sound pruning over the test points
+(scan/), the batched local refinement in (u, v) from its starts (refine/), verdicts.
 (docs/MATH.md §3.7, §5, §6)"""
 
 from __future__ import annotations
