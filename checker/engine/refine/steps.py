@@ -33,10 +33,10 @@ import numpy as np
 
 from checker.engine.grid.frames import rotated, row_height
 from checker.engine.refine.objective import FLOOR_STEPS, Objective
-from checker.engine.sizes import RowFrame, SizeArgs, point_size
+from checker.engine.sizes import RowFrame, point_size
 from checker.geometry.evaluate import SurfaceEval
 from checker.geometry.newton_uv import newton_step
-from checker.geometry.trims import PackedTrims, kept
+from checker.geometry.trims import kept
 from checker.part import Part
 
 _ON_FLOOR = 1e-6  # mm: points this close above the bottom plane lie on its contour
@@ -70,20 +70,13 @@ _R_TRUST, _R_REACH, _R_CAP = range(3)
 _U_LO, _U_HI, _V_LO, _V_HI = range(4)
 
 
-class _Model(NamedTuple):
-    """What the compiled steps evaluate the starts' Taylor models with: their `terms (S, 6, 3)`
-    (rows _POINT.._DVV) about their `centres (S, 2)`, the rows' rotations `Q (N, 3, 3)` part
-    -> tool frame and bottom planes `floor (N,)` (tool-frame height; empty: none), the
-    surfaces' `domains (surfaces, 2, 2)`, the rows' `sizes` (sizes.size_args) and the packed
-    `trims`."""
-
-    terms: np.ndarray
-    centres: np.ndarray
-    Q: np.ndarray
-    floor: np.ndarray
-    domains: np.ndarray
-    sizes: SizeArgs
-    trims: PackedTrims
+# The model the compiled steps evaluate the starts with, M = (d, uv0, Q, floor, dom, sz, T):
+# the starts' Taylor terms d (S, 6, 3) (rows _POINT.._DVV) about their (u, v) uv0 (S, 2), the
+# rows' rotations Q (N, 3, 3) part -> tool frame and bottom planes floor (N,) (tool-frame
+# height; empty: none), the surfaces' domains dom (surfaces, 2, 2), the rows' sz
+# (sizes.size_args) and the packed trims T; always unpacked whole. A plain tuple: as a
+# NamedTuple, the calls that take it (not inlined) made the refinement 7 % slower (mould
+# sample, numba 0.68).
 
 
 class _ModelValue(NamedTuple):
@@ -131,11 +124,11 @@ def _onto_level(excess, hu, hv, u, v, lo_u, hi_u, lo_v, hi_v):
 
 @nb.njit(cache=True)
 def _model_value(M, s, r, sd, u, v, snap, e):
-    """The `_ModelValue` of start s's Taylor model (`M`: `_Model`) at (u, v) for CC row r,
+    """The `_ModelValue` of start s's Taylor model (M, above) at (u, v) for CC row r,
     surface sd (rules of `sizes.point_size`, tool frame through Q, inf outside the trim). With a
     floor a point below it (with `snap`: any point) first moves onto it by Newton steps on the
     model's height, clipped to the domain; (u, v) come back moved."""
-    d, uv0, Q, floor, dom = M.terms, M.centres, M.Q, M.floor, M.domains
+    d, uv0, Q, floor, dom, sz, T = M
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
     _taylor_at(d, uv0, s, u, v, e)
     for _ in range(FLOOR_STEPS if floor.shape[0] else 0):
@@ -150,7 +143,7 @@ def _model_value(M, s, r, sd, u, v, snap, e):
         v = min(max(v + dv, lo_v), hi_v)
         _taylor_at(d, uv0, s, u, v, e)
     x, y, z = rotated(Q, r, e, _POINT)
-    f = point_size(M.sizes, r, x, y, z) if kept(M.trims, sd, u, v) else np.inf
+    f = point_size(sz, r, x, y, z) if kept(T, sd, u, v) else np.inf
     return _ModelValue(f, u, v)
 
 
@@ -307,7 +300,7 @@ def _walk(M, s, r, sd, f0, radius, box, e):
     decrease (in place). A step that reaches below the bottom plane of a flat-bottomed cutter
     ends the walk (the contour steps go on from there). Returns (value, u, v, the distance
     walked in mm, model values computed)."""
-    d, uv0, dom = M.terms, M.centres, M.domains
+    d, uv0, _, _, dom, _, _ = M
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
     su, sv = _speeds(d, s)
     su, sv = max(su, 1e-300), max(sv, 1e-300)
@@ -367,7 +360,7 @@ def _walk(M, s, r, sd, f0, radius, box, e):
 def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h, radius,
                 walked, cand, flags, k0, k1):
     """`_steps` for the active starts a[k0:k1]."""
-    M = _Model(d, uv0, Q, floor, dom, sz, T)
+    M = (d, uv0, Q, floor, dom, sz, T)
     e = np.empty((3, 3))
     F = np.empty(9)
     U = np.empty((9, 2))
@@ -426,7 +419,7 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     model centre (value f0), every point snapped onto the plane: at -tau and +tau mm (tau from
     the stencil half-widths), then at the fractions of the parabola's vertex. Returns their
     count."""
-    d, uv0, Q, dom = M.terms, M.centres, M.Q, M.domains
+    d, uv0, Q, _, dom, _, _ = M
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
     gu = row_height(Q, r, d[s], _DU)  # the height's derivatives in u and v
     gv = row_height(Q, r, d[s], _DV)
@@ -470,11 +463,9 @@ def _steps(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, 
     stencil's quadratic (the best stencil point where that is not finite or not convex) with
     backtracking to the first of _FRACTIONS that improves, and for flat-bottomed cutters, where
     the start's best point lies on the bottom plane, the steps along its contour, elsewhere,
-    where the stencil stalled, a `_walk`; all on the start's Taylor model (the fields of a
-    `_Model`, one by one). `radius (S, 3)` per start: the walk's radii (columns `_R_*`). Writes
-    the best
-    point found, `cand[s]`, the distance walked `walked[s]` mm, and `flags[s]` (columns
-    `_F_*`)."""
+    where the stencil stalled, a `_walk`; all on the start's Taylor model (the fields of M, one
+    by one). `radius (S, 3)` per start: the walk's radii (columns `_R_*`). Writes the best point
+    found, `cand[s]`, the distance walked `walked[s]` mm, and `flags[s]` (columns `_F_*`)."""
     n = a.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
         _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h,
