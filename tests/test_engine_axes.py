@@ -1,4 +1,4 @@
-"""Rows with their own tool axes (engine bins, checker/engine/bins.py): allowable sizes of many
+"""Rows with their own tool axes (engine bins, checker/engine/grid/bins.py): allowable sizes of many
 distinct axes at once (candidates found through a grid built for a nearby axis) equal those of one
 axis at a time (a grid for each row's own axis), also for 4-axis rows close in B that fall into
 different bins."""
@@ -12,8 +12,8 @@ from scipy.spatial import cKDTree
 from checker.b_axis import axis_for_b
 from checker.cutter import parse_cutter
 from checker.engine import allowable
-from checker.engine.bins import _BIN_DEG, _OWN_GRID_ROWS, axis_bins, part_tops
-from checker.engine.frames import tool_rotation, tool_rotations
+from checker.engine.grid.bins import _BIN_DEG, _OWN_GRID_ROWS, axis_bins, part_tops
+from checker.engine.grid.frames import tool_rotation, tool_rotations
 from checker.geometry.sampling import TestPoints
 
 SAMPLE = "samples/compressor/compressor"
@@ -151,7 +151,7 @@ def test_four_axis_rows_close_in_b_across_bins_agree_with_direct(compressor):
 
 
 def test_small_first_trial_gives_the_same_answer_from_fewer_candidates(compressor, monkeypatch):
-    """(CC point, B) rows far from the CAM's B: the scan's small first trial (search.scan
+    """(CC point, B) rows far from the CAM's B: the scan's small first trial (scan.search.scan
     `first`) finds the same seeds (refinement starts) and bit-identical sizes, limiting points
     and verdicts as a start at the nearest points' upper bound, with fewer kernel evaluations."""
     import checker.engine.api as api

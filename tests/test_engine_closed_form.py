@@ -1,13 +1,13 @@
 """Allowable sizes against closed-form truths derived for exact rational NURBS parts.
 
-Bowl (sphere radius rho, concave): a ball of radius rho fits everywhere (r* = rho). A bull-nose
-of corner r (r = 0: a flat end-mill, whose bottom rim passes through the CC point and whose
-limit there is the closed form of checker/engine/limits.py) touching at polar angle phi from the
-bottom: its corner circle lies in the
-horizontal plane of the fillet centre O, whose section of the offset sphere (radius rho - r) is a
-circle through O of radius (rho - r) sin(phi) centred on the bowl axis, so R* = (rho - r) sin(phi)
-(the corner circle coincides with it). Groove (cylinder radius rho, concave): the same argument in
-the strip |y| <= (rho - r) sin(phi) gives R* = (rho - r) sin(phi), and r* = rho for a ball.
+Bowl (sphere radius rho, concave): a ball of radius rho fits everywhere (r* = rho). A bull-nose of
+corner r (r = 0: a flat end-mill, whose bottom rim passes through the CC point and whose limit there
+is the closed form of checker/engine/refine/limits.py) touching at polar angle phi from the bottom:
+its corner circle lies in the horizontal plane of the fillet centre O, whose section of the offset
+sphere (radius rho - r) is a circle through O of radius (rho - r) sin(phi) centred on the bowl axis,
+so R* = (rho - r) sin(phi) (the corner circle coincides with it). Groove (cylinder radius rho,
+concave): the same argument in the strip |y| <= (rho - r) sin(phi) gives R* = (rho - r) sin(phi),
+and r* = rho for a ball.
 Tilted floor + wall at x = X: a ball of radius r touching at the origin has its centre at r n
 with n_x = 0, it reaches the wall when r = X; a bull-nose (corner r0, axis at x = 0) reaches it
 when R + r0 = X. The floor never limits (a convex cutter tangent to a plane)."""

@@ -1,4 +1,4 @@
-"""The curvature limit at the CC point in closed form (checker/engine/limits.py, docs/MATH.md
+"""The curvature limit at the CC point in closed form (checker/engine/refine/limits.py, docs/MATH.md
 §3.7) against the size function itself: on free-form patches (tests/engine_parts.free_form), at
 CC points with the tool axis along +z and tilted, for a ball, a bull-nose and a flat end-mill,
 the limit equals the smallest size over a ring of surface points around Pcc extrapolated to the
@@ -15,8 +15,8 @@ from engine_parts import free_form
 from scipy.optimize import brentq, minimize_scalar
 
 from checker.cutter import parse_cutter
-from checker.engine.frames import rotate_rows, tool_rotations
-from checker.engine.limits import curvature_limit
+from checker.engine.grid.frames import rotate_rows, tool_rotations
+from checker.engine.refine.limits import curvature_limit
 from checker.engine.sizes import RowFrame, horizontal_e
 from checker.geometry.evaluate import evaluate_mixed
 from checker.geometry.sampling import sample_part

@@ -26,16 +26,16 @@ SEEDS = ([np.random.SeedSequence().entropy % 2**31] if _ASKED == "random"
          else [int(_ASKED)] if _ASKED else [389757302, 1711532687])
 # a bull-nose whose size falls to its curvature limit at the CC point along a direction a few
 # hundredths of a degree wide: the rings of starts stopped 0.008 mm above PSO at 18.5 mm (PSO's
-# limiting point 0.001 mm from the CC point); the closed form (engine/limits.py) reaches it
+# limiting point 0.001 mm from the CC point); the closed form (engine/refine/limits.py) reaches it
 SHARP_LIMIT = (27306813, 1, "CUTTER/10,2")
 # a flat end-mill whose minimum lies on the bottom plane's contour 0.33 mm from the CC point;
 # the two-dimensional steps slid past it towards the CC point (0.0129 mm above the oracle); the
-# one-dimensional search along the contour (engine/contour_walk.py) finds it
+# one-dimensional search along the contour (engine/refine/contour_walk.py) finds it
 CONTOUR_PAST_PCC = (164492092, 2, "CUTTER/10")
 # bull-noses whose size falls away from the CC point inside a narrow sector (a few degrees at
 # 0.01 mm) around the closed form's direction: the wider rings followed the first ring's sampled
 # best direction, 12 degrees off, and stopped up to 0.86 mm above the oracle; they now follow the
-# closed form's direction (engine/limits.py)
+# closed form's direction (engine/refine/limits.py)
 NARROW_SECTOR = [(1767176840, 1, "CUTTER/10,2"), (925145068, 1, "CUTTER/10,2"),
                  (93157461, 1, "CUTTER/10,2")]
 # a flat end-mill reported unbounded where the oracle finds 519 mm: the part rises above the

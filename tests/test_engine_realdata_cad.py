@@ -4,7 +4,7 @@ BladeX's propeller IGES): every part mapped with a ball, a bull-nose and a flat 
 timeout), never NaN, and for the ball never call a cutter safe that the brute-force oracle
 (tests/engine_oracle.py, dense sampling plus bisection, written from the cutter's geometry
 alone) proves unsafe: engine <= oracle + 1e-3 mm. Before the fix, ec_turbine-A.stp raised a
-ZeroDivisionError from `refine._steps` and ran without end with CUTTER/10,2."""
+ZeroDivisionError from `refine.steps._steps` and ran without end with CUTTER/10,2."""
 
 from __future__ import annotations
 

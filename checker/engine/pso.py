@@ -12,7 +12,8 @@ import numpy as np
 from scipy.optimize import minimize
 
 from checker.config import EngineConfig
-from checker.engine.refine import Objective
+from checker.engine.refine.best import RowBest
+from checker.engine.refine.objective import Objective
 from checker.engine.sizes import RowFrame
 from checker.part import Part
 
@@ -30,10 +31,9 @@ def _to_surface(part: Part, X: np.ndarray):
 
 
 def pso_search(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rng: np.random.Generator,
-               cfg: EngineConfig):
+               cfg: EngineConfig) -> RowBest:
     """PSO + Nelder-Mead for every row of `frame` (tool frames `Q (N, 3, 3)`, one per row);
-    returns per row (size, limiting point (part frame), surface, uv, evaluations) like the exact
-    engine."""
+    the rows' best like the exact engine's."""
     obj = Objective(part, cutter, frame, Q)
     n, npart = len(frame.cc), cfg.pso_particles
     ns = len(part.surfaces)
@@ -45,7 +45,7 @@ def pso_search(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rng: np.rando
 
     def f_of(Xf: np.ndarray, r: np.ndarray) -> np.ndarray:
         sid, u, v = _to_surface(part, Xf)
-        return obj.exact(r, sid, u, v, order=1)[0]
+        return obj.exact(r, sid, u, v, order=1).size
 
     F = f_of(X.reshape(-1, 2), rows).reshape(n, npart)
     pbest, pval = X.copy(), F.copy()
@@ -89,9 +89,9 @@ def pso_search(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rng: np.rando
         if res.fun < size[i]:
             size[i], X_final[i] = res.fun, np.clip(res.x, 0.0, hi - 1e-12)
     sid, u, v = _to_surface(part, X_final)
-    pts = obj.exact(np.arange(n), sid, u, v, order=1)[1]
+    pts = obj.exact(np.arange(n), sid, u, v, order=1).point
     found = np.isfinite(size)
     pts[~found] = np.nan
     sid = np.where(found, sid, -1)
     uv = np.where(found[:, None], np.column_stack([u, v]), np.nan)
-    return size, pts, sid, uv, evals
+    return RowBest(size, pts, sid, uv, evals)

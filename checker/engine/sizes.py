@@ -11,7 +11,7 @@ import numba as nb
 import numpy as np
 
 from checker import kernels
-from checker.engine.family import FamilyBounds
+from checker.engine.grid.family import FamilyBounds
 
 _EPS_H = 1e-9
 

@@ -15,7 +15,7 @@ from checker.b_axis import (
     rotate_about_y,
 )
 from checker.config import Config
-from checker.engine.bins import drop_table_grids
+from checker.engine.grid.bins import drop_table_grids
 from checker.four_axis.best_b import best_b
 from checker.four_axis.plan import (
     Orientations,

@@ -1,6 +1,6 @@
 """The projected Newton step in a surface's parameters (u, v) that every parameter search of the
 project takes: foot points of points near a surface (inverse.py), the cutter's contact with the
-part (contact.py), points brought onto a flat cutter's bottom plane (engine/refine.py).
+part (contact.py), points brought onto a flat cutter's bottom plane (engine/refine/objective.py).
 
 For an objective with gradient g = (g_u, g_v) and a symmetric positive semi-definite matrix H
 (a positive-definite Hessian, or the Gauss-Newton matrix J^T J of a residual), the step d

@@ -90,3 +90,9 @@ def rotated(rot, i, xyz, p):
     return (rot[i, 0, 0] * x + rot[i, 0, 1] * y + rot[i, 0, 2] * z,
             rot[i, 1, 0] * x + rot[i, 1, 1] * y + rot[i, 1, 2] * z,
             rot[i, 2, 0] * x + rot[i, 2, 1] * y + rot[i, 2, 2] * z)
+
+
+@nb.njit(cache=True, inline="always")
+def row_height(rot, i, xyz, p):
+    """The height (z) of point `xyz[p]` (grid frame) in the frame of row i: `rotated(...)[2]`."""
+    return rot[i, 2, 0] * xyz[p, 0] + rot[i, 2, 1] * xyz[p, 1] + rot[i, 2, 2] * xyz[p, 2]

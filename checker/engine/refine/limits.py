@@ -32,7 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from checker.engine.frames import rotate_rows
+from checker.engine.grid.frames import rotate_rows
 from checker.engine.sizes import RowFrame
 from checker.geometry.evaluate import evaluate_mixed
 from checker.geometry.fundamental import second_form, uv_of_tangents

@@ -5,13 +5,12 @@ minimum and seeds (basins.py) and, for flat-bottomed cutters, its contour crossi
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
 
-from checker.engine.basins import row_seeds
-from checker.engine.candidates import (
+from checker.engine.grid.candidates import (
     SERIAL_ROWS,
     CellGrid,
     cell_misses,
@@ -20,25 +19,58 @@ from checker.engine.candidates import (
     grid_view,
     inside,
 )
-from checker.engine.contour import row_crossings, straddles
-from checker.engine.frames import rotated
-from checker.engine.sizes import point_size
+from checker.engine.grid.frames import rotated
+from checker.engine.scan.basins import row_seeds
+from checker.engine.scan.contour import (
+    ContourSeeds,
+    Crossings,
+    CrossingSlots,
+    EdgeData,
+    row_crossings,
+    straddles,
+)
+from checker.engine.sizes import SizeArgs, point_size
 
 _BLOCKS_PER_THREAD = 4  # rows are dealt round-robin to this many blocks per thread
 
 
-@dataclass
-class Pass:
-    """Per row (N,): `best` smallest evaluated size (mm, inf: none), `arg` its test point (-1),
-    `seeds (N, m)`, `seed_size (N, m)` (basins.row_seeds, limit `rel * best + slack` above the
-    best), `evaluations`; `crossings` (rows, p, q, fraction) of the contour or None."""
+class Minima(NamedTuple):
+    """Per row: `best (N,)` smallest evaluated size (mm, inf: none), `arg (N,)` its test point
+    (-1 none), `seeds (N, m)` test points starting the refinement (-1 pad) and `seed_size
+    (N, m)` their sizes (basins.row_seeds), `evaluations (N,)` kernel evaluations spent."""
 
     best: np.ndarray
     arg: np.ndarray
     seeds: np.ndarray
     seed_size: np.ndarray
     evaluations: np.ndarray
-    crossings: tuple | None
+
+    @staticmethod
+    def empty(n: int, m: int) -> Minima:
+        """n rows with nothing found yet, m seeds a row."""
+        return Minima(np.full(n, np.inf), np.full(n, -1, dtype=np.int64),
+                      np.full((n, m), -1, dtype=np.int64), np.full((n, m), np.inf),
+                      np.zeros(n, dtype=np.int64))
+
+
+class Scan(NamedTuple):
+    """The result of a scan or of one pass: the rows' `minima` and the `crossings` of their
+    bottom-plane contours (None: not wanted)."""
+
+    minima: Minima
+    crossings: Crossings | None
+
+
+class _CrossingInputs(NamedTuple):
+    """The crossings wanted, as the kernels take them: `on` (any at all), the arrays of the
+    grid's `EdgeData` and the `separation` (mm) of two crossings of a row. Flat: the parallel
+    kernel takes no tuple nested in a tuple."""
+
+    on: bool
+    nb_lo: np.ndarray
+    nb_hi: np.ndarray
+    edges: np.ndarray
+    separation: float
 
 
 @nb.njit(cache=True)
@@ -86,11 +118,12 @@ def _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, ids, vals, cand):
 
 @nb.njit(cache=True)
 def _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, found):
-    """The rows b, b + nblocks, ... of a pass, with scratch arrays of their own: `out` (best,
-    arg, seeds, seed_size, evaluations), `cross` (on, nb_lo, nb_hi, edges, separation mm) and
-    `found` (the crossings' p, q, fraction, size, x-y) as in `sweep`."""
-    best, arg, seeds, seed_size, evals = out
-    on, nb_lo, nb_hi, edges, sep = cross
+    """The rows b, b + nblocks, ... of a pass, with scratch arrays of their own, into `out`
+    (`Minima`) and `found` (`CrossingSlots`); `cross` the crossings wanted."""
+    best, arg, seeds, seed_size, evals = (out.best, out.arg, out.seeds, out.seed_size,
+                                          out.evaluations)
+    on, nb_lo, nb_hi, edges, sep = (cross.on, cross.nb_lo, cross.nb_hi, cross.edges,
+                                    cross.separation)
     npts = knn.shape[0]
     ids = np.empty(npts, dtype=np.int64)
     vals = np.empty(npts)
@@ -108,7 +141,7 @@ def _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, fou
             row_seeds(i, ids, vals, ne, knn, best[i] * (1.0 + rel) + slack, stamp, pos, seeds,
                       seed_size)
         if on:
-            row_crossings(i, cand, nc, grid.xyz, rot, knn, edges, sz, sep, *found)
+            row_crossings(i, cand, nc, grid.xyz, rot, knn, edges, sz, sep, found)
 
 
 @nb.njit(cache=True, parallel=True)
@@ -123,32 +156,26 @@ def _sweep_ser(nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, fo
         _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, found)
 
 
-def sweep(grid: CellGrid, rot: np.ndarray, reg: np.ndarray, lim: np.ndarray, sz: tuple,
-          knn: np.ndarray, m: int, rel: float, slack: float,
-          crossings: tuple | None = None) -> Pass:
-    """One pass over N rows: the test points of each row's region `reg` (candidates.py region
-    array) are its candidates, and those also in the region `lim` are evaluated (sizes.py, `sz`
-    from `size_args`); seeds up to m per row within `rel * best + slack` mm of the best.
-    `rot (N, 3, 3)`: each row's frame seen from the grid's. `crossings` (count, separation mm,
-    contour.edge_data): also up to that many contour crossings per row from all candidates."""
+def sweep(grid: CellGrid, rot: np.ndarray, reg: np.ndarray, lim: np.ndarray, sz: SizeArgs,
+          knn: np.ndarray, m: int, rel: float, slack: float, crossings: ContourSeeds | None = None,
+          edges: EdgeData | None = None) -> Scan:
+    """One pass over N rows: the test points of each row's region `reg` (grid/candidates.py
+    region array) are its candidates, and those also in the region `lim` are evaluated
+    (sizes.py, `sz` from `size_args`); seeds up to m per row within `rel * best + slack` mm of
+    the best. `rot (N, 3, 3)`: each row's frame seen from the grid's. `crossings`: also that
+    many contour crossings per row from all candidates, through the grid's `edges`
+    (contour.edge_data)."""
     n = len(reg)
-    out = (np.full(n, np.inf), np.full(n, -1, dtype=np.int64), np.full((n, m), -1, dtype=np.int64),
-           np.full((n, m), np.inf), np.zeros(n, dtype=np.int64))
+    out = Minima.empty(n, m)
     if crossings is None:
         none = np.zeros((0, 3))
-        mc, cross = 1, (False, none, none, np.zeros((0, 2)), 0.0)
+        found = CrossingSlots.empty(0, 1)
+        cross = _CrossingInputs(False, none, none, np.zeros((0, 2)), 0.0)
     else:
-        mc, sep, (edges, nb_lo, nb_hi) = crossings
-        cross = (True, nb_lo, nb_hi, edges, float(sep))
-    rows_c = 0 if crossings is None else n
-    found = (np.full((rows_c, mc), -1, dtype=np.int64), np.full((rows_c, mc), -1, dtype=np.int64),
-             np.zeros((rows_c, mc)), np.full((rows_c, mc), np.inf), np.zeros((rows_c, mc, 2)))
+        found = CrossingSlots.empty(n, crossings.count)
+        cross = _CrossingInputs(True, edges.nb_lo, edges.nb_hi, edges.edges,
+                                float(crossings.separation))
     kernel, nblocks = ((_sweep_ser, 1) if n < SERIAL_ROWS else
                        (_sweep_par, min(n, _BLOCKS_PER_THREAD * nb.get_num_threads())))
     kernel(nblocks, grid.kernel_args(), rot, reg, lim, sz, knn, rel, slack, out, cross, found)
-    crossed = None
-    if crossings is not None:
-        out_p, out_q, out_f, out_v, _ = found
-        r, c = np.nonzero(np.isfinite(out_v))
-        crossed = (r, out_p[r, c], out_q[r, c], out_f[r, c])
-    return Pass(*out, crossed)
+    return Scan(out, None if crossings is None else found.found())

@@ -13,7 +13,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from checker.engine.family import FamilyBounds
+from checker.engine.grid.family import FamilyBounds
 
 SERIAL_ROWS = 64  # below this many rows a kernel runs serially (thread start-up costs more)
 _EPS_MM = 1e-9  # mm added to a tilted search disc against rounding
@@ -41,6 +41,21 @@ class GridArrays(NamedTuple):
     box_lo: np.ndarray  # (C, 3) lowest corner of each cell's points (inf: empty)
     box_hi: np.ndarray  # (C, 3) highest corner (-inf: empty)
     xyz: np.ndarray  # (M, 3) the points by id
+
+
+class GridView(NamedTuple):
+    """A row's region seen from the grid's frame (`grid_view`, for `cell_misses`): the row's
+    z axis (ax, ay, az), the plane's normal (px, py, pz) and the ball's centre (sx, sy, sz)."""
+
+    ax: float
+    ay: float
+    az: float
+    px: float
+    py: float
+    pz: float
+    sx: float
+    sy: float
+    sz: float
 
 
 @dataclass
@@ -145,17 +160,16 @@ def column_span(reg, i, grid, a, j0, j1):
 
 @nb.njit(cache=True, inline="always")
 def grid_view(reg, i, rot):
-    """Row i's region axes seen from the grid's frame, for `cell_misses`: the row's z axis, the
-    plane's normal and the ball's centre (grid frame, 9 floats)."""
+    """Row i's `GridView`: its region's axes seen from the grid's frame."""
     px, py, pz = reg[i, PX], reg[i, PY], reg[i, PZ]
     sx, sy, sz = reg[i, SX], reg[i, SY], reg[i, SZ]
-    return (rot[i, 2, 0], rot[i, 2, 1], rot[i, 2, 2],
-            px * rot[i, 0, 0] + py * rot[i, 1, 0] + pz * rot[i, 2, 0],
-            px * rot[i, 0, 1] + py * rot[i, 1, 1] + pz * rot[i, 2, 1],
-            px * rot[i, 0, 2] + py * rot[i, 1, 2] + pz * rot[i, 2, 2],
-            sx * rot[i, 0, 0] + sy * rot[i, 1, 0] + sz * rot[i, 2, 0],
-            sx * rot[i, 0, 1] + sy * rot[i, 1, 1] + sz * rot[i, 2, 1],
-            sx * rot[i, 0, 2] + sy * rot[i, 1, 2] + sz * rot[i, 2, 2])
+    return GridView(rot[i, 2, 0], rot[i, 2, 1], rot[i, 2, 2],
+                    px * rot[i, 0, 0] + py * rot[i, 1, 0] + pz * rot[i, 2, 0],
+                    px * rot[i, 0, 1] + py * rot[i, 1, 1] + pz * rot[i, 2, 1],
+                    px * rot[i, 0, 2] + py * rot[i, 1, 2] + pz * rot[i, 2, 2],
+                    sx * rot[i, 0, 0] + sy * rot[i, 1, 0] + sz * rot[i, 2, 0],
+                    sx * rot[i, 0, 1] + sy * rot[i, 1, 1] + sz * rot[i, 2, 1],
+                    sx * rot[i, 0, 2] + sy * rot[i, 1, 2] + sz * rot[i, 2, 2])
 
 
 @nb.njit(cache=True, inline="always")
@@ -170,8 +184,8 @@ def cell_heights(view, lo, hi, c):
     """Lowest and highest row-frame height (mm, widened by _CULL_EPS_MM) over the box `lo[c]`,
     `hi[c]` (grid frame; `view` from `grid_view`)."""
     mx, my, mz, hx, hy, hz = _box(lo, hi, c)
-    zc = view[0] * mx + view[1] * my + view[2] * mz
-    zh = abs(view[0]) * hx + abs(view[1]) * hy + abs(view[2]) * hz
+    zc = view.ax * mx + view.ay * my + view.az * mz
+    zh = abs(view.ax) * hx + abs(view.ay) * hy + abs(view.az) * hz
     return zc - zh - _CULL_EPS_MM, zc + zh + _CULL_EPS_MM
 
 
@@ -189,14 +203,14 @@ def cell_misses(reg, i, view, grid, c):
     z_lo, z_hi = cell_heights(view, grid.box_lo, grid.box_hi, c)
     if z_hi < reg[i, ZLO] or z_lo > reg[i, ZHI]:
         return True
-    top = view[3] * mx + view[4] * my + view[5] * mz + abs(view[3]) * hx + abs(view[4]) * hy \
-        + abs(view[5]) * hz
+    top = view.px * mx + view.py * my + view.pz * mz + abs(view.px) * hx + abs(view.py) * hy \
+        + abs(view.pz) * hz
     if top < reg[i, PD] - _CULL_EPS_MM:
         return True
     if z_hi < reg[i, ZEQ]:
-        ex = max(abs(mx - view[6]) - hx, 0.0)
-        ey = max(abs(my - view[7]) - hy, 0.0)
-        ez = max(abs(mz - view[8]) - hz, 0.0)
+        ex = max(abs(mx - view.sx) - hx, 0.0)
+        ey = max(abs(my - view.sy) - hy, 0.0)
+        ez = max(abs(mz - view.sz) - hz, 0.0)
         far = reg[i, SR] + _CULL_EPS_MM
         if ex * ex + ey * ey + ez * ez > far * far:
             return True

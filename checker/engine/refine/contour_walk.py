@@ -18,12 +18,48 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.engine.frames import heights
-from checker.engine.refine import Objective
+from checker.engine.grid.frames import heights
+from checker.engine.refine.best import RowBest
+from checker.engine.refine.objective import Objective, SurfaceSizes
+from checker.engine.sizes import RowFrame
+from checker.part import Part
 
 FIRST_STEP = 0.005  # mm along the contour: the first probe from the start
 GOLDEN_ROUNDS = 12  # shrinks the bracket 320-fold: sigma to ~1 micrometre near Pcc, R to ~1e-6 mm
 _GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
+_ON_CONTOUR = 1e-6  # mm: a best point this near its row's bottom plane lies on its contour
+_CONTOUR_REACH = 2.0  # test-point spacings searched along the contour either way
+_UNBOUNDED_REACH = 8.0  # the same from Pcc, for a row with no size at all
+
+
+def along_contours(part: Part, cutter, frame: RowFrame, Q: np.ndarray, best: RowBest,
+                   cc_part: np.ndarray, spacing: float, own: np.ndarray,
+                   uv_own: np.ndarray | None) -> None:
+    """Flat-bottomed cutters: where a row's best point lies on its bottom plane's contour (or
+    is Pcc itself, the curvature limit; `cc_part (N, 3)` part frame), the contour searched in
+    one dimension from there, up to `_CONTOUR_REACH` test-point `spacing`s either way, may
+    lower it (in place). A row with no size at all searches the contour through Pcc (surface
+    `own (N,)`, parameters `uv_own (N, 2)`) up to `_UNBOUNDED_REACH` spacings: where the part
+    rises above the plane only in a sliver narrower than the samples (at a surface's edge), no
+    sample is cut, and the contour leads there (docs/MATH.md §6.4)."""
+    height = np.full(len(best.size), np.inf)
+    ok = np.isfinite(best.size) & (best.surface >= 0) & np.isfinite(best.uv).all(axis=1)
+    rows = np.flatnonzero(ok)
+    height[rows] = heights(Q, best.point[rows], rows) - frame.fam.z0[rows]
+    at_cc = np.linalg.norm(best.point - cc_part, axis=1) <= frame.exclusion
+    rows = np.flatnonzero(ok & ((np.abs(height) <= _ON_CONTOUR) | at_cc))
+    walks = [(rows, best.surface[rows], best.uv[rows], _CONTOUR_REACH)]
+    if uv_own is not None:
+        rows = np.flatnonzero(~np.isfinite(best.size) & (own >= 0))
+        walks.append((rows, own[rows], uv_own[rows], _UNBOUNDED_REACH))
+    obj = None
+    for rows, sid, uv, reach in walks:
+        if not rows.size:
+            continue
+        obj = obj or Objective(part, cutter, frame, Q)
+        f, p, q = _contour_minimum(obj, rows, sid, uv, reach * spacing)
+        best.evaluations[rows] += _contour_evaluations(reach * spacing)
+        best.lower(rows, f, p, sid, q)
 
 
 def _sigmas(reach: float) -> np.ndarray:
@@ -32,30 +68,31 @@ def _sigmas(reach: float) -> np.ndarray:
     return np.concatenate([[0.0], FIRST_STEP * 2.0 ** np.arange(count)])
 
 
-def contour_evaluations(reach: float) -> int:
-    """Exact size evaluations per start of `contour_minimum` (at most)."""
+def _contour_evaluations(reach: float) -> int:
+    """Exact size evaluations per start of `_contour_minimum` (at most)."""
     return 2 * len(_sigmas(reach)) + GOLDEN_ROUNDS + 3
 
 
-def contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.ndarray,
-                    reach: float):
+def _contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.ndarray,
+                     reach: float):
     """(size (K,), point (K, 3) part frame, uv (K, 2)): the smallest size found on the contour
     through each start (rows, surfaces, uv (K, 2)), up to `reach` mm from it either way."""
     rows2, sid2 = np.tile(rows, 2), np.tile(sid, 2)
-    f0, p0, uv0, ev = obj.on_contour(rows2, sid2, np.tile(uv[:, 0], 2), np.tile(uv[:, 1], 2))
-    tangent = _contour_tangent(obj, rows2, ev) * np.repeat([1.0, -1.0], len(rows))[:, None]
+    start = obj.on_contour(rows2, sid2, np.tile(uv[:, 0], 2), np.tile(uv[:, 1], 2))
+    f0, p0, uv0 = start.size, start.point, start.uv
+    tangent = _contour_tangent(obj, rows2, start.ev) * np.repeat([1.0, -1.0], len(rows))[:, None]
     sigma = _sigmas(reach)  # (m,)
 
     lo, hi = obj.dom[sid2, :, 0], obj.dom[sid2, :, 1]
 
-    def at(s: np.ndarray, k: np.ndarray):
-        """Sizes, points and uv at sigma `s` along the contours of walkers `k`."""
+    def at(s: np.ndarray, k: np.ndarray) -> SurfaceSizes:
+        """The sizes at sigma `s` along the contours of walkers `k`."""
         w = np.clip(uv0[k] + s[:, None] * tangent[k], lo[k], hi[k])
-        f, p, q, _ = obj.on_contour(rows2[k], sid2[k], w[:, 0], w[:, 1])
-        return f, p, q
+        return obj.on_contour(rows2[k], sid2[k], w[:, 0], w[:, 1])
 
     k2, m, half = len(rows2), len(sigma), len(rows)
-    fg, pg, qg = at(np.tile(sigma[1:], k2), np.repeat(np.arange(k2), m - 1))
+    grid = at(np.tile(sigma[1:], k2), np.repeat(np.arange(k2), m - 1))
+    fg, pg, qg = grid.size, grid.point, grid.uv
     f_grid = np.column_stack([f0, fg.reshape(k2, m - 1)])
     p_grid = np.concatenate([p0[:, None], pg.reshape(k2, m - 1, 3)], axis=1)
     q_grid = np.concatenate([uv0[:, None], qg.reshape(k2, m - 1, 2)], axis=1)
@@ -68,15 +105,16 @@ def contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.nd
     walkers, jg = side[go], j[side[go]]
     a, b = sigma[np.maximum(jg - 1, 0)], sigma[np.minimum(jg + 1, m - 1)]
     c, d = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
-    fc, fd = at(c, walkers)[0], at(d, walkers)[0]
+    fc, fd = at(c, walkers).size, at(d, walkers).size
     for _ in range(GOLDEN_ROUNDS):
         left = fc <= fd
         b, a = np.where(left, d, b), np.where(left, a, c)
         probe = np.where(left, b - _GOLDEN * (b - a), a + _GOLDEN * (b - a))
-        fp = at(probe, walkers)[0]
+        fp = at(probe, walkers).size
         c, fc, d, fd = (np.where(left, probe, d), np.where(left, fp, fd),
                         np.where(left, c, probe), np.where(left, fc, fp))
-    fg, pg, qg = at(np.where(fc <= fd, c, d), walkers)
+    last = at(np.where(fc <= fd, c, d), walkers)
+    fg, pg, qg = last.size, last.point, last.uv
     better = fg < f[go]
     f[go[better]], p[go[better]], q[go[better]] = fg[better], pg[better], qg[better]
     return f, p, q

@@ -8,11 +8,12 @@ region (`coarse_bounds`), or at given start points, e.g. the minima of nearby ro
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
 
-from checker.engine.candidates import (
+from checker.engine.grid.candidates import (
     SERIAL_ROWS,
     CellGrid,
     cell_misses,
@@ -20,10 +21,18 @@ from checker.engine.candidates import (
     grid_view,
     inside,
 )
-from checker.engine.frames import rotated
-from checker.engine.sizes import point_size
+from checker.engine.grid.frames import rotated
+from checker.engine.sizes import SizeArgs, point_size
 
 _COARSE_POINTS = 512  # at most about this many cells per row are sampled by `coarse_bounds`
+
+
+class Bounds(NamedTuple):
+    """Per row (N,): an `upper` bound (mm, inf: none found) of the smallest size over all test
+    points, and the kernel `evaluations` spent on it."""
+
+    upper: np.ndarray
+    evaluations: np.ndarray
 
 
 @nb.njit(cache=True)
@@ -121,29 +130,27 @@ def _warm_ser(xyz, rot, sz, knn, starts, u, evals):
         _warm_row(i, xyz, rot, sz, knn, starts, u, evals)
 
 
-def coarse_bounds(grid: CellGrid, rot: np.ndarray, reg: np.ndarray, sz: tuple,
-                  knn: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per row (N,): an upper bound (mm, inf: none found) of the smallest size over all test
-    points, from about one point per cell (at most about `_COARSE_POINTS` cells) of the region
-    array `reg` (candidates.py) and a descent along the sample graph `knn`; and the kernel
-    evaluations spent. `rot (N, 3, 3)`: each row's frame seen from the grid's; `sz`:
-    sizes.size_args of the rows."""
+def coarse_bounds(grid: CellGrid, rot: np.ndarray, reg: np.ndarray, sz: SizeArgs,
+                  knn: np.ndarray) -> Bounds:
+    """The rows' bounds from about one point per cell (at most about `_COARSE_POINTS` cells) of
+    the region array `reg` (grid/candidates.py) and a descent along the sample graph `knn`.
+    `rot (N, 3, 3)`: each row's frame seen from the grid's; `sz`: sizes.size_args of the
+    rows."""
     n = len(reg)
     u, evals = np.empty(n), np.empty(n, dtype=np.int64)
     kernel = _coarse_ser if n < SERIAL_ROWS else _coarse_par
     kernel(grid.kernel_args(), rot, reg, sz, knn, u, evals)
-    return u, evals
+    return Bounds(u, evals)
 
 
-def warm_bounds(xyz: np.ndarray, rot: np.ndarray, starts: np.ndarray, sz: tuple,
-                knn: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per row (N,): an upper bound (mm, inf: none found) of the smallest size over all test
-    points from the test points `starts (N, S)` (-1: none) and a descent along the sample
-    graph `knn`; and the kernel evaluations spent. `xyz (M, 3)` the test points by id in some
-    frame (a grid's), `rot (N, 3, 3)` each row's frame seen from that one; the other
-    arguments as `coarse_bounds`."""
+def warm_bounds(xyz: np.ndarray, rot: np.ndarray, starts: np.ndarray, sz: SizeArgs,
+                knn: np.ndarray) -> Bounds:
+    """The rows' bounds from the test points `starts (N, S)` (-1: none) and a descent along
+    the sample graph `knn`. `xyz (M, 3)` the test points by id in some frame (a grid's),
+    `rot (N, 3, 3)` each row's frame seen from that one; the other arguments as
+    `coarse_bounds`."""
     n = len(starts)
     u, evals = np.empty(n), np.empty(n, dtype=np.int64)
     kernel = _warm_ser if n < SERIAL_ROWS else _warm_par
     kernel(xyz, rot, sz, knn, np.ascontiguousarray(starts, dtype=np.int64), u, evals)
-    return u, evals
+    return Bounds(u, evals)

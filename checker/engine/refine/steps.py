@@ -26,22 +26,20 @@ dozen call sites inlined took two minutes to compile; its arguments are few flat
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
 
-from checker.engine.frames import heights, rotate_rows, rotated
-from checker.engine.sizes import RowFrame, pair_sizes, point_size, size_args
-from checker.geometry.evaluate import SurfaceEval, evaluate_mixed
-from checker.geometry.newton_uv import newton_step, newton_steps
-from checker.geometry.trims import kept, pack_trims
+from checker.engine.grid.frames import rotated, row_height
+from checker.engine.refine.objective import FLOOR_STEPS, Objective
+from checker.engine.sizes import RowFrame, point_size
+from checker.geometry.evaluate import SurfaceEval
+from checker.geometry.newton_uv import newton_step
+from checker.geometry.trims import kept
 from checker.part import Part
 
-_ABOVE = 1e-9  # mm above the bottom plane: on it the kernels already count a point as uncut
 _ON_FLOOR = 1e-6  # mm: points this close above the bottom plane lie on its contour
-_FLOOR_STEPS = 3
-_CONTOUR_STEPS = 8  # the same, for points predicted along the contour (contour_walk.py)
-_ON_PLANE = 1e-11  # mm: a point moved onto the plane from either side is on it within this
 _FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125])
 _REACH = 4.0  # longest Newton step, stencil half-widths
 _PRUNE_AFTER = 2  # iterations before starts far above their row's best are dropped
@@ -62,6 +60,32 @@ _WALK_STEPS = 4  # trust-region steps of a walk
 _ACROSS = 2  # Newton steps across the valley after each of them
 _STILL = 1e-7  # mm: a walk whose model predicts less decrease than this has arrived
 _MOVED = 1e-3  # mm: a start that arrived walks again once it has moved this far
+# rows of a start's Taylor terms (`_Taylor.d[s]`; the point and first derivatives also of the
+# model's value at a point, `e`): the point, S_u, S_v, S_uu, S_uv, S_vv
+_POINT, _DU, _DV, _DUU, _DUV, _DVV = range(6)
+# columns of the per-start walk radii (mm): the trust radius (negative: the walk has arrived),
+# the reach (longest walk) and the cap of both
+_R_TRUST, _R_REACH, _R_CAP = range(3)
+# entries of a walk's domain box: offsets (mm) of the domain's bounds from the walk's centre
+_U_LO, _U_HI, _V_LO, _V_HI = range(4)
+
+
+# The model the compiled steps evaluate the starts with, M = (d, uv0, Q, floor, dom, sz, T):
+# the starts' Taylor terms d (S, 6, 3) (rows _POINT.._DVV) about their (u, v) uv0 (S, 2), the
+# rows' rotations Q (N, 3, 3) part -> tool frame and bottom planes floor (N,) (tool-frame
+# height; empty: none), the surfaces' domains dom (surfaces, 2, 2), the rows' sz
+# (sizes.size_args) and the packed trims T; always unpacked whole. A plain tuple: as a
+# NamedTuple, the calls that take it (not inlined) made the refinement 7 % slower (mould
+# sample, numba 0.68).
+
+
+class _ModelValue(NamedTuple):
+    """The model's size at (u, v), and (u, v) themselves (moved onto the bottom plane where
+    that applies)."""
+
+    size: float
+    u: float
+    v: float
 
 
 @dataclass
@@ -77,15 +101,16 @@ class Refined:
 
 @nb.njit(cache=True, inline="always")
 def _taylor_at(d, uv0, s, u, v, out):
-    """Point and first derivatives (out[0..2], part frame) of start s's Taylor model at (u, v)."""
+    """Point and first derivatives (rows _POINT, _DU, _DV of `out`, part frame) of start s's
+    Taylor model at (u, v)."""
     a = u - uv0[s, 0]
     b = v - uv0[s, 1]
     for m in range(3):
-        su = d[s, 1, m] + a * d[s, 3, m] + b * d[s, 4, m]
-        sv = d[s, 2, m] + a * d[s, 4, m] + b * d[s, 5, m]
-        out[0, m] = d[s, 0, m] + 0.5 * (a * (su + d[s, 1, m]) + b * (sv + d[s, 2, m]))
-        out[1, m] = su
-        out[2, m] = sv
+        su = d[s, _DU, m] + a * d[s, _DUU, m] + b * d[s, _DUV, m]
+        sv = d[s, _DV, m] + a * d[s, _DUV, m] + b * d[s, _DVV, m]
+        out[_POINT, m] = d[s, _POINT, m] + 0.5 * (a * (su + d[s, _DU, m]) + b * (sv + d[s, _DV, m]))
+        out[_DU, m] = su
+        out[_DV, m] = sv
 
 
 @nb.njit(cache=True, inline="always")
@@ -99,35 +124,35 @@ def _onto_level(excess, hu, hv, u, v, lo_u, hi_u, lo_v, hi_v):
 
 @nb.njit(cache=True)
 def _model_value(M, s, r, sd, u, v, snap, e):
-    """(size, u, v) of start s's Taylor model at (u, v) for CC row r, surface sd (rules of
-    `sizes.point_size`, tool frame through Q, inf outside the trim). With a floor (per row,
-    tool-frame height; empty: none) a point below it (with `snap`: any point) first moves onto
-    it by Newton steps on the model's height, clipped to the domain; (u, v) come back moved."""
+    """The `_ModelValue` of start s's Taylor model (M, above) at (u, v) for CC row r,
+    surface sd (rules of `sizes.point_size`, tool frame through Q, inf outside the trim). With a
+    floor a point below it (with `snap`: any point) first moves onto it by Newton steps on the
+    model's height, clipped to the domain; (u, v) come back moved."""
     d, uv0, Q, floor, dom, sz, T = M
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
     _taylor_at(d, uv0, s, u, v, e)
-    for _ in range(_FLOOR_STEPS if floor.shape[0] else 0):
-        z = rotated(Q, r, e, 0)[2]
+    for _ in range(FLOOR_STEPS if floor.shape[0] else 0):
+        z = row_height(Q, r, e, _POINT)
         if z >= floor[r] and not (snap and z - floor[r] > _ON_FLOOR):
             break
-        du, dv = _onto_level(z - floor[r], rotated(Q, r, e, 1)[2], rotated(Q, r, e, 2)[2], u, v,
-                             lo_u, hi_u, lo_v, hi_v)
+        du, dv = _onto_level(z - floor[r], row_height(Q, r, e, _DU), row_height(Q, r, e, _DV), u,
+                             v, lo_u, hi_u, lo_v, hi_v)
         if du == 0.0 and dv == 0.0:
             break
         u = min(max(u + du, lo_u), hi_u)
         v = min(max(v + dv, lo_v), hi_v)
         _taylor_at(d, uv0, s, u, v, e)
-    x, y, z = rotated(Q, r, e, 0)
+    x, y, z = rotated(Q, r, e, _POINT)
     f = point_size(sz, r, x, y, z) if kept(T, sd, u, v) else np.inf
-    return f, u, v
+    return _ModelValue(f, u, v)
 
 
 @nb.njit(cache=True, inline="always")
 def _near_floor(Q, r, d, s, best_p, floor, hu, hv):
     """Whether start s's best point lies on row r's bottom plane or within the height range of
     its stencil (half-widths hu, hv) above it: the contour steps apply."""
-    span = abs(rotated(Q, r, d[s], 1)[2]) * hu + abs(rotated(Q, r, d[s], 2)[2]) * hv
-    return rotated(Q, r, best_p, s)[2] - floor[r] <= max(_ON_FLOOR, span)
+    span = abs(row_height(Q, r, d[s], _DU)) * hu + abs(row_height(Q, r, d[s], _DV)) * hv
+    return row_height(Q, r, best_p, s) - floor[r] <= max(_ON_FLOOR, span)
 
 
 @nb.njit(cache=True, inline="always")
@@ -162,8 +187,8 @@ def _newton_target(F, cu, cv, hu, hv):
 @nb.njit(cache=True, inline="always")
 def _speeds(d, s):
     """|S_u|, |S_v| (mm per parameter unit) at start s's model centre."""
-    return (np.sqrt(d[s, 1, 0] ** 2 + d[s, 1, 1] ** 2 + d[s, 1, 2] ** 2),
-            np.sqrt(d[s, 2, 0] ** 2 + d[s, 2, 1] ** 2 + d[s, 2, 2] ** 2))
+    return (np.sqrt(d[s, _DU, 0] ** 2 + d[s, _DU, 1] ** 2 + d[s, _DU, 2] ** 2),
+            np.sqrt(d[s, _DV, 0] ** 2 + d[s, _DV, 1] ** 2 + d[s, _DV, 2] ** 2))
 
 
 @nb.njit(cache=True)
@@ -172,11 +197,11 @@ def _derivatives(M, s, r, sd, u0, v0, f0, su, sv, e):
     (value f0 there), per mm along u and v (su, sv: mm per parameter unit): central differences
     of width _DELTA, the cross term forward; ok False where a value is not finite."""
     du, dv = _DELTA / su, _DELTA / sv
-    fup = _model_value(M, s, r, sd, u0 + du, v0, False, e)[0]
-    fum = _model_value(M, s, r, sd, u0 - du, v0, False, e)[0]
-    fvp = _model_value(M, s, r, sd, u0, v0 + dv, False, e)[0]
-    fvm = _model_value(M, s, r, sd, u0, v0 - dv, False, e)[0]
-    fpp = _model_value(M, s, r, sd, u0 + du, v0 + dv, False, e)[0]
+    fup = _model_value(M, s, r, sd, u0 + du, v0, False, e).size
+    fum = _model_value(M, s, r, sd, u0 - du, v0, False, e).size
+    fvp = _model_value(M, s, r, sd, u0, v0 + dv, False, e).size
+    fvm = _model_value(M, s, r, sd, u0, v0 - dv, False, e).size
+    fpp = _model_value(M, s, r, sd, u0 + du, v0 + dv, False, e).size
     if not np.isfinite(fup + fum + fvp + fvm + fpp + f0):
         return False, 0.0, 0.0, 0.0, 0.0, 0.0
     return (True, (fup - fum) / (2 * _DELTA), (fvp - fvm) / (2 * _DELTA),
@@ -253,11 +278,12 @@ def _boxed_step(gu, gv, huu, huv, hvv, radius, box):
     cross is held there and the other takes its own line step; a step that crosses a bound
     from inside stops at it. Returns (pu, pv, the decrease the quadratic predicts)."""
     pu, pv = _trust_region(gu, gv, huu, huv, hvv, radius)
-    if (pu < box[0] and box[0] > -_DELTA) or (pu > box[1] and box[1] < _DELTA):
+    if (pu < box[_U_LO] and box[_U_LO] > -_DELTA) or (pu > box[_U_HI] and box[_U_HI] < _DELTA):
         pu, pv = 0.0, _line_step(gv, hvv, radius)
-    elif (pv < box[2] and box[2] > -_DELTA) or (pv > box[3] and box[3] < _DELTA):
+    elif (pv < box[_V_LO] and box[_V_LO] > -_DELTA) or (pv > box[_V_HI] and box[_V_HI] < _DELTA):
         pu, pv = _line_step(gu, huu, radius), 0.0
-    t = min(_fraction_inside(pu, box[0], box[1]), _fraction_inside(pv, box[2], box[3]))
+    t = min(_fraction_inside(pu, box[_U_LO], box[_U_HI]),
+            _fraction_inside(pv, box[_V_LO], box[_V_HI]))
     pu, pv = t * pu, t * pv
     pred = -(gu * pu + gv * pv + 0.5 * (huu * pu * pu + 2.0 * huv * pu * pv + hvv * pv * pv))
     return pu, pv, pred
@@ -268,13 +294,13 @@ def _walk(M, s, r, sd, f0, radius, box, e):
     """Trust-region Newton steps on start s's model from its centre (value f0; derivatives
     from `_derivatives`), each followed by up to _ACROSS Newton steps across the valley (along
     the Hessian's steep direction), which keeps long steps on the floor of narrow curved
-    valleys. Up to _WALK_STEPS steps while they improve, in all at most radius[s, 1] mm; the
-    trust radius radius[s, 0] mm grows after a full-length step that improved, shrinks after
-    one that did not, and turns negative where the model predicts no more decrease (in
-    place). A step that reaches below the bottom plane of a flat-bottomed cutter ends the walk
-    (the contour steps go on from there). Returns (value, u, v, the distance walked in mm,
-    model values computed)."""
-    d, uv0, dom = M[0], M[1], M[4]
+    valleys. Up to _WALK_STEPS steps while they improve, in all at most radius[s, _R_REACH] mm;
+    the trust radius radius[s, _R_TRUST] mm grows after a full-length step that improved,
+    shrinks after one that did not, and turns negative where the model predicts no more
+    decrease (in place). A step that reaches below the bottom plane of a flat-bottomed cutter
+    ends the walk (the contour steps go on from there). Returns (value, u, v, the distance
+    walked in mm, model values computed)."""
+    d, uv0, _, _, dom, _, _ = M
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
     su, sv = _speeds(d, s)
     su, sv = max(su, 1e-300), max(sv, 1e-300)
@@ -283,14 +309,14 @@ def _walk(M, s, r, sd, f0, radius, box, e):
     for _ in range(_WALK_STEPS):
         ok, gu, gv, huu, huv, hvv = _derivatives(M, s, r, sd, u, v, f, su, sv, e)
         probes += 5
-        step = min(radius[s, 0], radius[s, 1] - walked)
+        step = min(radius[s, _R_TRUST], radius[s, _R_REACH] - walked)
         if not ok or step < _DELTA:
             break
-        box[0], box[1] = (lo_u - u) * su, (hi_u - u) * su
-        box[2], box[3] = (lo_v - v) * sv, (hi_v - v) * sv
+        box[_U_LO], box[_U_HI] = (lo_u - u) * su, (hi_u - u) * su
+        box[_V_LO], box[_V_HI] = (lo_v - v) * sv, (hi_v - v) * sv
         pu, pv, pred = _boxed_step(gu, gv, huu, huv, hvv, step, box)
         if not pred > _STILL:  # the model's minimum: walks end here until the start moves
-            radius[s, 0] = -radius[s, 0]
+            radius[s, _R_TRUST] = -radius[s, _R_TRUST]
             break
         x = min(max(u + pu / su, lo_u), hi_u)
         y = min(max(v + pv / sv, lo_v), hi_v)
@@ -303,8 +329,10 @@ def _walk(M, s, r, sd, f0, radius, box, e):
         _, _, x1, y1 = _eigen(huu, huv, hvv)
         tu, tv = -y1, x1  # across the valley: the eigenvector of the larger eigenvalue
         for _ in range(_ACROSS):  # Newton steps across the valley, back onto its floor
-            fp = _model_value(M, s, r, sd, x + _DELTA * tu / su, y + _DELTA * tv / sv, False, e)[0]
-            fm = _model_value(M, s, r, sd, x - _DELTA * tu / su, y - _DELTA * tv / sv, False, e)[0]
+            fp = _model_value(M, s, r, sd, x + _DELTA * tu / su, y + _DELTA * tv / sv, False,
+                              e).size
+            fm = _model_value(M, s, r, sd, x - _DELTA * tu / su, y - _DELTA * tv / sv, False,
+                              e).size
             probes += 3
             curv = (fp - 2.0 * ft + fm) / _DELTA**2
             if not (curv > 0.0 and np.isfinite(fp + fm)):
@@ -318,10 +346,11 @@ def _walk(M, s, r, sd, f0, radius, box, e):
             ft, x, y = fc, xc, yc
         length = np.sqrt(pu * pu + pv * pv)
         if not ft < f:
-            radius[s, 0] = max(_SHRINK * length, _DELTA)
+            radius[s, _R_TRUST] = max(_SHRINK * length, _DELTA)
             break
-        if length > 0.99 * radius[s, 0]:  # the quadratic's along-valley curvature is noise:
-            radius[s, 0] = min(_GROW * radius[s, 0], radius[s, 2])  # success alone grows it
+        if length > 0.99 * radius[s, _R_TRUST]:  # the quadratic's along-valley curvature is
+            # noise: success alone grows the trust radius
+            radius[s, _R_TRUST] = min(_GROW * radius[s, _R_TRUST], radius[s, _R_CAP])
         walked += np.sqrt(((x - u) * su) ** 2 + ((y - v) * sv) ** 2)
         u, v, f = x, y, ft
     return f, u, v, walked, probes
@@ -373,7 +402,7 @@ def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, bes
             for j in range(n):
                 if vals[j] < fc:
                     fc, nu, nv, along = vals[j], uvs[j, 0], uvs[j, 1], True
-        elif (clipped or not newton) and radius[s, 0] > 0.0:  # smooth, the stencil stuck: walk
+        elif (clipped or not newton) and radius[s, _R_TRUST] > 0.0:  # the stencil stuck: walk
             ft, x, y, walked[s], n = _walk(M, s, r, sd, best_f[s], radius, box, e)
             probes += n
             if ft < fc:
@@ -390,13 +419,13 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     model centre (value f0), every point snapped onto the plane: at -tau and +tau mm (tau from
     the stencil half-widths), then at the fractions of the parabola's vertex. Returns their
     count."""
-    d, uv0, Q, floor, dom, sz, T = M
+    d, uv0, Q, _, dom, _, _ = M
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
-    gu = rotated(Q, r, d[s], 1)[2]  # the height's derivatives in u and v
-    gv = rotated(Q, r, d[s], 2)[2]
+    gu = row_height(Q, r, d[s], _DU)  # the height's derivatives in u and v
+    gv = row_height(Q, r, d[s], _DV)
     mm = 0.0
     for m in range(3):
-        mm += (-gv * d[s, 1, m] + gu * d[s, 2, m]) ** 2  # the contour tangent, mm per unit
+        mm += (-gv * d[s, _DU, m] + gu * d[s, _DV, m]) ** 2  # the contour tangent, mm per unit
     mm = max(np.sqrt(mm), 1e-300)
     tu, tv = -gv / mm, gu / mm  # (u, v) per mm along the contour
     su, sv = _speeds(d, s)
@@ -434,11 +463,9 @@ def _steps(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, 
     stencil's quadratic (the best stencil point where that is not finite or not convex) with
     backtracking to the first of _FRACTIONS that improves, and for flat-bottomed cutters, where
     the start's best point lies on the bottom plane, the steps along its contour, elsewhere,
-    where the stencil stalled, a `_walk`; all on the start's Taylor model (the model arguments
-    from `Objective.model_args`). `radius (S, 3)` per start: the walk's trust radius, its
-    reach and their cap, mm (a negative trust radius: the walk has arrived). Writes the best
-    point found, `cand[s]`, the distance walked `walked[s]` mm, and `flags[s]` (columns
-    `_F_*`)."""
+    where the stencil stalled, a `_walk`; all on the start's Taylor model (the fields of M, one
+    by one). `radius (S, 3)` per start: the walk's radii (columns `_R_*`). Writes the best point
+    found, `cand[s]`, the distance walked `walked[s]` mm, and `flags[s]` (columns `_F_*`)."""
     n = a.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
         _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h,
@@ -447,7 +474,8 @@ def _steps(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, 
 
 class _Taylor:
     """Second-order Taylor model of the surface of every start about `uv0 (S, 2)`, from an
-    order-2 evaluation `ev` there (part frame, mm per parameter unit)."""
+    order-2 evaluation `ev` there: its terms `d (S, 6, 3)` (rows _POINT.._DVV; part frame, mm
+    per parameter unit)."""
 
     def __init__(self, uv0: np.ndarray, ev: SurfaceEval) -> None:
         self.uv0 = np.ascontiguousarray(uv0, dtype=np.float64).copy()
@@ -457,86 +485,6 @@ class _Taylor:
         """Re-centre the models of `starts` on `uv0` with their order-2 evaluation `ev`."""
         self.uv0[starts] = uv0
         self.d[starts] = np.stack([ev.points, ev.du, ev.dv, ev.duu, ev.duv, ev.dvv], axis=1)
-
-
-class Objective:
-    """Imaginary size of surface points (surface id, u, v) for given rows; trims honoured.
-
-    Flat-bottomed cutters (R family, psi = 0) cut nothing below their bottom plane, so the
-    size jumps to inf there and the minimum often lies on the contour line of the part at that
-    height. Points below it are moved onto the contour (Newton steps on the height in (u, v)),
-    which turns that jump into a smooth boundary the local steps can follow. `Q (N, 3, 3)`: the
-    rotation part frame -> tool frame of every row of `frame`."""
-
-    def __init__(self, part: Part, cutter, frame: RowFrame, Q: np.ndarray) -> None:
-        self.part, self.cutter, self.frame, self.Q = part, cutter, frame, Q
-        self.trimmed = [s.id for s in part.surfaces if s.trim is not None]
-        self.dom = part.domains
-        flat = cutter.flat_bottomed
-        self.floor = frame.fam.z0 + _ABOVE if flat else None
-        self.sz = size_args(cutter, frame, np.arange(len(frame.cc)))
-        self.trims = pack_trims([s.trim for s in part.surfaces])
-
-    def exact(self, rows, sid, u, v, order: int = 2):
-        """(f (K,), points (K, 3) part frame, uv (K, 2), evaluation of that order) on the
-        surfaces."""
-        u, v = u.copy(), v.copy()
-        ev = evaluate_mixed(self.part, sid, u, v, order=order)
-        if self.floor is not None:
-            self._onto_floor(rows, sid, u, v, ev, order)
-        return (*self._sizes(rows, sid, u, v, ev.points), ev)
-
-    def model_args(self, taylor: _Taylor) -> tuple:
-        """What the compiled steps need: (Taylor terms, their centres, Q, floor (empty: none),
-        domains (surfaces, 2, 2), `sizes.size_args`, packed trims)."""
-        floor = np.zeros(0) if self.floor is None else self.floor
-        return (taylor.d, taylor.uv0, self.Q, floor, self.dom, self.sz, self.trims)
-
-    def _sizes(self, rows, sid, u, v, pts):
-        """(f (K,), points, uv (K, 2)): sizes of the part-frame points, inf outside trims."""
-        f = pair_sizes(self.cutter, self.frame, rows, rotate_rows(self.Q, pts, rows))
-        return self._trimmed(sid, u, v, f, pts)
-
-    def _trimmed(self, sid, u, v, f, pts):
-        """(f, points, uv (K, 2)) with f = inf at the points outside their surface's trim."""
-        for s in self.trimmed:
-            sel = np.flatnonzero(sid == s)
-            if sel.size:
-                out = ~np.asarray(self.part.surfaces[s].trim.contains(u[sel], v[sel]), dtype=bool)
-                f[sel[out]] = np.inf
-        return f, pts, np.column_stack([u, v])
-
-    def on_contour(self, rows, sid, u, v):
-        """(f (K,), points (K, 3) part frame, uv (K, 2), order-1 evaluation): the points moved
-        onto their row's bottom plane from either side (its contour), and their sizes."""
-        u, v = u.copy(), v.copy()
-        ev = evaluate_mixed(self.part, sid, u, v)
-        self._onto_floor(rows, sid, u, v, ev, 1, both_sides=True, steps=_CONTOUR_STEPS)
-        return (*self._sizes(rows, sid, u, v, ev.points), ev)
-
-    def _onto_floor(self, rows, sid, u, v, ev, order: int, both_sides: bool = False,
-                    steps: int = _FLOOR_STEPS) -> None:
-        """Move points below their row's bottom plane (with `both_sides`, also those above it)
-        onto it in up to `steps` Newton steps (in place: u, v, ev)."""
-        for _ in range(steps):
-            z = heights(self.Q, ev.points, rows)
-            off = np.flatnonzero(np.abs(z - self.floor[rows]) > _ON_PLANE if both_sides
-                                 else z < self.floor[rows])
-            if off.size == 0:
-                return
-            d = self.dom[sid[off]]
-            a = np.column_stack([heights(self.Q, ev.du[off], rows[off]),
-                                 heights(self.Q, ev.dv[off], rows[off])])  # height gradient
-            excess = z[off] - self.floor[rows[off]]
-            step = newton_steps(excess[:, None] * a, a[:, :, None] * a[:, None, :],
-                                np.column_stack([u[off], v[off]]), d[:, :, 0], d[:, :, 1])
-            ok = (step != 0.0).any(axis=1)
-            off, step, d = off[ok], step[ok], d[ok]
-            u[off] = np.clip(u[off] + step[:, 0], d[:, 0, 0], d[:, 0, 1])
-            v[off] = np.clip(v[off] + step[:, 1], d[:, 1, 0], d[:, 1, 1])
-            sub = evaluate_mixed(self.part, sid[off], u[off], v[off], order=order)
-            for name in ("points", "du", "dv", "duu", "duv", "dvv")[:3 * order]:
-                getattr(ev, name)[off] = getattr(sub, name)
 
 
 def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray, sid: np.ndarray,
@@ -550,18 +498,21 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
     width = hi - lo
     hmin = np.maximum(1e-10 * np.maximum(width, 1e-300), _CONVERGED * step)
     cur = np.clip(uv, lo, hi)
-    f, pts, cur, ev = obj.exact(rows, sid, cur[:, 0], cur[:, 1])
-    best_f, best_uv, best_p = f.copy(), cur.copy(), pts.copy()
-    taylor = _Taylor(cur, ev)
+    first = obj.exact(rows, sid, cur[:, 0], cur[:, 1])
+    best_f, best_uv, best_p = first.size.copy(), first.uv.copy(), first.point.copy()
+    taylor = _Taylor(first.uv, first.ev)
+    floor = np.zeros(0) if obj.floor is None else obj.floor
     h = np.clip(step, hmin, 0.25 * width)
     evals = np.ones(len(rows), dtype=np.int64)
     active = np.ones(len(rows), dtype=bool)
     nrow = int(rows.max()) + 1 if rows.size else 0
     cand = np.empty_like(best_uv)
     flags = np.zeros((len(rows), _F_COLS), dtype=np.int64)
-    r0 = np.maximum(h[:, 0] * np.linalg.norm(ev.du, axis=1),
-                    h[:, 1] * np.linalg.norm(ev.dv, axis=1))  # the stencil's half-width, mm
-    radius = np.column_stack([r0, _REACH * r0, np.maximum(_RADIUS_CAP * r0, _CAP_MM)])
+    r0 = np.maximum(h[:, 0] * np.linalg.norm(first.ev.du, axis=1),
+                    h[:, 1] * np.linalg.norm(first.ev.dv, axis=1))  # the stencil's half-width, mm
+    radius = np.empty((len(rows), 3))  # columns _R_*
+    radius[:, _R_TRUST], radius[:, _R_REACH] = r0, _REACH * r0
+    radius[:, _R_CAP] = np.maximum(_RADIUS_CAP * r0, _CAP_MM)
     walked = np.zeros(len(rows))
     for it in range(iterations):
         if it >= _PRUNE_AFTER:  # drop starts clearly above the best of their row
@@ -572,25 +523,27 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
         a = np.flatnonzero(active)
         if a.size == 0:
             break
-        _steps(*obj.model_args(taylor), a, rows, sid, best_uv, best_f, best_p, h, radius, walked,
-               cand, flags)
+        _steps(taylor.d, taylor.uv0, obj.Q, floor, obj.dom, obj.sz, obj.trims, a, rows, sid,
+               best_uv, best_f, best_p, h, radius, walked, cand, flags)
         newton, along, centre, trust = (flags[a, j].astype(bool)
                                         for j in (_F_STEP, _F_ALONG, _F_CENTRE, _F_WALK))
         evals[a] += flags[a, _F_PROBES]
         ra, sa, ha = rows[a], sid[a], h[a]
         c = np.clip(best_uv[a], lo[a] + ha, hi[a] - ha)
-        fe, pe, ue, eve = obj.exact(ra, sa, cand[a, 0], cand[a, 1])
+        got = obj.exact(ra, sa, cand[a, 0], cand[a, 1])
+        fe, pe, ue = got.size, got.point, got.uv
         evals[a] += 1
         won = fe < best_f[a]
         t = a[won]
         moved = t[np.linalg.norm(pe[won] - best_p[t], axis=1) > _MOVED]
-        radius[moved, 0] = np.abs(radius[moved, 0])  # a start that moved may walk again
+        # a start that moved may walk again
+        radius[moved, _R_TRUST] = np.abs(radius[moved, _R_TRUST])
         best_f[t], best_uv[t], best_p[t] = fe[won], ue[won], pe[won]
-        taylor.move(t, ue[won], _rows_of(eve, won))
-        far = a[trust & won & (walked[a] >= 0.99 * radius[a, 1])]
-        radius[far, 1] = np.minimum(_GROW * radius[far, 1], radius[far, 2])
+        taylor.move(t, ue[won], _rows_of(got.ev, won))
+        far = a[trust & won & (walked[a] >= 0.99 * radius[a, _R_REACH])]
+        radius[far, _R_REACH] = np.minimum(_GROW * radius[far, _R_REACH], radius[far, _R_CAP])
         misled = a[trust & ~won]  # the model misled the walk: shorter walks
-        radius[misled, 1] = np.maximum(_SHRINK * walked[misled], _DELTA)
+        radius[misled, _R_REACH] = np.maximum(_SHRINK * walked[misled], _DELTA)
         shrink = np.where(centre, 0.25, 0.5)[:, None] * ha
         # a Newton step sets the stencil to its length, a step along the contour may grow it
         reach = np.where(along, _REACH, 1.0)[:, None] * ha

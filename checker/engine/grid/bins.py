@@ -30,13 +30,13 @@ as before and costs only memory.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from checker.engine.candidates import CellGrid, build_grid
-from checker.engine.frames import group_axes, tool_rotation
-from checker.engine.search import Scan, scan
-from checker.engine.sizes import RowFrame
+from checker.engine.grid.candidates import CellGrid, build_grid
+from checker.engine.grid.frames import group_axes, tool_rotation
 from checker.geometry.sampling import TestPoints
 
 _BIN_DEG = 2.0  # lattice step on the unit sphere, degrees
@@ -45,11 +45,22 @@ _GRIDS_MAX = 32  # cached grids per set of test points, besides the table lattic
 _TOP_CHUNK = 1 << 21  # (row, hull vertex) products per block in `part_tops`
 
 
+class AxisBin(NamedTuple):
+    """Rows that share one cell grid: `rows (B,)`, the bin's unit `axis (3,)` (part frame) and
+    its tool frame `rotation (3, 3)`; `relative (B, 3, 3)` each row's tool frame seen from the
+    bin's (D), None when every row of the bin has the bin's own frame."""
+
+    rows: np.ndarray
+    axis: np.ndarray
+    rotation: np.ndarray
+    relative: np.ndarray | None
+
+
 def tool_grid(tp: TestPoints, axis: np.ndarray, Q: np.ndarray | None = None) -> CellGrid:
     """Cell grid of the test points rotated by `Q` (default `tool_rotation(axis)`) into the tool
     frame of the unit `axis` (part frame); cached per axis: kept for the part on the table
     lattice (module docstring), else one of the last `_GRIDS_MAX`."""
-    cache = tp.cache("engine.bins")
+    cache = tp.cache("engine.grid.bins")
     key = tuple(np.round(axis, 12).tolist())
     table = cache.setdefault("table", {})
     grids = cache.setdefault("grids", {})
@@ -68,20 +79,20 @@ def tool_grid(tp: TestPoints, axis: np.ndarray, Q: np.ndarray | None = None) -> 
 
 def drop_table_grids(tp: TestPoints) -> None:
     """Free the table lattice's grids of `tp` (after a best-B search: the memory goes back)."""
-    tp.cache("engine.bins").pop("table", None)
+    tp.cache("engine.grid.bins").pop("table", None)
 
 
 def _on_table_lattice(axis: np.ndarray) -> bool:
     """Whether the unit `axis` (3,) is a lattice axis perpendicular to Y (to 12 decimals)."""
-    rep = _lattice(axis[None, :])[1][0]
-    return abs(axis[1]) < 1e-12 and bool(np.all(np.round(rep - axis, 12) == 0.0))
+    _, rep = _lattice(axis[None, :])
+    return abs(axis[1]) < 1e-12 and bool(np.all(np.round(rep[0] - axis, 12) == 0.0))
 
 
 def part_tops(tp: TestPoints, Q: np.ndarray) -> np.ndarray:
     """(N,) height of the highest test point in each row's tool frame `Q (N, 3, 3)`, mm: the
     maximum over the vertices of the points' convex hull (cached; all points when the hull is
     flat)."""
-    cache = tp.cache("engine.bins")
+    cache = tp.cache("engine.grid.bins")
     ext = cache.get("extreme")
     if ext is None:
         try:
@@ -112,10 +123,8 @@ def _lattice(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return (k * most + j).astype(np.int64), rep
 
 
-def axis_bins(axes: np.ndarray, Q: np.ndarray):
-    """Bins of rows with unit `axes (N, 3)` and their tool frames `Q (N, 3, 3)`: a list of
-    (rows (B,), bin axis (3,), bin rotation (3, 3), D (B, 3, 3) or None when every row of the
-    bin has the bin's own frame)."""
+def axis_bins(axes: np.ndarray, Q: np.ndarray) -> list[AxisBin]:
+    """Bins of rows with unit `axes (N, 3)` and their tool frames `Q (N, 3, 3)`."""
     keys, group = group_axes(axes)
     counts = np.bincount(group, minlength=len(keys))
     cell, rep = _lattice(axes)
@@ -129,35 +138,9 @@ def axis_bins(axes: np.ndarray, Q: np.ndarray):
         if rows.size == 0:
             continue
         if (group[rows] == group[rows[0]]).all() and not kept[rows[0]]:
-            out.append((rows, axes[rows[0]], Q[rows[0]], None))
+            out.append(AxisBin(rows, axes[rows[0]], Q[rows[0]], None))
         else:
             Qb = tool_rotation(rep[rows[0]])
-            out.append((rows, rep[rows[0]], Qb, Q[rows] @ Qb.T))
+            out.append(AxisBin(rows, rep[rows[0]], Qb, Q[rows] @ Qb.T))
     return out
 
-
-def binned_scan(tp: TestPoints, cutter, frame: RowFrame, Q: np.ndarray, axes: np.ndarray,
-                s_start: np.ndarray, s_cap: float, slack: float, m: int, knn: np.ndarray,
-                crossings: tuple[int, float] | None = None,
-                first: np.ndarray | None = None) -> Scan:
-    """`search.scan` for rows of any tool axes `axes (N, 3)` (part frame, unit) with tool frames
-    `Q (N, 3, 3)`, one scan per bin of nearby axes (`first`: see `scan`); the merged result."""
-    n = len(s_start)
-    best = np.full(n, np.inf)
-    arg = np.full(n, -1, dtype=np.int64)
-    seeds = np.full((n, m), -1, dtype=np.int64)
-    seed_size = np.full((n, m), np.inf)
-    evals = np.zeros(n, dtype=np.int64)
-    cross: list[tuple] = []
-    for rows, axis, Qb, D in axis_bins(axes, Q):
-        sub = RowFrame(frame.cc[rows], frame.n[rows], frame.e[rows], frame.fam.take(rows),
-                       frame.exclusion)
-        sc = scan(cutter, sub, tool_grid(tp, axis, Qb), s_start[rows], s_cap, slack, m, knn,
-                  crossings, rot=D, first=None if first is None else first[rows])
-        best[rows], arg[rows], evals[rows] = sc.best, sc.arg, sc.evaluations
-        seeds[rows], seed_size[rows] = sc.seeds, sc.seed_size
-        if sc.crossings is not None:
-            r, p, q, f = sc.crossings
-            cross.append((rows[r], p, q, f))
-    found = tuple(np.concatenate([c[t] for c in cross]) for t in range(4)) if cross else None
-    return Scan(best, arg, seeds, seed_size, evals, found)
