@@ -1,5 +1,6 @@
 """The fundamental forms at surface points, on (u, v) steps: tangent vectors to (u, v) through the
-first fundamental form, and the second fundamental form with a given normal. Any frame (the
+first fundamental form, and the second fundamental form with a given normal; an orthonormal
+tangent basis to express directions in. Any frame (the
 forms only need the derivatives and the normal in the same one); mm and parameter units."""
 
 from __future__ import annotations
@@ -38,3 +39,11 @@ def second_form(n: np.ndarray, second: tuple[np.ndarray, np.ndarray, np.ndarray]
     d2 = (suu * (a1 * a2)[:, None] + suv * (a1 * b2 + a2 * b1)[:, None]
           + svv * (b1 * b2)[:, None])
     return np.einsum("ij,ij->i", n, d2)
+
+
+def tangent_basis(du: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Orthonormal tangent vectors (t1, t2) (K, 3) at K surface points with unit normals `n`
+    (K, 3): t1 along `du`'s part normal to n, t2 = n x t1."""
+    t1 = du - np.einsum("ij,ij->i", du, n)[:, None] * n
+    t1 = t1 / np.maximum(np.linalg.norm(t1, axis=1, keepdims=True), 1e-300)
+    return t1, np.cross(n, t1)

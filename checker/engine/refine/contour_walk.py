@@ -52,11 +52,11 @@ def along_contours(part: Part, cutter, frame: RowFrame, Q: np.ndarray, best: Row
     if uv_own is not None:
         rows = np.flatnonzero(~np.isfinite(best.size) & (own >= 0))
         walks.append((rows, own[rows], uv_own[rows], _UNBOUNDED_REACH))
-    obj = None
+    walks = [walk for walk in walks if walk[0].size]
+    if not walks:
+        return
+    obj = Objective(part, cutter, frame, Q)
     for rows, sid, uv, reach in walks:
-        if not rows.size:
-            continue
-        obj = obj or Objective(part, cutter, frame, Q)
         f, p, q = _contour_minimum(obj, rows, sid, uv, reach * spacing)
         best.evaluations[rows] += _contour_evaluations(reach * spacing)
         best.lower(rows, f, p, sid, q)

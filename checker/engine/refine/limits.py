@@ -35,7 +35,7 @@ import numpy as np
 from checker.engine.grid.frames import rotate_rows
 from checker.engine.sizes import RowFrame
 from checker.geometry.evaluate import evaluate_mixed
-from checker.geometry.fundamental import second_form, uv_of_tangents
+from checker.geometry.fundamental import second_form, tangent_basis, uv_of_tangents
 from checker.part import Part
 
 _EPS_H = 1e-9  # |n_h| below this: the normal is along the axis (no parallel circle)
@@ -62,9 +62,7 @@ def curvature_limit(cutter, part: Part, frame: RowFrame, Q: np.ndarray, rows: np
     n = frame.n[rows]
     to_uv = uv_of_tangents(su, sv)
     if cutter.ball_family:
-        t1 = su - np.einsum("ij,ij->i", su, n)[:, None] * n
-        t1 /= np.maximum(np.linalg.norm(t1, axis=1, keepdims=True), 1e-300)
-        t2 = np.cross(n, t1)
+        t1, t2 = tangent_basis(su, n)
         a, b, c = _forms(n, second, to_uv, t1, t2)
         half = np.sqrt((0.5 * (a - c)) ** 2 + b * b)
         k_max = 0.5 * (a + c) + half

@@ -13,7 +13,7 @@ from checker.engine.grid.frames import rotate_rows
 from checker.engine.scan.contour import Crossings
 from checker.engine.sizes import RowFrame, pair_sizes
 from checker.geometry.evaluate import evaluate_mixed, points_mixed
-from checker.geometry.fundamental import uv_of_tangents
+from checker.geometry.fundamental import tangent_basis, uv_of_tangents
 from checker.geometry.inverse import invert_points
 from checker.geometry.sampling import TestPoints
 from checker.part import Part
@@ -85,13 +85,14 @@ def _per_parameter(part: Part, sid: np.ndarray, uv: np.ndarray, mm: np.ndarray) 
                             mm / np.maximum(np.linalg.norm(ev.dv, axis=1), 1e-12)])
 
 
-def _nearest_of_surface(sid: np.ndarray) -> np.ndarray:
+def _nearest_of_other_surfaces(sid: np.ndarray, own: np.ndarray) -> np.ndarray:
     """(N, k) mask of the entries of sorted nearest-neighbour rows whose surface `sid (N, k)`
-    no nearer entry of the row has: the nearest test point of each surface."""
+    no nearer entry of the row has, other than the row's own surface `own (N,)`: the nearest
+    test point of each other surface."""
     first = np.ones(sid.shape, dtype=bool)
     for j in range(1, sid.shape[1]):
         first[:, j] = (sid[:, :j] != sid[:, j:j + 1]).all(axis=1)
-    return first
+    return first & (sid != own[:, None]) & (sid >= 0)
 
 
 def contact_pairs(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray,
@@ -102,7 +103,7 @@ def contact_pairs(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray,
     has = (own >= 0) & np.isfinite(uv_own).all(axis=1)
     rows, sids, uvs = [np.flatnonzero(has)], [own[has]], [uv_own[has]]
     sid = tp.surface[knn]
-    r, j = np.nonzero(_nearest_of_surface(sid) & (sid != own[:, None]) & (sid >= 0))
+    r, j = np.nonzero(_nearest_of_other_surfaces(sid, own))
     idx = knn[r, j]
     for s in np.unique(tp.surface[idx]):
         sel = np.flatnonzero(tp.surface[idx] == s)
@@ -125,7 +126,7 @@ def seam_starts(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray,
     sid = tp.surface[knn]
     rows = np.repeat(np.arange(n), k)
     d = np.linalg.norm(tp.points[knn] - tp.points[knn[:, :1]], axis=2)  # from the nearest one
-    pick = (_nearest_of_surface(sid) & (sid != own[:, None]) & (sid >= 0) & (d <= spacing)).ravel()
+    pick = (_nearest_of_other_surfaces(sid, own) & (d <= spacing)).ravel()
     idx = knn.ravel()[pick]
     sid = tp.surface[idx].astype(np.int64)
     return Starts(rows[pick], sid, tp.uv[idx], _per_parameter(part, sid, tp.uv[idx],
@@ -169,7 +170,10 @@ def ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, contacts: Co
     lo, hi = dom[sid, :, 0], dom[sid, :, 1]
     per_mm = 1.0 / np.maximum(np.column_stack([np.linalg.norm(ev.du, axis=1),
                                                np.linalg.norm(ev.dv, axis=1)]), 1e-12)
-    to_uv = _tangent_to_uv(ev.du, ev.dv)
+    nrm = np.cross(ev.du, ev.dv)  # the parametrisation's normal (the ring's sense of angles)
+    t1, t2 = tangent_basis(ev.du, nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True),
+                                                   1e-300))
+    to_uv = _tangent_to_uv(ev.du, ev.dv, t1, t2)
     even = np.arange(8) * np.pi / 4
     first = np.arange(_FIRST_RING) * 2 * np.pi / _FIRST_RING
     angles = np.broadcast_to(first, (len(rows), _FIRST_RING))
@@ -187,7 +191,6 @@ def ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, contacts: Co
         half = radius * per_mm * (1.0 if j == 0 else 0.5)
         out.append(Starts(rows[ok], sid[ok], ring[ar, k][ok], half[ok]))
         if j == 0:
-            t1, t2 = _tangent_basis(ev.du, ev.dv)
             known = np.isfinite(toward).all(axis=1)  # the closed form's direction (limits.py)
             best = np.where(known, np.arctan2(np.einsum("ij,ij->i", toward, t2),
                                               np.einsum("ij,ij->i", toward, t1)),
@@ -219,18 +222,10 @@ def _limit_at_cc(cutter, frame: RowFrame, Q: np.ndarray, part: Part, contacts: C
     return CCLimits(rows[ok], limit, sid[ok], uv[ok])
 
 
-def _tangent_basis(du: np.ndarray, dv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Orthonormal tangent vectors (K, 3) at K surface points: du's direction, and the normal
-    cross it."""
-    t1 = du / np.maximum(np.linalg.norm(du, axis=1, keepdims=True), 1e-300)
-    nrm = np.cross(du, dv)
-    return t1, np.cross(nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300), t1)
-
-
-def _tangent_to_uv(du: np.ndarray, dv: np.ndarray):
+def _tangent_to_uv(du: np.ndarray, dv: np.ndarray, t1: np.ndarray, t2: np.ndarray):
     """`f(angles (K, m)) -> (K, m, 2)`: the (u, v) steps of unit length in the tangent plane at
-    K surface points (derivatives du, dv (K, 3)), at `angles` (rad) from du's direction."""
-    t1, t2 = _tangent_basis(du, dv)
+    K surface points (derivatives du, dv (K, 3); orthonormal tangents t1, t2 (K, 3)), at
+    `angles` (rad) from t1 towards t2."""
     to_uv = uv_of_tangents(du, dv)
 
     def f(angles: np.ndarray) -> np.ndarray:
