@@ -12,7 +12,7 @@ import pytest
 from checker.config import default_config
 from checker.cutter import parse_cutter
 from checker.four_axis.best_b import best_b
-from checker.four_axis.plan import allowable_over_b
+from checker.four_axis.plan import OverB, allowable_over_b
 from checker.geometry import load_part
 from checker.geometry.contact import cl_to_cc
 from checker.geometry.sampling import sample_part
@@ -47,23 +47,18 @@ def passage(repo):
     return part, tp, pick
 
 
-@pytest.mark.parametrize("cutter_text", ["CUTTER/12,2", "CUTTER/12,6"])
-def test_best_b_agrees_with_a_brute_force_scan(passage, cutter_text):
-    """A bull-nose's allowable size depends on B (clear maxima); a ball's is the curvature
-    limit over a range of B (flat tops), where b_best must lie on the top."""
-    part, tp, con = passage
-    cfg = default_config()
-    cutter = parse_cutter(cutter_text)
-    fn = allowable_over_b(tp, part, cutter, con, cfg)
-    n = len(con.cc)
-    best = best_b(fn, n, b_min=B_RANGE[0], b_max=B_RANGE[1], coarse_step=4.0, tolerance=0.01,
-                  required=cutter.size)
+def _dense_scan(fn, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The engine at every point and every B of the range in STEP degrees: (B (K,), (n, K))."""
     dense = np.arange(B_RANGE[0], B_RANGE[1] + 1e-9, STEP)
     rows = np.repeat(np.arange(n), dense.size)
-    scan = fn(rows, np.tile(dense, n)).reshape(n, dense.size)
+    return dense, fn(rows, np.tile(dense, n)).reshape(n, dense.size)
+
+
+def _assert_agrees_with_scan(best, dense: np.ndarray, scan: np.ndarray, cutter) -> None:
+    """b_best and the size there against the dense scan (module docstring)."""
     top = scan.max(axis=1)
     strict_peaks = 0
-    for i in range(n):
+    for i in range(len(scan)):
         if np.isinf(top[i]):  # unbounded at some B: best B is one of them
             assert np.isinf(best.allowable_at_best[i])
             inf_b = dense[np.isinf(scan[i])]
@@ -82,6 +77,52 @@ def test_best_b_agrees_with_a_brute_force_scan(passage, cutter_text):
             assert on_top.min() - STEP <= best.b_best[i] <= on_top.max() + STEP
     if cutter.kind == "bullnose":
         assert strict_peaks >= 4, "the passage should give the bull-nose clear best B values"
+
+
+@pytest.mark.parametrize("cutter_text", ["CUTTER/12,2", "CUTTER/12,6"])
+def test_best_b_agrees_with_a_brute_force_scan(passage, cutter_text):
+    """A bull-nose's allowable size depends on B (clear maxima); a ball's is the curvature
+    limit over a range of B (flat tops), where b_best must lie on the top."""
+    part, tp, con = passage
+    cutter = parse_cutter(cutter_text)
+    fn = allowable_over_b(tp, part, cutter, con, default_config())
+    n = len(con.cc)
+    best = best_b(fn, n, b_min=B_RANGE[0], b_max=B_RANGE[1], coarse_step=4.0, tolerance=0.01,
+                  required=cutter.size)
+    _assert_agrees_with_scan(best, *_dense_scan(fn, n), cutter)
+
+
+@pytest.mark.parametrize("cutter_text", ["CUTTER/12,2", "CUTTER/12,6"])
+def test_tracked_refinement_agrees_with_a_brute_force_scan(passage, cutter_text):
+    """The refinement on the sizes refined from the tracked limiting points (three engine
+    evaluations per point instead of seventeen) meets the same brute-force scan."""
+    part, tp, con = passage
+    cutter = parse_cutter(cutter_text)
+    over = OverB(tp, part, cutter, con, default_config())
+    n = len(con.cc)
+    best = best_b(over.sizes, n, b_min=B_RANGE[0], b_max=B_RANGE[1], coarse_step=4.0,
+                  tolerance=0.01, required=cutter.size, tracked=over)
+    _assert_agrees_with_scan(best, *_dense_scan(over.sizes, n), cutter)
+
+
+@pytest.mark.parametrize("cutter_text", ["CUTTER/12,2", "CUTTER/12,6"])
+def test_sizes_near_the_limiting_points_meet_the_engine(passage, cutter_text):
+    """From the engine's own limiting points `sizes_near` finds the engine's size again (to
+    1e-6 mm) or a smaller one (a size at a surface point, which the engine's minimum is at most
+    in truth); 0 where the point faces away from the axis, as the engine."""
+    part, tp, con = passage
+    cutter = parse_cutter(cutter_text)
+    over = OverB(tp, part, cutter, con, default_config())
+    n = len(con.cc)
+    b = np.arange(-30.0, 30.0 + 1e-9, 5.0)
+    rows = np.repeat(np.arange(n), b.size)
+    at = over.limited(rows, np.tile(b, n))
+    near = over.near(rows, np.tile(b, n), at.surface[:, None], at.uv[:, None])
+    assert ((near == 0.0) == (at.size == 0.0)).all() and (at.size == 0.0).any()
+    bounded = np.isfinite(at.size) & (at.surface >= 0)
+    assert bounded.sum() >= 20
+    assert (near[bounded] <= at.size[bounded] + 1e-6).all()
+    assert np.mean(np.abs(near[bounded] - at.size[bounded]) <= 1e-6) >= 0.95
 
 
 @pytest.mark.parametrize("cutter_text", ["CUTTER/12,2", "CUTTER/12,6"])

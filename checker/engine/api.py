@@ -22,6 +22,7 @@ from checker.engine.refine.starts import (
     Starts,
     contact_pairs,
     contour_starts,
+    per_parameter,
     ring_evaluations,
     ring_radii,
     ring_starts,
@@ -48,6 +49,7 @@ _FIRST_TRIAL = 4.0  # first trial size of the scan at most this many times s0
 _HINT_MARGIN = 0.1  # a hinted first trial: this fraction above the hint and the slack
 _BOUND_POINTS = 256  # test points (evenly spread over their order) that start `upper_bounds`
 _BOUND_BLOCK = 1 << 19  # (row, start point) pairs per call of `upper_bounds`' kernel
+_NEAR_ITERATIONS = 2  # refinement steps of `sizes_near` (it starts at minima of nearby axes)
 
 
 @dataclass
@@ -243,6 +245,38 @@ def upper_bounds(test_points: TestPoints, part: Part, cutter, cc, normals, axes,
                         size_args(cutter, tf.frame, r), knn).upper
         bound[rows[r]] = np.where(u <= cfg.engine.max_size, u, np.inf)
     return bound
+
+
+def sizes_near(test_points: TestPoints, part: Part, cutter, cc, normals, axes, surface: np.ndarray,
+               uv: np.ndarray, *, cc_surface: np.ndarray, cc_uv: np.ndarray,
+               config: Config | None = None) -> np.ndarray:
+    """(N,) upper bounds (mm, inf: none) of `allowable(...).size` for the same arguments (the
+    exact method on a NURBS part, the CC points on their surfaces `cc_surface (N,)` at `cc_uv
+    (N, 2)`), from far fewer evaluations: the size refined in (u, v) from the points `uv
+    (N, m, 2)` on `surface (N, m)` (-1: none), e.g. where the size was limited at nearby axes,
+    and the closed-form limit at the CC point; 0 where the row faces away from its axis.
+    Sound: each is a size the engine's minimum is at most. Tight where the limiting points
+    move little with the axis."""
+    cfg = config or default_config()
+    cc, normals, axes = _rows(cc, normals, axes)
+    out = np.zeros(len(cc))
+    tf = _tool_frames(test_points, cutter, cc, normals, axes, None, cfg)
+    rows = tf.rows
+    if not rows.size:
+        return out
+    own, uv_own = np.asarray(cc_surface, np.int64)[rows], np.asarray(cc_uv, np.float64)[rows]
+    size = curvature_limit(cutter, part, tf.frame, tf.Q, np.arange(rows.size), own, uv_own).size
+    r, j = np.nonzero(np.asarray(surface, np.int64)[rows] >= 0)
+    if r.size:
+        sid = np.asarray(surface, np.int64)[rows][r, j]
+        at = np.asarray(uv, np.float64)[rows][r, j]
+        half = 0.5 * test_points.spacing.max()  # the scan's seeds' stencil (refine/starts.py)
+        ref = refine(part, cutter, tf.frame, tf.Q, r, sid, at,
+                     per_parameter(part, sid, at, np.full(r.size, half)),
+                     _NEAR_ITERATIONS)
+        np.minimum.at(size, r, ref.size)
+    out[rows] = np.where(size > cfg.engine.max_size, np.inf, size)
+    return out
 
 
 _MESH_INDEX: dict[str, object] = {}

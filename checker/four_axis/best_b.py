@@ -17,7 +17,10 @@ nothing from it: its probes lie near the top, where the bound is seldom below th
 probe is compared with; about 4 % of them on the compressor job, 6 % with `coarse_fn`, which
 costs 70 % of `fn`. Brent's parabolic steps save only ~19 % of its rows there: A(B) is a
 minimum over test points, often with a kink or several small maxima in the bracket, so they
-fall back to golden steps and end at other local maxima, lower on some rows. The interval ends
+fall back to golden steps and end at other local maxima, lower on some rows. What does pay is
+tracking where the size is limited: near the top of A(B) the limiting points move little, so
+the section runs on the sizes refined from them, at a fifth of the engine's cost, and the
+engine confirms the result (`_golden_tracked`). The interval ends
 stay a bisection: A(B) jumps at them, from ~0 to near its top within 0.1 degree, where a
 secant step gains nothing.)
 (docs/MATH.md §7.1, §5.3)
@@ -27,6 +30,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
+from typing import NamedTuple, Protocol
 
 import numpy as np
 
@@ -39,6 +44,27 @@ PLATEAU = 1e-6  # mm: coarse samples this close to the top make a flat top
 COARSE_PLATEAU = 1e-3  # mm: the same for a coarse evaluation (a cheaper upper bound)
 END_TOLERANCE = 0.2  # degrees: the feasible intervals' ends, kept on the feasible side
 _SCAN_BATCH = 10_000  # (point, B) rows per engine call of the coarse scan
+_TRACKED_PASSES = 3  # sections on tracked limiting points before the section of the engine
+
+
+class Limited(NamedTuple):
+    """The engine's sizes at (point, B) rows, `size (M,)` mm, and where each was limited: on
+    `surface (M,)` (-1: nowhere) at `uv (M, 2)`."""
+
+    size: np.ndarray
+    surface: np.ndarray
+    uv: np.ndarray
+
+
+class Tracked(Protocol):
+    """The engine over B with the points that limit its sizes (`four_axis.plan.OverB`)."""
+
+    def sizes(self, rows: np.ndarray, b_deg: np.ndarray) -> np.ndarray: ...
+
+    def limited(self, rows: np.ndarray, b_deg: np.ndarray) -> Limited: ...
+
+    def near(self, rows: np.ndarray, b_deg: np.ndarray, surface: np.ndarray,
+             uv: np.ndarray) -> np.ndarray: ...
 
 
 @dataclass(frozen=True)
@@ -124,12 +150,14 @@ def _unless_below(fn: AllowableFn, bound: AllowableFn | None, rows: np.ndarray, 
     return out
 
 
-def _golden_max(fn: AllowableFn, rows: np.ndarray, lo: np.ndarray, hi: np.ndarray, tol: float):
-    """Vectorised golden-section search for the maximum of fn(row, b) on [lo, hi] per row."""
+def _golden_max(fn: AllowableFn, rows: np.ndarray, lo: np.ndarray, hi: np.ndarray, tol: float,
+                inner: tuple[np.ndarray, np.ndarray] | None = None):
+    """Vectorised golden-section search for the maximum of fn(row, b) on [lo, hi] per row
+    (`inner`: the values at the two inner points, when known)."""
     a, b = lo.copy(), hi.copy()
     c = b - GOLDEN * (b - a)
     d = a + GOLDEN * (b - a)
-    fc, fd = fn(rows, c), fn(rows, d)
+    fc, fd = (fn(rows, c), fn(rows, d)) if inner is None else inner
     with step("best B: refinement", total=_rounds(float(np.max(b - a)), tol, GOLDEN)) as advance:
         while np.max(b - a) > tol:
             left = fc >= fd  # keep [a, d]
@@ -148,6 +176,44 @@ def _golden_max(fn: AllowableFn, rows: np.ndarray, lo: np.ndarray, hi: np.ndarra
             advance(1)
     best_is_c = fc >= fd
     return np.where(best_is_c, c, d), np.where(best_is_c, fc, fd)
+
+
+def _golden_tracked(tracked: Tracked, rows: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                    tol: float):
+    """`_golden_max` of the engine's A(B) (`tracked.limited`) from 3 of its evaluations per
+    row instead of 17: the section runs on g(B), the sizes refined from the points where A was
+    limited at the bracket's two inner points (`tracked.near`: sizes at surface points, so
+    g >= the true minimum), then A is evaluated at the section's best B*. Where A(B*) >=
+    g(B*) - PLATEAU, B* is as good as a section of A: A(B*) >= g(B*) >= g(B) >= A(B) over the
+    bracket (for the maximiser the section finds); elsewhere the point where A(B*) was limited
+    joins the tracked ones for another pass, and after _TRACKED_PASSES the section of A itself
+    decides. The size reported is min(A(B*), g(B*)): g lies below A where the engine's own
+    search missed a minimum that a tracked point leads to (docs/MATH.md §7.1)."""
+    c, d = hi - GOLDEN * (hi - lo), lo + GOLDEN * (hi - lo)
+    seen = [tracked.limited(rows, c), tracked.limited(rows, d)]
+    b_out, f_out = np.empty(rows.size), np.empty(rows.size)
+    todo = np.arange(rows.size)
+    for _ in range(_TRACKED_PASSES):
+        near = partial(tracked.near, surface=np.column_stack([e.surface[todo] for e in seen]),
+                       uv=np.stack([e.uv[todo] for e in seen], axis=1))
+        b_star, g_star = _golden_max(near, rows[todo], lo[todo], hi[todo], tol,
+                                     (seen[0].size[todo], seen[1].size[todo]))
+        at = tracked.limited(rows[todo], b_star)
+        ok = at.size >= g_star - PLATEAU
+        b_out[todo[ok]], f_out[todo[ok]] = b_star[ok], np.minimum(at.size, g_star)[ok]
+        seen.append(_scattered(at, todo, rows.size))
+        todo = todo[~ok]
+        if not todo.size:
+            return b_out, f_out
+    b_out[todo], f_out[todo] = _golden_max(tracked.sizes, rows[todo], lo[todo], hi[todo], tol)
+    return b_out, f_out
+
+
+def _scattered(part: Limited, where: np.ndarray, n: int) -> Limited:
+    """`part` placed at rows `where` of n rows; the others limited nowhere."""
+    out = Limited(np.zeros(n), np.full(n, -1, np.int64), np.full((n, 2), np.nan))
+    out.size[where], out.surface[where], out.uv[where] = part
+    return out
 
 
 def _refine_ends(fn: AllowableFn, rows, inside, outside, level, tol: float,
@@ -208,6 +274,7 @@ def best_b(
     candidates: int | None = None,
     coarse_fn: AllowableFn | None = None,
     bound_fn: AllowableFn | None = None,
+    tracked: Tracked | None = None,
 ) -> BestB:
     """Best B to `tolerance` degrees for n points, and their feasible intervals (ends to
     END_TOLERANCE) for a cutter that needs `required` mm. Unbounded and flat tops (the same size
@@ -215,7 +282,9 @@ def best_b(
     `coarse_fn`: a cheaper evaluation (an upper bound of `fn`) for the scan and the interval
     ends; the refinement and the size at the best B use `fn`. `bound_fn`: a still cheaper
     upper bound of the scan's function, to skip the rows that cannot matter (module docstring;
-    in the scan only with one candidate peak, where only the top sample is refined)."""
+    in the scan only with one candidate peak, where only the top sample is refined).
+    `tracked`: `fn` with the points that limit its sizes, for a refinement from far fewer of
+    its evaluations (`_golden_tracked`)."""
     coarse = fn if coarse_fn is None else coarse_fn
     grid = coarse_grid(b_min, b_max, coarse_step)
     plateau = PLATEAU if coarse_fn is None else COARSE_PLATEAU
@@ -249,7 +318,8 @@ def best_b(
         step = grid[1] - grid[0]
         lo = np.maximum(grid[k] - step, b_min)
         hi = np.minimum(grid[k] + step, b_max)
-        b_ref, f_ref = _golden_max(fn, rows, lo, hi, tolerance)
+        b_ref, f_ref = (_golden_max(fn, rows, lo, hi, tolerance) if tracked is None
+                        else _golden_tracked(tracked, rows, lo, hi, tolerance))
         f_ref = f_ref.reshape(-1, peaks.shape[1])
         b_ref = b_ref.reshape(-1, peaks.shape[1])
         pick = np.argmax(f_ref, axis=1)

@@ -19,6 +19,7 @@ from checker.engine.grid.bins import drop_table_grids
 from checker.four_axis.best_b import best_b
 from checker.four_axis.plan import (
     Orientations,
+    OverB,
     allowable_over_b,
     bound_over_b,
     coarse_config,
@@ -47,13 +48,14 @@ def plan_b(*, test_points, part, cutter, contacts, tips: np.ndarray, axes: np.nd
     check_b_range(lo, hi, *machine_limits)
     b_original = b_for_axis(axes)
     step = np.r_[0.0, np.linalg.norm(np.diff(contacts.cc, axis=0), axis=1)]
-    fn = allowable_over_b(test_points, part, cutter, contacts, cfg)
+    exact = OverB(test_points, part, cutter, contacts, cfg)
     coarse_cfg = coarse_config(cfg)
     coarse = allowable_over_b(test_points, part, cutter, contacts, coarse_cfg)
     bound = bound_over_b(test_points, part, cutter, contacts, coarse_cfg)
-    orientations = plan_orientations(fn, coarse, b_original, step,
+    orientations = plan_orientations(exact.sizes, coarse, b_original, step,
                                      cutter.size + cfg.check.tolerance, cfg, (lo, hi), bound,
-                                     searched=lambda: drop_table_grids(test_points))
+                                     searched=lambda: drop_table_grids(test_points),
+                                     tracked=exact if exact.tracks else None)
     b_chosen = orientations.chosen.b
     return orientations, b_chosen, moved_tips(cutter, contacts, tips, b_original, b_chosen)
 

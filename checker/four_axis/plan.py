@@ -13,7 +13,7 @@ import numpy as np
 
 from checker.b_axis import axis_for_b
 from checker.config import Config
-from checker.four_axis.best_b import BestB, best_b
+from checker.four_axis.best_b import BestB, Limited, best_b
 from checker.four_axis.orientation import (
     Orientation,
     greedy_smoothing,
@@ -58,24 +58,63 @@ def _over_b(contacts, sizes):
     return fn
 
 
-def allowable_over_b(test_points, part, cutter, contacts, cfg: Config):
-    """`fn(rows, b_deg) -> sizes` for the best-B search: the engine's allowable size of CC
-    point `rows` at table angle `b_deg`; 0 where the point faces away from that axis.
-    `contacts` has `cc`, `normal` (N, 3) and `surface`, `uv` (None when unknown). Each point's
-    last size hints the engine's next evaluation of it (the search moves B in small steps;
-    only the time depends on the hint)."""
-    from checker.engine import allowable
+class OverB:
+    """The allowable-cutter engine as a function of the table angle for the CC points
+    `contacts` (`cc`, `normal` (N, 3); `surface`, `uv` None when unknown). Each point's last
+    size hints the engine's next evaluation of it (the search moves B in small steps; only the
+    time depends on the hint)."""
 
-    last = np.full(len(contacts.cc), np.nan)
+    def __init__(self, test_points, part, cutter, contacts, cfg: Config) -> None:
+        self.test_points, self.part, self.cutter, self.cfg = test_points, part, cutter, cfg
+        self.contacts = contacts
+        self.last = np.full(len(contacts.cc), np.nan)
 
-    def sizes(r: np.ndarray, axes: np.ndarray) -> np.ndarray:
-        out = allowable(test_points, part, cutter, contacts.cc[r], contacts.normal[r], axes,
-                        cc_surface=_take(contacts.surface, r), cc_uv=_take(contacts.uv, r),
-                        config=cfg, hint=last[r]).size
-        last[r] = out
+    def sizes(self, rows: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
+        """The engine's allowable size (M,) mm of CC points `rows` at table angles `b_deg`; 0
+        where the point faces away from that axis."""
+        return self.limited(rows, b_deg).size
+
+    @property
+    def tracks(self) -> bool:
+        """Whether `near` applies: the CC points' surfaces and parameters are known."""
+        return self.contacts.surface is not None and self.contacts.uv is not None
+
+    def limited(self, rows: np.ndarray, b_deg: np.ndarray) -> Limited:
+        """`sizes(rows, b_deg)` and where they were limited (0 and nowhere where the point
+        faces away from the axis)."""
+        axes = axis_for_b(b_deg)
+        out = Limited(np.zeros(len(rows)), np.full(len(rows), -1, np.int64),
+                      np.full((len(rows), 2), np.nan))
+        facing = np.flatnonzero(np.einsum("ij,ij->i", self.contacts.normal[rows], axes) > 1e-12)
+        if facing.size:
+            from checker.engine import allowable
+
+            r, c = rows[facing], self.contacts
+            res = allowable(self.test_points, self.part, self.cutter, c.cc[r], c.normal[r],
+                            axes[facing], cc_surface=_take(c.surface, r), cc_uv=_take(c.uv, r),
+                            config=self.cfg, hint=self.last[r])
+            self.last[r] = res.size
+            out.size[facing], out.surface[facing], out.uv[facing] = (
+                res.size, res.limiting_surface, res.limiting_uv)
         return out
 
-    return _over_b(contacts, sizes)
+    def near(self, rows: np.ndarray, b_deg: np.ndarray, surface: np.ndarray,
+             uv: np.ndarray) -> np.ndarray:
+        """Upper bounds (M,) mm of `sizes(rows, b_deg)` from the points `uv (M, m, 2)` on
+        `surface (M, m)` where they were limited at nearby B (`engine.api.sizes_near`)."""
+        from checker.engine.api import sizes_near
+
+        c = self.contacts
+        return sizes_near(self.test_points, self.part, self.cutter, c.cc[rows], c.normal[rows],
+                          axis_for_b(b_deg), surface, uv, cc_surface=c.surface[rows],
+                          cc_uv=c.uv[rows], config=self.cfg)
+
+
+def allowable_over_b(test_points, part, cutter, contacts, cfg: Config):
+    """`fn(rows, b_deg) -> sizes` for the best-B search: the engine's allowable size of CC
+    point `rows` at table angle `b_deg`; 0 where the point faces away from that axis
+    (`OverB.sizes`)."""
+    return OverB(test_points, part, cutter, contacts, cfg).sizes
 
 
 def bound_over_b(test_points, part, cutter, contacts, cfg: Config):
@@ -101,18 +140,20 @@ def plan_orientations(
     b_range: tuple[float, float],
     bound_fn=None,
     searched=None,
+    tracked=None,
 ) -> Orientations:
     """Best B and feasible intervals of every CC point (`fn` exact, `coarse_fn` its cheaper
     upper bound for the scan, `bound_fn` a still cheaper one of that: see `best_b`), then the
     shortest-path and greedy orientations inside them. `b_original` (N,) the CAM's B (nan:
     none), `path_length` (N,) mm of the step arriving at each point, `required` the size the
     real cutter needs (mm). `searched()`, when given, is called once the best-B search is done
-    (before the shortest path's own memory is taken)."""
+    (before the shortest path's own memory is taken). `tracked`: `fn` with its limiting points
+    (`OverB`), for a refinement from fewer evaluations (`best_b`)."""
     fa = cfg.four_axis
     n = len(b_original)
     best = best_b(fn, n, b_min=b_range[0], b_max=b_range[1], coarse_step=fa.b_coarse_step,
                   tolerance=fa.b_tolerance, required=required, reference=b_original,
-                  coarse_fn=coarse_fn, bound_fn=bound_fn)
+                  coarse_fn=coarse_fn, bound_fn=bound_fn, tracked=tracked)
     if searched is not None:
         searched()
     optima = interval_optima(best.grid, best.samples, best.feasible)

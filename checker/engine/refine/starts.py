@@ -65,7 +65,7 @@ def seed_starts(tp: TestPoints, part: Part, seeds: np.ndarray) -> Starts:
     srow, idx = srow[keep], idx[keep]
     sid = tp.surface[idx].astype(np.int64)
     uv = tp.uv[idx]
-    return Starts(srow, sid, uv, _per_parameter(part, sid, uv, 0.5 * tp.spacing[idx]))
+    return Starts(srow, sid, uv, per_parameter(part, sid, uv, 0.5 * tp.spacing[idx]))
 
 
 def contour_starts(tp: TestPoints, part: Part, crossings: Crossings) -> Starts:
@@ -74,10 +74,10 @@ def contour_starts(tp: TestPoints, part: Part, crossings: Crossings) -> Starts:
     p, q, f = crossings.p, crossings.q, crossings.fraction
     sid = tp.surface[p].astype(np.int64)
     uv = tp.uv[p] + f[:, None] * (tp.uv[q] - tp.uv[p])
-    return Starts(crossings.rows, sid, uv, _per_parameter(part, sid, uv, 0.25 * tp.spacing[p]))
+    return Starts(crossings.rows, sid, uv, per_parameter(part, sid, uv, 0.25 * tp.spacing[p]))
 
 
-def _per_parameter(part: Part, sid: np.ndarray, uv: np.ndarray, mm: np.ndarray) -> np.ndarray:
+def per_parameter(part: Part, sid: np.ndarray, uv: np.ndarray, mm: np.ndarray) -> np.ndarray:
     """(K, 2) lengths `mm (K,)` expressed in u and in v at the surface points (sid, uv):
     mm / |S_u|, mm / |S_v|."""
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
@@ -129,7 +129,7 @@ def seam_starts(tp: TestPoints, part: Part, knn: np.ndarray, own: np.ndarray,
     pick = (_nearest_of_other_surfaces(sid, own) & (d <= spacing)).ravel()
     idx = knn.ravel()[pick]
     sid = tp.surface[idx].astype(np.int64)
-    return Starts(rows[pick], sid, tp.uv[idx], _per_parameter(part, sid, tp.uv[idx],
+    return Starts(rows[pick], sid, tp.uv[idx], per_parameter(part, sid, tp.uv[idx],
                                                               0.25 * tp.spacing[idx]))
 
 
