@@ -76,8 +76,10 @@ class OverB:
 
     @property
     def tracks(self) -> bool:
-        """Whether `near` applies: the CC points' surfaces and parameters are known."""
-        return self.contacts.surface is not None and self.contacts.uv is not None
+        """Whether `near` applies: a NURBS part, the CC points' surfaces and parameters known."""
+        c = self.contacts
+        return (self.part.mesh is None and c.surface is not None and c.uv is not None
+                and bool((np.asarray(c.surface) >= 0).all()))
 
     def limited(self, rows: np.ndarray, b_deg: np.ndarray) -> Limited:
         """`sizes(rows, b_deg)` and where they were limited (0 and nowhere where the point
