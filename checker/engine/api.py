@@ -255,8 +255,9 @@ def sizes_near(test_points: TestPoints, part: Part, cutter, cc, normals, axes, s
     (N, 2)`), from far fewer evaluations: the size refined in (u, v) from the points `uv
     (N, m, 2)` on `surface (N, m)` (-1: none), e.g. where the size was limited at nearby axes,
     and the closed-form limit at the CC point; 0 where the row faces away from its axis.
-    Sound: each is a size the engine's minimum is at most. Tight where the limiting points
-    move little with the axis."""
+    Sound: each is the size at a surface point or the limit at the CC point, which the true
+    minimum is at most (and below the engine's where its search missed the minimum such a
+    start leads to). Tight where the limiting points move little with the axis."""
     cfg = config or default_config()
     cc, normals, axes = _rows(cc, normals, axes)
     out = np.zeros(len(cc))
