@@ -1,10 +1,14 @@
 """Where compiled kernels are cached: `$PATHCHECK_CACHE_DIR`, else the user's cache folder
 (platformdirs: `~/.cache/pathcheck` on Linux), else a folder of this user in the temporary
-directory when that one cannot be written. numba keeps its files under `numba/` there, one set
-per source file and machine; a numba cache folder set by the user (`NUMBA_CACHE_DIR`) wins."""
+directory when that one cannot be written. numba keeps its files under `numba/<key>/` there,
+`<key>` a hash of the package's sources: numba checks a cached kernel against the text of its
+own file only, so a kernel that calls a kernel of another file kept that one's old code after
+the other file changed (an upgrade, a checkout), until this key. A numba cache folder set by the
+user (`NUMBA_CACHE_DIR`) wins, as it is."""
 
 from __future__ import annotations
 
+import hashlib
 import os
 import sys
 import tempfile
@@ -30,11 +34,24 @@ def _writable(folder: Path) -> bool:
     return os.access(folder, os.W_OK | os.X_OK)
 
 
+PACKAGE = Path(__file__).resolve().parent
+
+
+def source_key(root: Path = PACKAGE) -> str:
+    """12 hex digits of a hash of the Python sources under `root` (their paths and texts; the
+    package's ~160 files in about 5 ms)."""
+    h = hashlib.sha1()
+    for f in sorted(root.rglob("*.py")):
+        h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
+    return h.hexdigest()[:12]
+
+
 def kernel_cache_dir() -> Path:
-    """The folder numba caches pathcheck's compiled kernels in."""
+    """The folder numba caches pathcheck's compiled kernels in (one per version of the
+    sources)."""
     if os.environ.get("NUMBA_CACHE_DIR"):
         return Path(os.environ["NUMBA_CACHE_DIR"])
-    return cache_dir() / "numba"
+    return cache_dir() / "numba" / source_key()
 
 
 def use_kernel_cache() -> Path:
@@ -42,7 +59,7 @@ def use_kernel_cache() -> Path:
     child processes), falling back to the temporary directory when it cannot be written."""
     folder = kernel_cache_dir()
     if not _writable(folder):
-        folder = Path(tempfile.gettempdir()) / f"pathcheck-{os.getuid()}" / "numba"
+        folder = Path(tempfile.gettempdir()) / f"pathcheck-{os.getuid()}" / "numba" / source_key()
         folder.mkdir(parents=True, exist_ok=True)
     os.environ["NUMBA_CACHE_DIR"] = str(folder)
     if "numba" in sys.modules:  # imported before pathcheck: make it read the folder again

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import textwrap
 
+from checker.cache import source_key
 from checker.resources import resource
 
 _NO_COMPILE = textwrap.dedent("""
@@ -37,7 +38,7 @@ def test_warm_fills_the_user_cache_and_the_demo_then_compiles_nothing(repo, tmp_
     warm = subprocess.run([sys.executable, "-m", "checker.cli", "warm"], capture_output=True,
                           text=True, env=env, timeout=900)
     assert warm.returncode == 0, warm.stderr
-    assert f"kernels compiled into {cache / 'numba'} in " in warm.stdout
+    assert f"kernels compiled into {cache / 'numba' / source_key()} in " in warm.stdout
     assert any(cache.rglob("*.nbi")) and any(cache.rglob("*.nbc"))
     assert not any((repo / "checker").rglob("*.nbi")), "kernels cached in the source tree"
     demo = repo / "samples/compressor/compressor_small_d12.apt"

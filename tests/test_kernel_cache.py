@@ -1,0 +1,58 @@
+"""The kernel cache follows the sources: numba checks a cached kernel against the text of its
+own file only, so a kernel that calls a kernel of another file keeps that one's old code when
+only the other file changes. The cache folder is keyed by a hash of all the sources
+(`checker.cache.source_key`): shown here with real numba on a two-file package, whose caller's
+answer follows the callee's edit only because the folder changed."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+
+from checker.cache import source_key
+
+_CALLEE = "import numba\n\n@numba.njit(cache=True)\ndef f(x):\n    return x + {}\n"
+_CALLER = textwrap.dedent("""
+    import numba
+    from pkg.callee import f
+
+    @numba.njit(cache=True)
+    def g(x):
+        return f(x) * 10
+""")
+
+
+def _answer(root, cache_dir) -> int:
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache_dir), PYTHONPATH=str(root))
+    done = subprocess.run([sys.executable, "-c", "from pkg.caller import g; print(g(1))"],
+                          capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr
+    return int(done.stdout)
+
+
+def test_a_callers_kernel_follows_its_callees_edit_only_with_the_source_key(tmp_path):
+    pkg = tmp_path / "src" / "pkg"
+    pkg.mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "caller.py").write_text(_CALLER)
+    (pkg / "callee.py").write_text(_CALLEE.format(1))
+    fixed = tmp_path / "one-folder"
+    before = source_key(pkg)
+    assert _answer(tmp_path / "src", fixed) == 20
+    assert _answer(tmp_path / "src", tmp_path / before) == 20
+    (pkg / "callee.py").write_text(_CALLEE.format(2))
+    after = source_key(pkg)
+    assert after != before and source_key(pkg) == after
+    assert _answer(tmp_path / "src", fixed) == 20, "numba alone keeps the caller's old code"
+    assert _answer(tmp_path / "src", tmp_path / after) == 30
+
+
+def test_the_kernels_are_cached_per_version_of_the_sources(tmp_path, monkeypatch):
+    from checker.cache import kernel_cache_dir
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setenv("PATHCHECK_CACHE_DIR", str(tmp_path))
+    assert kernel_cache_dir() == tmp_path / "numba" / source_key()
+    assert len(source_key()) == 12
