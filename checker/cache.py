@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shutil
 import sys
 import tempfile
 from pathlib import Path
 
 CACHE_ENV = "PATHCHECK_CACHE_DIR"
+KEEP_VERSIONS = 4  # kernel folders of the most recent versions of the sources kept
 
 
 def cache_dir() -> Path:
@@ -54,13 +56,30 @@ def kernel_cache_dir() -> Path:
     return cache_dir() / "numba" / source_key()
 
 
+def prune_versions(parent: Path, keep: int = KEEP_VERSIONS) -> None:
+    """Delete all but the `keep` most recently modified folders in `parent` (the kernels of
+    older versions of the sources; a process of such a version compiles afresh)."""
+    try:
+        folders = sorted((f for f in parent.iterdir() if f.is_dir()),
+                         key=lambda f: f.stat().st_mtime, reverse=True)
+    except OSError:
+        return
+    for old in folders[keep:]:
+        shutil.rmtree(old, ignore_errors=True)
+
+
 def use_kernel_cache() -> Path:
     """Point numba's cache at `kernel_cache_dir()` (before numba is imported; inherited by
-    child processes), falling back to the temporary directory when it cannot be written."""
+    child processes), falling back to the temporary directory when it cannot be written. A
+    folder made for a new version of the sources prunes the oldest versions'."""
     folder = kernel_cache_dir()
+    new = not folder.exists()
     if not _writable(folder):
         folder = Path(tempfile.gettempdir()) / f"pathcheck-{os.getuid()}" / "numba" / source_key()
+        new = not folder.exists()
         folder.mkdir(parents=True, exist_ok=True)
+    if new and not os.environ.get("NUMBA_CACHE_DIR"):
+        prune_versions(folder.parent)
     os.environ["NUMBA_CACHE_DIR"] = str(folder)
     if "numba" in sys.modules:  # imported before pathcheck: make it read the folder again
         sys.modules["numba"].core.config.reload_config()

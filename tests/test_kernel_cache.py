@@ -56,3 +56,17 @@ def test_the_kernels_are_cached_per_version_of_the_sources(tmp_path, monkeypatch
     monkeypatch.setenv("PATHCHECK_CACHE_DIR", str(tmp_path))
     assert kernel_cache_dir() == tmp_path / "numba" / source_key()
     assert len(source_key()) == 12
+
+
+def test_only_the_newest_versions_kernels_are_kept(tmp_path):
+    from checker.cache import KEEP_VERSIONS, prune_versions
+
+    for age in range(KEEP_VERSIONS + 2):
+        folder = tmp_path / f"v{age}"
+        (folder / "sub").mkdir(parents=True)
+        (folder / "sub" / "k.nbi").write_text("x")
+        os.utime(folder, (1e9 - age * 100, 1e9 - age * 100))
+    (tmp_path / "note.txt").write_text("not a version")
+    prune_versions(tmp_path)
+    assert sorted(f.name for f in tmp_path.iterdir()) == [
+        "note.txt", *(f"v{age}" for age in range(KEEP_VERSIONS))]
