@@ -55,6 +55,11 @@ class Limited(NamedTuple):
     surface: np.ndarray
     uv: np.ndarray
 
+    @staticmethod
+    def nowhere(n: int) -> Limited:
+        """n rows of size 0, limited nowhere (to be filled)."""
+        return Limited(np.zeros(n), np.full(n, -1, np.int64), np.full((n, 2), np.nan))
+
 
 class Tracked(Protocol):
     """The engine over B with the points that limit its sizes (`four_axis.plan.OverB`)."""
@@ -211,7 +216,7 @@ def _golden_tracked(tracked: Tracked, rows: np.ndarray, lo: np.ndarray, hi: np.n
 
 def _scattered(part: Limited, where: np.ndarray, n: int) -> Limited:
     """`part` placed at rows `where` of n rows; the others limited nowhere."""
-    out = Limited(np.zeros(n), np.full(n, -1, np.int64), np.full((n, 2), np.nan))
+    out = Limited.nowhere(n)
     out.size[where], out.surface[where], out.uv[where] = part
     return out
 

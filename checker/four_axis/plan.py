@@ -43,6 +43,12 @@ def coarse_config(cfg: Config) -> Config:
     return cfg.model_copy(update={"engine": engine})
 
 
+def _facing(contacts, rows: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """Which CC points `rows` face their tool axes `axes (M, 3)` (part frame): the others have
+    size 0 without a search."""
+    return np.einsum("ij,ij->i", contacts.normal[rows], axes) > 1e-12
+
+
 def _over_b(contacts, sizes):
     """`fn(rows, b_deg) -> (M,)` mm: `sizes(r, axes)` for the CC points `r` that face the tool
     axes `axes (K, 3)` of their table angles (part frame), 0 for the others."""
@@ -50,7 +56,7 @@ def _over_b(contacts, sizes):
     def fn(rows: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
         axes = axis_for_b(b_deg)
         out = np.zeros(len(rows))
-        facing = np.einsum("ij,ij->i", contacts.normal[rows], axes) > 1e-12
+        facing = _facing(contacts, rows, axes)
         if facing.any():
             out[facing] = sizes(rows[facing], axes[facing])
         return out
@@ -85,9 +91,8 @@ class OverB:
         """`sizes(rows, b_deg)` and where they were limited (0 and nowhere where the point
         faces away from the axis)."""
         axes = axis_for_b(b_deg)
-        out = Limited(np.zeros(len(rows)), np.full(len(rows), -1, np.int64),
-                      np.full((len(rows), 2), np.nan))
-        facing = np.flatnonzero(np.einsum("ij,ij->i", self.contacts.normal[rows], axes) > 1e-12)
+        out = Limited.nowhere(len(rows))
+        facing = np.flatnonzero(_facing(self.contacts, rows, axes))
         if facing.size:
             from checker.engine import allowable
 
