@@ -1,22 +1,24 @@
 """Seeds of the local refinement for one CC row: the sampled local minima of the imaginary size
-among the row's evaluated test points (numba)."""
+among the row's evaluated test points, then near-minimal samples in the slots left (numba)."""
 
 from __future__ import annotations
 
 import numba as nb
+import numpy as np
 
 NEAR_TIE = 2e-4  # relative: a sample whose lower neighbours are all lower by less is near-minimal
 
 
 @nb.njit(cache=True)
-def _minimal(i, p, v, knn, values, stamp, pos, tie):
-    """Whether no evaluated neighbour of test point p (size v) is below v * (1 - tie)."""
+def _lowest_neighbour(i, p, knn, values, stamp, pos):
+    """The smallest size among the evaluated nearest test points of test point p (inf: none)."""
     npts = knn.shape[0]
+    low = np.inf
     for t in range(knn.shape[1]):
         q = knn[p, t]
-        if q >= 0 and q < npts and stamp[q] == i and values[pos[q]] < v * (1.0 - tie):
-            return False
-    return True
+        if q >= 0 and q < npts and stamp[q] == i and values[pos[q]] < low:
+            low = values[pos[q]]
+    return low
 
 
 @nb.njit(cache=True)
@@ -39,7 +41,7 @@ def _keep(i, p, v, first, taken, seeds, seed_size):
 
 
 @nb.njit(cache=True)
-def row_seeds(i, ids, values, count, knn, limit, stamp, pos, seeds, seed_size):
+def row_seeds(i, ids, values, count, knn, limit, stamp, pos, low, seeds, seed_size):
     """Up to m = `seeds.shape[1]` seeds of row i into `seeds[i]` (test point ids) and
     `seed_size[i]` (mm): among the evaluated points `ids[:count]` with sizes `values[:count]`
     and size <= `limit`, the m smallest sampled local minima (no evaluated point among their
@@ -48,20 +50,22 @@ def row_seeds(i, ids, values, count, knn, limit, stamp, pos, seeds, seed_size):
     a valley that falls so gently towards a surface edge hides a minimum between its samples
     that is not one of theirs (the compressor at B = 5.08 degrees: the samples fall by 0.001 mm
     per 1.4 mm towards the edge, 3 mm from a minimum 0.003 mm below the edge's).
-    `stamp`, `pos` (M,): scratch over all test points, `stamp` never holding i beforehand."""
+    `stamp`, `pos` (M,): scratch over all test points, `stamp` never holding i beforehand;
+    `low` (M,): scratch, each point's smallest neighbour (found once for both kinds)."""
     for k in range(count):
         stamp[ids[k]] = i
         pos[ids[k]] = k
     taken = 0
     for k in range(count):
         v = values[k]
-        if v <= limit and _minimal(i, ids[k], v, knn, values, stamp, pos, 0.0):
-            taken = _keep(i, ids[k], v, 0, taken, seeds, seed_size)
+        if v <= limit:
+            low[k] = _lowest_neighbour(i, ids[k], knn, values, stamp, pos)
+            if low[k] >= v:
+                taken = _keep(i, ids[k], v, 0, taken, seeds, seed_size)
     strict = taken
     if strict == seeds.shape[1]:
         return
     for k in range(count):
         v = values[k]
-        if v <= limit and not _minimal(i, ids[k], v, knn, values, stamp, pos, 0.0) and \
-                _minimal(i, ids[k], v, knn, values, stamp, pos, NEAR_TIE):
+        if v <= limit and v * (1.0 - NEAR_TIE) <= low[k] < v:
             taken = _keep(i, ids[k], v, strict, taken, seeds, seed_size)

@@ -130,6 +130,7 @@ def _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, fou
     cand = np.empty(npts if on else 0, dtype=np.int64)
     stamp = np.full(npts, -1, dtype=np.int64)
     pos = np.empty(npts, dtype=np.int64)
+    low = np.empty(npts)
     for i in range(b, reg.shape[0], nblocks):
         ne, nc = _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, ids, vals, cand)
         evals[i] = ne
@@ -138,8 +139,8 @@ def _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, fou
                 best[i] = vals[k]
                 arg[i] = ids[k]
         if best[i] < np.inf:
-            row_seeds(i, ids, vals, ne, knn, best[i] * (1.0 + rel) + slack, stamp, pos, seeds,
-                      seed_size)
+            row_seeds(i, ids, vals, ne, knn, best[i] * (1.0 + rel) + slack, stamp, pos, low,
+                      seeds, seed_size)
         if on:
             row_crossings(i, cand, nc, grid.xyz, rot, knn, edges, sz, sep, found)
 
