@@ -267,10 +267,10 @@ def sizes_near(test_points: TestPoints, part: Part, cutter, cc, normals, axes, s
         return out
     own, uv_own = np.asarray(cc_surface, np.int64)[rows], np.asarray(cc_uv, np.float64)[rows]
     size = curvature_limit(cutter, part, tf.frame, tf.Q, np.arange(rows.size), own, uv_own).size
-    r, j = np.nonzero(np.asarray(surface, np.int64)[rows] >= 0)
+    surface = np.asarray(surface, np.int64)[rows]
+    r, j = np.nonzero(surface >= 0)
     if r.size:
-        sid = np.asarray(surface, np.int64)[rows][r, j]
-        at = np.asarray(uv, np.float64)[rows][r, j]
+        sid, at = surface[r, j], np.asarray(uv, np.float64)[rows][r, j]
         half = 0.5 * test_points.spacing.max()  # the scan's seeds' stencil (refine/starts.py)
         ref = refine(part, cutter, tf.frame, tf.Q, r, sid, at,
                      per_parameter(part, sid, at, np.full(r.size, half)),
