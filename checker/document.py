@@ -391,8 +391,7 @@ def _operations(job, program, cutters, classes, tol) -> list[OperationResult]:
 
 def _summary(job, program, points, advice, cutters, tol, w, t0, time) -> Summary:
     verdicts = [p.verdict for p in points]
-    moves_ok = len(w.along.end) - sum(p.kind == "move" for p in points)
-    all_counts = counts(verdicts + ["ok"] * moves_ok)
+    all_counts = counts([p.verdict for p in points if p.kind != "move"] + list(w.move_verdict))
     cam_counts = None
     if program.cam is not None:
         c = program.cam

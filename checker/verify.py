@@ -9,14 +9,18 @@ travel at most L, with depths da and db at its ends, no pose is deeper than (da 
 (the two cones from the ends meet there). Stretches whose bound is above the tolerance are
 halved and their middles checked, until every stretch is certified within the tolerance or
 the move's deepest pose is found to a fraction of it (`along_moves`). A move in the air is
-certified from its clearances in a few halvings; in contact, stretches of about twice the
-tolerance remain: the number of poses follows the length in contact with the part, never the
-length of a move. A multi-axis move on a 5-axis machine runs the machine's joints linearly
-(`checker.five_axis.motion`, which gives its poses and its L). mm, part frame."""
+certified from its clearances in a few halvings. In contact that bound would need stretches of
+about twice the tolerance; there a stretch is first certified whole against the part swept
+along it (`checker.mesh.swept`: exact for a translation, with a slack for the tool's turning,
+`stretches`), and only the stretches that fail are halved: on the compressor sample 1,630
+poses along its 3,367 moves instead of 156,696. A multi-axis move on a 5-axis machine runs the
+machine's joints linearly (`checker.five_axis.motion`, which gives its poses and its L); it is
+halved as before. mm, part frame."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -71,6 +75,14 @@ class PoseProbe:
         return Depths(np.asarray(r.depth, float), np.asarray(r.piece, np.int64),
                       np.asarray(r.point, float), np.asarray(r.triangle, np.int64), height)
 
+    def certify(self, ref: Stretches, tolerance: np.ndarray) -> np.ndarray:
+        """(S,) bool: no pose of stretch s goes deeper than `tolerance[s]` mm
+        (`checker.mesh.swept`)."""
+        from checker.mesh.swept import certified_stretches
+
+        return certified_stretches(self.index, self.pieces, ref.mids, ref.axes, ref.half,
+                                   ref.tau, ref.alpha, tolerance)
+
 
 @dataclass(frozen=True)
 class MoveDepths:
@@ -100,6 +112,47 @@ def _pose_at(moves: Moves, end: np.ndarray, t: np.ndarray, b: np.ndarray | None,
     me = rotate_about_y(moves.tip[e], b[e], center)
     bt = b[a] + t * (b[e] - b[a])
     return rotate_about_y(ma + t[:, None] * (me - ma), -bt, center), axis_for_b(bt)
+
+
+class Stretches(NamedTuple):
+    """Reference motions of S stretches of moves (`checker.mesh.swept`): the tool at unit axis
+    `axes (S, 3)` translating from tip `mids - half` to `mids + half` (S, 3; mm, part frame);
+    the real poses leave it by at most `tau (S,)` mm at the tip and `alpha (S,)` radians."""
+
+    mids: np.ndarray
+    axes: np.ndarray
+    half: np.ndarray
+    tau: np.ndarray
+    alpha: np.ndarray
+
+
+def stretches(moves: Moves, end: np.ndarray, t0: np.ndarray, t1: np.ndarray,
+              b: np.ndarray | None, center: np.ndarray) -> Stretches:
+    """The reference motions of the stretches t0..t1 of the moves ending at `end`: the chord of
+    the tips at the middle axis. A tool translating with its axis turning linearly follows the
+    chord (tau = 0) and turns from the middle axis by less than to the end axes. The table
+    turning by dθ over a stretch (radians) while the machine tip X runs straight by |ΔX|: the
+    part-frame tip X(s) turned by -B(s) bends by |p''| <= dθ^2 |X - c| + 2 dθ |ΔX| (|X - c|
+    from the table's axis, largest at an end), at most |p''| / 8 off its chord; the axis is
+    within dθ / 2 of the middle one."""
+    tm = 0.5 * (t0 + t1)
+    tip0, ax0 = _pose_at(moves, end, t0, b, center)
+    tip1, ax1 = _pose_at(moves, end, t1, b, center)
+    _, axm = _pose_at(moves, end, tm, b, center)
+    mids, half = 0.5 * (tip0 + tip1), 0.5 * (tip1 - tip0)
+    if b is None:
+        cos = np.minimum(np.einsum("ij,ij->i", ax0, axm), np.einsum("ij,ij->i", ax1, axm))
+        return Stretches(mids, axm, half, np.zeros(len(end)), np.arccos(np.clip(cos, -1.0, 1.0)))
+    a, e = end - 1, end
+    ma = rotate_about_y(moves.tip[a], b[a], center)
+    me = rotate_about_y(moves.tip[e], b[e], center)
+    dt = t1 - t0
+    turn = np.radians(np.abs(b[e] - b[a])) * dt
+    run = np.linalg.norm(me - ma, axis=1) * dt
+    xa, xb = ma + t0[:, None] * (me - ma), ma + t1[:, None] * (me - ma)
+    arm = np.maximum(np.hypot(xa[:, 0] - center[0], xa[:, 2] - center[2]),
+                     np.hypot(xb[:, 0] - center[0], xb[:, 2] - center[2]))
+    return Stretches(mids, axm, half, (turn ** 2 * arm + 2.0 * turn * run) / 8.0, 0.5 * turn)
 
 
 def move_lengths(moves: Moves, end: np.ndarray, box: np.ndarray, b: np.ndarray | None = None,
@@ -163,6 +216,9 @@ def along_moves(probe: PoseProbe, moves: Moves, end: np.ndarray, end_depths: np.
             slack = np.maximum(precision * tolerance[k], _DEPTH_PRECISION * known)
             open_ = (bound > tolerance[k]) & (bound > known + slack)
             k, t0, t1, d0, d1 = k[open_], t0[open_], t1[open_], d0[open_], d1[open_]
+            if k.size and motion is None:  # a stretch certified whole needs no halving
+                open_ = ~probe.certify(stretches(moves, end[k], t0, t1, b, center), tolerance[k])
+                k, t0, t1, d0, d1 = k[open_], t0[open_], t1[open_], d0[open_], d1[open_]
             if k.size == 0:
                 break
             tm = 0.5 * (t0 + t1)

@@ -115,7 +115,11 @@ def verify(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray, cutters: dict,
     pose_verdict = vd.decide(poses.depth, poses.piece, rapid_pose, near, tolerance + local)
     move_near = _near(job, moves, cutters, along.depths.height, along.end)
     move_tol = tolerance[along.end] + _local_deviation(job, along.depths.triangle)
-    move_verdict = vd.decide(along.depths.depth, along.depths.piece,
+    # the depth is continuous: a move whose end pose penetrates penetrates next to it too, at
+    # least within the tolerance where the poses checked along it found nothing deeper
+    touching = np.maximum(poses.depth[along.end - 1], poses.depth[along.end])
+    move_verdict = vd.decide(np.maximum(along.depths.depth, np.minimum(touching, move_tol)),
+                             along.depths.piece,
                              (moves.kind[along.end] == RAPID) & ~moves.retract[along.end],
                              move_near, move_tol)
     return Verified(moves, poses, along, pose_verdict, move_verdict, tolerance + local, move_tol)

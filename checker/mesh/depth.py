@@ -385,12 +385,12 @@ def _reduce(W, A, lam, n):
 
 @nb.njit(cache=True)
 def _gjk(T, P, m, thresh, x0x, x0y, x0z, y0x, y0y, y0z, W, A, lam, res):
-    """Distance between the triangle T (3, 3) and the solid of revolution of P[:m] (tool frame),
-    starting from x0 in T and y0 in the solid. Returns 0 separated (0 < res[0] <= distance <=
-    res[1]), 1 intersecting or closer than GJK_TOUCH (res[0] = res[1] = 0), 2 farther than
-    `thresh` (res[0] > thresh), 3 stopped (rounding, iterations) with no positive lower bound:
-    0 <= distance <= res[1], intersection not excluded;
-    res[2:5] the point of T nearest the solid (a common point when intersecting)."""
+    """Distance between the triangle T (3, 3) (or any convex polytope: its vertices (k, 3)) and
+    the solid of revolution of P[:m] (tool frame), starting from x0 in T and y0 in the solid.
+    Returns 0 separated (0 < res[0] <= distance <= res[1]), 1 intersecting or closer than
+    GJK_TOUCH (res[0] = res[1] = 0), 2 farther than `thresh` (res[0] > thresh), 3 stopped
+    (rounding, iterations) with no positive lower bound: 0 <= distance <= res[1], intersection
+    not excluded; res[2:5] the point of T nearest the solid (a common point when intersecting)."""
     W[0, 0], W[0, 1], W[0, 2] = x0x - y0x, x0y - y0y, x0z - y0z
     A[0, 0], A[0, 1], A[0, 2] = x0x, x0y, x0z
     lam[0] = 1.0
@@ -406,7 +406,7 @@ def _gjk(T, P, m, thresh, x0x, x0y, x0z, y0x, y0y, y0z, W, A, lam, res):
         vn = math.sqrt(vv)
         j = 0
         dmin = vx * T[0, 0] + vy * T[0, 1] + vz * T[0, 2]
-        for k in range(1, 3):
+        for k in range(1, T.shape[0]):
             d = vx * T[k, 0] + vy * T[k, 1] + vz * T[k, 2]
             if d < dmin:
                 dmin, j = d, k
@@ -476,9 +476,11 @@ def _plane_upper(T, nx, ny, nz, P, m, rho):
 @nb.njit(cache=True, inline="always")
 def _slack(T, cn, cc, nc, solid, rmin, rmax, hlo, hhi):
     """min_i (c_i - min over T of (a_i r + b_i h)) with T's least distance `rmin` from the axis
-    (a degenerate core: the bounding cylinder's sides, at most 0), mm."""
-    hmin = min(T[0, 2], min(T[1, 2], T[2, 2]))
-    hmax = max(T[0, 2], max(T[1, 2], T[2, 2]))
+    (a degenerate core: the bounding cylinder's sides, at most 0), mm. T: the vertices of a
+    triangle, or of any convex polytope (rows)."""
+    hmin, hmax = T[0, 2], T[0, 2]
+    for k in range(1, T.shape[0]):
+        hmin, hmax = min(hmin, T[k, 2]), max(hmax, T[k, 2])
     if solid:
         ub = np.inf
         for i in range(nc):
@@ -492,11 +494,11 @@ def _slack(T, cn, cc, nc, solid, rmin, rmax, hlo, hhi):
 @nb.njit(cache=True)
 def _quick_upper(T, cn, cc, nc, solid, rho, rmax, hlo, hhi):
     """A cheaper, looser `_upper`: min r over T bounded below by the distance from the axis to
-    the box of T's shadow."""
-    x0 = min(T[0, 0], min(T[1, 0], T[2, 0]))
-    x1 = max(T[0, 0], max(T[1, 0], T[2, 0]))
-    y0 = min(T[0, 1], min(T[1, 1], T[2, 1]))
-    y1 = max(T[0, 1], max(T[1, 1], T[2, 1]))
+    the box of T's shadow (T: a triangle's vertices, or any convex polytope's)."""
+    x0, x1, y0, y1 = T[0, 0], T[0, 0], T[0, 1], T[0, 1]
+    for k in range(1, T.shape[0]):
+        x0, x1 = min(x0, T[k, 0]), max(x1, T[k, 0])
+        y0, y1 = min(y0, T[k, 1]), max(y1, T[k, 1])
     dx = max(x0, max(-x1, 0.0))
     dy = max(y0, max(-y1, 0.0))
     rmin = math.sqrt(dx * dx + dy * dy)

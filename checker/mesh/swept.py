@@ -1,0 +1,169 @@
+"""Certify a stretch of a move at once: no pose along it goes deeper into the mesh than a
+tolerance, however long the stretch (`checker.verify.along_moves` asks this before halving).
+
+Reference motion: the tool at the stretch's middle orientation (axis a, tool frame as in
+`checker.mesh.depth`) translating along the chord of the tips, tip c + s w, s in [-1/2, 1/2].
+The real pose at s differs from the reference by a rigid motion that moves a point x (tool
+frame, measured from the reference tip) by at most tau + alpha |x| (tau: how far the real tip
+leaves the chord; alpha: the largest angle between the real axis and a; both bounded by the
+caller), so its signed value against the real tool is at most the reference's plus
+slack = tau (1 + alpha) + alpha |x| (a signed distance is 1-Lipschitz).
+
+Under the translation a triangle T meets the piece P = K (+) rho B as T (-) s w meets the piece
+at rest: over the whole reference motion T's largest signed value is that of the prism
+T (+) [-w/2, w/2] (convex, six vertices), rho - min over the prism of sd_K. It is at most
+tol - slack when dist(prism, K) >= rho - tol + slack (GJK on the prism's vertices; where that
+is not positive, the prism must miss the core eroded by its opposite). Every candidate
+triangle of every piece passing certifies the stretch; one failing leaves it to be halved.
+Exact for a pure translation (alpha = tau = 0): a ball sliding on a plane is certified in one
+test, where the depth bound of `checker.verify` needs stretches of twice the tolerance."""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from checker.mesh.bvh import STACK, MeshIndex, query_capsule
+from checker.mesh.depth import _PV, _clip, _constraints, _erode, _frame, _gjk, _quick_upper
+from checker.mesh.tool import ToolPieces
+
+TOO_TURNED = 0.25  # mm: a slack this large anywhere near a piece is not worth a test
+
+
+@nb.njit(cache=True)
+def _prism_passes(V, P, m, cn, cc, nc, solid, rho, tol, tau, alpha, rmax, hlo, hhi, W, A,
+                  lam, res, buf_a, buf_b):
+    """Whether the prism V (6, 3) (tool frame) stays within `tol` of the piece (core P[:m],
+    its sides cn, cc, grown by rho) with the slack of the rotation at its farthest vertex."""
+    far = 0.0
+    for k in range(V.shape[0]):
+        far = max(far, V[k, 0] ** 2 + V[k, 1] ** 2 + V[k, 2] ** 2)
+    slack = tau * (1.0 + alpha) + alpha * math.sqrt(far) + 1e-9
+    if _quick_upper(V, cn, cc, nc, solid, rho, rmax, hlo, hhi) + slack <= tol:
+        return True
+    thresh = rho - tol + slack  # dist(prism, K) must reach this
+    if thresh > 0.0:
+        st = _gjk(V, P, m, thresh, V[0, 0], V[0, 1], V[0, 2], P[0, 0], 0.0, P[0, 1], W, A,
+                  lam, res)
+        return st == 2 or (st == 0 and res[0] >= thresh)
+    if not solid:  # a segment core: sd_K >= 0, every value at most rho
+        return True
+    Q, mq = _erode(P, m, cn, cc, nc, -thresh, buf_a, buf_b)
+    if mq == 0:
+        return True
+    st = _gjk(V, Q, mq, 0.0, V[0, 0], V[0, 1], V[0, 2], Q[0, 0], 0.0, Q[0, 1], W, A, lam, res)
+    return st == 2
+
+
+@nb.njit(cache=True)
+def _stretch(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv, mlo, mhi,
+             prof, nprof, rho, mids, axes, half, tau, alpha, tol, cand, stack, P, Pc, cn, cc,
+             V, W, A, lam, res, buf_a, buf_b):
+    """Whether stretch i is certified (module docstring). Returns (passed, cand)."""
+    px, py, pz = mids[i, 0], mids[i, 1], mids[i, 2]
+    e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez = _frame(axes[i, 0], axes[i, 1], axes[i, 2])
+    hx, hy, hz = half[i, 0], half[i, 1], half[i, 2]
+    wx = hx * e1x + hy * e1y + hz * e1z
+    wy = hx * e2x + hy * e2y + hz * e2z
+    wz = hx * ex + hy * ey + hz * ez
+    hn = math.sqrt(hx * hx + hy * hy + hz * hz)
+    hm = -np.inf  # highest point of the mesh's box above the middle tip, any pose of the stretch
+    for c in range(8):
+        qx = mhi[0] if c & 1 else mlo[0]
+        qy = mhi[1] if c & 2 else mlo[1]
+        qz = mhi[2] if c & 4 else mlo[2]
+        hm = max(hm, (qx - px) * ex + (qy - py) * ey + (qz - pz) * ez)
+    hm += hn
+    for p in range(prof.shape[0]):
+        rp = rho[p]
+        m0 = nprof[p]
+        for k in range(m0):
+            P[k, 0], P[k, 1] = prof[p, k, 0], prof[p, k, 1]
+        h1 = hm + rp + 1.0  # an unbounded piece clipped above the mesh, as `depth._pose`
+        mc = _clip(P, m0, 0.0, 1.0, h1, Pc)
+        rr = 0.0
+        for k in range(mc):
+            rr = max(rr, Pc[k, 0])
+        mc = _clip(P, m0, 0.0, 1.0, h1 + rr, Pc)
+        if mc == 0:
+            continue
+        nc, solid = _constraints(Pc, mc, cn, cc)
+        rmax, hlo, hhi = 0.0, np.inf, -np.inf
+        for k in range(mc):
+            rmax = max(rmax, Pc[k, 0])
+            hlo = min(hlo, Pc[k, 1])
+            hhi = max(hhi, Pc[k, 1])
+        # a point that can matter lies within pad of the axis segment, so within `far` of the tip
+        far = max(abs(hlo), abs(hhi)) + rmax + hn + rp + 1.0
+        worst = tau[i] * (1.0 + alpha[i]) + alpha[i] * far
+        if worst > TOO_TURNED:
+            return False, cand
+        pad = rmax + hn + max(rp - tol[i] + worst, 0.0) + 1e-9
+        sx, sy, sz = px + hlo * ex, py + hlo * ey, pz + hlo * ez
+        L = hhi - hlo
+        cand, k_c = query_capsule(node_lo, node_hi, node_left, node_right, node_start,
+                                  node_count, sx, sy, sz, L * ex, L * ey, L * ez, pad, cand,
+                                  stack)
+        for q in range(k_c):
+            t = cand[q]
+            for v in range(3):
+                dx, dy, dz = tv[t, v, 0] - px, tv[t, v, 1] - py, tv[t, v, 2] - pz
+                x = dx * e1x + dy * e1y + dz * e1z
+                y = dx * e2x + dy * e2y + dz * e2z
+                z = dx * ex + dy * ey + dz * ez
+                V[v, 0], V[v, 1], V[v, 2] = x - wx, y - wy, z - wz
+                V[v + 3, 0], V[v + 3, 1], V[v + 3, 2] = x + wx, y + wy, z + wz
+            if not _prism_passes(V, Pc, mc, cn, cc, nc, solid, rp, tol[i], tau[i], alpha[i],
+                                 rmax, hlo, hhi, W, A, lam, res, buf_a, buf_b):
+                return False, cand
+    return True, cand
+
+
+@nb.njit(cache=True, parallel=True)
+def _stretches(node_lo, node_hi, node_left, node_right, node_start, node_count, tv, mlo, mhi,
+               prof, nprof, rho, mids, axes, half, tau, alpha, tol, nchunks):
+    n = mids.shape[0]
+    out = np.zeros(n, dtype=np.bool_)
+    for c in nb.prange(nchunks):
+        cand = np.empty(256, dtype=np.int64)
+        stack = np.empty(STACK, dtype=np.int64)
+        P = np.empty((_PV, 2))
+        Pc = np.empty((_PV, 2))
+        cn = np.empty((_PV, 2))
+        cc = np.empty(_PV)
+        V = np.empty((6, 3))
+        W = np.empty((4, 3))
+        A = np.empty((4, 3))
+        lam = np.empty(12)
+        res = np.empty(5)
+        buf_a = np.empty((_PV, 2))
+        buf_b = np.empty((_PV, 2))
+        for i in range(c * n // nchunks, (c + 1) * n // nchunks):
+            out[i], cand = _stretch(i, node_lo, node_hi, node_left, node_right, node_start,
+                                    node_count, tv, mlo, mhi, prof, nprof, rho, mids, axes, half,
+                                    tau, alpha, tol, cand, stack, P, Pc, cn, cc, V, W, A, lam,
+                                    res, buf_a, buf_b)
+    return out
+
+
+def certified_stretches(mesh_index: MeshIndex, pieces: ToolPieces, mids: np.ndarray,
+                        axes: np.ndarray, half: np.ndarray, tau: np.ndarray, alpha: np.ndarray,
+                        tol: np.ndarray) -> np.ndarray:
+    """(S,) bool: stretch s certified within `tol[s]` mm at every pose (module docstring).
+    Reference motion: tips `mids (S, 3)` + sigma `half (S, 3)`, sigma in [-1, 1], unit axes
+    `axes (S, 3)` (mm, part frame); `tau (S,)` mm and `alpha (S,)` radians bound how far the
+    real poses leave it."""
+    n = len(mids)
+    if n == 0:
+        return np.zeros(0, dtype=bool)
+    lo, hi, left, right, start, count, tv, _, _, mlo, mhi = mesh_index.arrays()
+    f = np.ascontiguousarray
+    nchunks = max(1, min(n, 8 * nb.get_num_threads(), (n + 15) // 16))
+    return _stretches(lo, hi, left, right, start, count, tv, mlo, mhi,
+                      f(pieces.prof, dtype=np.float64), f(pieces.nprof, dtype=np.int64),
+                      f(pieces.rho, dtype=np.float64), f(mids, dtype=np.float64),
+                      f(axes, dtype=np.float64), f(half, dtype=np.float64),
+                      f(tau, dtype=np.float64), f(alpha, dtype=np.float64),
+                      f(tol, dtype=np.float64), nchunks)
