@@ -25,20 +25,24 @@ _FAMILIES = ("mesh_and_plan", "engine")
 
 
 def compile_mesh_and_plan() -> None:
-    """The mesh kernels (the tree, the depth of a tool's pieces, the allowable size) and the
-    4-axis plan's (the coarse engine of the best-B scan, the shortest path over B)."""
+    """The mesh kernels (the tree, the depth of a tool's pieces, a stretch certified whole, the
+    allowable size) and the 4-axis plan's (the coarse engine of the best-B scan, the shortest
+    path over B)."""
     import numpy as np
 
     from checker.cutter import parse_cutter
     from checker.mesh import MeshIndex, tool_pieces
     from checker.mesh.depth import allowable_on_mesh, pose_depths
+    from checker.mesh.swept import certified_stretches
 
     v = np.array([[-20.0, -20, 0], [20, -20, 0], [0, 20, 0], [0, 0, 10]])
     index = MeshIndex.build(v, np.array([[0, 1, 2], [0, 1, 3]]))
     cutter = parse_cutter("CUTTER/6,3")
     tips = np.array([[0.0, 0, 1], [0, -5, -0.1]])
     axes = np.tile([0.0, 0, 1], (2, 1))
-    pose_depths(index, tool_pieces(cutter, with_holder=True), tips, axes, reach=1.0)
+    pieces = tool_pieces(cutter, with_holder=True)
+    pose_depths(index, pieces, tips, axes, reach=1.0)
+    certified_stretches(index, pieces, tips, axes, tips, np.zeros(2), np.zeros(2), np.ones(2))
     allowable_on_mesh(index, cutter, np.zeros((1, 3)), axes[:1], axes[:1], tol=1e-6, s_max=10.0)
     _plan()
 

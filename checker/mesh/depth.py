@@ -873,6 +873,44 @@ def _frame(ax, ay, az):
 
 
 @nb.njit(cache=True)
+def _box_top(mlo, mhi, px, py, pz, ex, ey, ez):
+    """The highest corner of the mesh's box above the point p along the axis e, mm."""
+    hm = -np.inf
+    for c in range(8):
+        qx = mhi[0] if c & 1 else mlo[0]
+        qy = mhi[1] if c & 2 else mlo[1]
+        qz = mhi[2] if c & 4 else mlo[2]
+        hm = max(hm, (qx - px) * ex + (qy - py) * ey + (qz - pz) * ez)
+    return hm
+
+
+@nb.njit(cache=True)
+def _piece_core(prof, nprof, p, h1, P, Pc, cn, cc):
+    """Piece p's core profile clipped for a pose into Pc: an unbounded piece cut first at h1
+    (above the mesh, with room for what is measured), then at h1 plus its radius there (room
+    for depths); its sides into cn, cc. Returns (count, sides, solid, rmax, hlo, hhi): the
+    clipped profile's vertex count, the sides, whether it has an interior, its radius and
+    height range (mm)."""
+    m0 = nprof[p]
+    for k in range(m0):
+        P[k, 0], P[k, 1] = prof[p, k, 0], prof[p, k, 1]
+    mc = _clip(P, m0, 0.0, 1.0, h1, Pc)
+    rr = 0.0
+    for k in range(mc):
+        rr = max(rr, Pc[k, 0])
+    mc = _clip(P, m0, 0.0, 1.0, h1 + rr, Pc)
+    if mc == 0:
+        return 0, 0, False, 0.0, 0.0, 0.0
+    nc, solid = _constraints(Pc, mc, cn, cc)
+    rmax, hlo, hhi = 0.0, np.inf, -np.inf
+    for k in range(mc):
+        rmax = max(rmax, Pc[k, 0])
+        hlo = min(hlo, Pc[k, 1])
+        hhi = max(hhi, Pc[k, 1])
+    return mc, nc, solid, rmax, hlo, hhi
+
+
+@nb.njit(cache=True)
 def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tn, tid, mlo,
           mhi, prof, nprof, rho, kind, tool_ptr, pose_tool, tips, axes, floor, reach, method,
           out_d, out_piece, out_tri, out_pt, stats, cand, bnd, order, stack, P, Pc, cn, cc, T, W,
@@ -885,37 +923,16 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
     best_tri = -1
     best_piece = -1
     bx = by = bz = np.nan
-    # highest point of the mesh's box above the tip
-    hm = -np.inf
-    for c in range(8):
-        qx = mhi[0] if c & 1 else mlo[0]
-        qy = mhi[1] if c & 2 else mlo[1]
-        qz = mhi[2] if c & 4 else mlo[2]
-        hm = max(hm, (qx - px) * ex + (qy - py) * ey + (qz - pz) * ez)
+    hm = _box_top(mlo, mhi, px, py, pz, ex, ey, ez)
     tool = pose_tool[i]
     for p in range(tool_ptr[tool], tool_ptr[tool + 1]):
         rp = rho[p]
-        m0 = nprof[p]
-        for k in range(m0):
-            P[k, 0], P[k, 1] = prof[p, k, 0], prof[p, k, 1]
-        # clip an unbounded piece above the mesh: first high enough for distances within
-        # reach, then for depths (at most the profile's radius there)
-        h1 = hm + rp + max(reach, 0.0) + 1.0
-        mc = _clip(P, m0, 0.0, 1.0, h1, Pc)
-        rr = 0.0
-        for k in range(mc):
-            rr = max(rr, Pc[k, 0])
-        mc = _clip(P, m0, 0.0, 1.0, h1 + rr, Pc)
+        # an unbounded piece clipped above the mesh, with room for distances within reach
+        mc, nc, solid, rmax, hlo, hhi = _piece_core(prof, nprof, p,
+                                                    hm + rp + max(reach, 0.0) + 1.0, P, Pc,
+                                                    cn, cc)
         if mc == 0:
             continue
-        nc, solid = _constraints(Pc, mc, cn, cc)
-        rmax = 0.0
-        hlo = np.inf
-        hhi = -np.inf
-        for k in range(mc):
-            rmax = max(rmax, Pc[k, 0])
-            hlo = min(hlo, Pc[k, 1])
-            hhi = max(hhi, Pc[k, 1])
         pad = rmax + max(rp - best, 0.0) + 1e-9
         s0x, s0y, s0z = px + hlo * ex, py + hlo * ey, pz + hlo * ez
         L = hhi - hlo

@@ -26,7 +26,7 @@ import numba as nb
 import numpy as np
 
 from checker.mesh.bvh import STACK, MeshIndex, query_capsule
-from checker.mesh.depth import _PV, _clip, _constraints, _erode, _frame, _gjk, _quick_upper
+from checker.mesh.depth import _PV, _box_top, _erode, _frame, _gjk, _piece_core, _quick_upper
 from checker.mesh.tool import ToolPieces
 
 TOO_TURNED = 0.25  # mm: a slack this large anywhere near a piece is not worth a test
@@ -69,32 +69,13 @@ def _stretch(i, node_lo, node_hi, node_left, node_right, node_start, node_count,
     wy = hx * e2x + hy * e2y + hz * e2z
     wz = hx * ex + hy * ey + hz * ez
     hn = math.sqrt(hx * hx + hy * hy + hz * hz)
-    hm = -np.inf  # highest point of the mesh's box above the middle tip, any pose of the stretch
-    for c in range(8):
-        qx = mhi[0] if c & 1 else mlo[0]
-        qy = mhi[1] if c & 2 else mlo[1]
-        qz = mhi[2] if c & 4 else mlo[2]
-        hm = max(hm, (qx - px) * ex + (qy - py) * ey + (qz - pz) * ez)
-    hm += hn
+    hm = _box_top(mlo, mhi, px, py, pz, ex, ey, ez) + hn  # above any pose of the stretch
     for p in range(prof.shape[0]):
         rp = rho[p]
-        m0 = nprof[p]
-        for k in range(m0):
-            P[k, 0], P[k, 1] = prof[p, k, 0], prof[p, k, 1]
-        h1 = hm + rp + 1.0  # an unbounded piece clipped above the mesh, as `depth._pose`
-        mc = _clip(P, m0, 0.0, 1.0, h1, Pc)
-        rr = 0.0
-        for k in range(mc):
-            rr = max(rr, Pc[k, 0])
-        mc = _clip(P, m0, 0.0, 1.0, h1 + rr, Pc)
+        mc, nc, solid, rmax, hlo, hhi = _piece_core(prof, nprof, p, hm + rp + 1.0, P, Pc, cn,
+                                                    cc)
         if mc == 0:
             continue
-        nc, solid = _constraints(Pc, mc, cn, cc)
-        rmax, hlo, hhi = 0.0, np.inf, -np.inf
-        for k in range(mc):
-            rmax = max(rmax, Pc[k, 0])
-            hlo = min(hlo, Pc[k, 1])
-            hhi = max(hhi, Pc[k, 1])
         # a point that can matter lies within pad of the axis segment, so within `far` of the tip
         far = max(abs(hlo), abs(hhi)) + rmax + hn + rp + 1.0
         worst = tau[i] * (1.0 + alpha[i]) + alpha[i] * far
