@@ -3,8 +3,9 @@ it (the exact per-pose depth, `pose_depths`), on the real moves and the real par
 SolidWorks-CAM job (../shared/realdata/amorim-solidworkscam-apt/Interface-glue: its STL and
 the cutters of its operations: ball, flat and cone).
 
-- A translation (the job's own 3-axis moves): the certificate is exact, so it passes at the
-  largest sampled depth plus what the samples can miss, and fails just below it.
+- A translation (the job's own 3-axis moves, with its cutters and with a bull-nose and a
+  tapered ball instead): the certificate is exact, so it passes at the largest sampled depth
+  plus what the samples can miss, and fails just below it.
 - The tool turning (the same moves made 4-axis: B changing by up to 0.5 degree over a move,
   about the compressor sample's median, the machine running linearly in X Y Z B; or 5-axis,
   the tool's axis turning as much, linearly, the tip running straight): it never
@@ -23,6 +24,7 @@ import pytest
 
 from checker.apt import read_cl
 from checker.b_axis import axis_for_b, rotate_about_y
+from checker.cutter import parse_cutter
 from checker.geometry import load_part
 from checker.mesh import MeshIndex, pose_depths, tool_pieces
 from checker.mesh.swept import certified_stretches
@@ -58,45 +60,52 @@ def job():
     return SimpleNamespace(ma=ma, index=index, cutters=cutters, end=np.sort(ends))
 
 
-def _dense(job, moves, end, b):
-    """(moves, SAMPLES) the depths at poses evenly along each move (the real motion)."""
+def _dense(job, moves, end, b, cutters=None):
+    """(moves, SAMPLES) the depths at poses evenly along each move (the real motion), with the
+    operations' `cutters` (default: the job's)."""
+    cutters = job.cutters if cutters is None else cutters
     t = np.linspace(0.0, 1.0, SAMPLES)
     out = np.empty((len(end), SAMPLES))
     for o in np.unique(job.ma.op[end]):
         k = np.flatnonzero(job.ma.op[end] == o)
         e = np.repeat(end[k], SAMPLES)
         tips, axes = _pose_at(moves, e, np.tile(t, len(k)), b, CENTER)
-        d = pose_depths(job.index, tool_pieces(job.cutters[o], with_holder=True), tips, axes,
+        d = pose_depths(job.index, tool_pieces(cutters[o], with_holder=True), tips, axes,
                         reach=REACH).depth
         out[k] = d.reshape(len(k), SAMPLES)
     return out
 
 
-def _certify(job, ref: Stretches, end, tol):
+def _certify(job, ref: Stretches, end, tol, cutters=None):
+    cutters = job.cutters if cutters is None else cutters
     out = np.empty(len(end), dtype=bool)
     for o in np.unique(job.ma.op[end]):
         k = np.flatnonzero(job.ma.op[end] == o)
         part = Stretches(*(x[k] for x in ref))
-        out[k] = certified_stretches(job.index, tool_pieces(job.cutters[o], with_holder=True),
+        out[k] = certified_stretches(job.index, tool_pieces(cutters[o], with_holder=True),
                                      part.mids, part.axes, part.half, part.tau, part.alpha,
                                      tol[k])
     return out
 
 
-def test_a_translation_is_certified_exactly(job):
+@pytest.mark.parametrize("cutter", [None, "CUTTER/10,2", "CUTTER/9.1633,5,0,5,0,5,0"],
+                         ids=["as written", "bull-nose", "tapered ball"])
+def test_a_translation_is_certified_exactly(job, cutter):
+    cutters = None if cutter is None else [parse_cutter(cutter)] * len(job.cutters)
     moves = SimpleNamespace(tip=job.ma.tip, axis=job.ma.axis)
     end = job.end
     ones = np.ones(len(end))
     ref = stretches(moves, end, 0.0 * ones, ones, None, CENTER)
     assert np.abs(ref.tau).max() == 0.0 and np.abs(ref.alpha).max() < 1e-7
-    sampled = _dense(job, moves, end, None).max(axis=1)
+    sampled = _dense(job, moves, end, None, cutters).max(axis=1)
     length = np.linalg.norm(job.ma.tip[end] - job.ma.tip[end - 1], axis=1)
     missed = 0.5 * length / (SAMPLES - 1)  # the depth changes by at most the distance moved
-    assert (sampled > 0.0).sum() >= 20 and (sampled > -REACH).all()
-    above = _certify(job, ref, end, sampled + missed + 1e-7)
-    below = _certify(job, ref, end, sampled - 1e-7)
+    reached = sampled > -REACH  # below that the sampled depth is only a cap
+    assert (sampled > 0.0).sum() >= 20 and reached.mean() > 0.9
+    above = _certify(job, ref, end, sampled + missed + 1e-7, cutters)
+    below = _certify(job, ref, end, sampled - 1e-7, cutters)
     assert above.all(), end[~above]
-    assert not below.any(), end[below]
+    assert not below[reached].any(), end[below & reached]
 
 
 def _turning(job, rng, kind: str):
