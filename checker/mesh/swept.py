@@ -7,7 +7,10 @@ The real pose at s differs from the reference by a rigid motion that moves a poi
 frame, measured from the reference tip) by at most tau + alpha |x| (tau: how far the real tip
 leaves the chord; alpha: the largest angle between the real axis and a; both bounded by the
 caller), so its signed value against the real tool is at most the reference's plus
-slack = tau (1 + alpha) + alpha |x| (a signed distance is 1-Lipschitz).
+slack = tau (1 + alpha) + alpha |x| (a signed distance is 1-Lipschitz), taken at a prism's
+farthest vertex but never beyond `far` (the core's reach from the tip plus rho, the stretch
+and 1 mm): a point beyond it is farther from the core than its slack can make up, so a large
+triangle is not charged for its far corners.
 
 Under the translation a triangle T meets the piece P = K (+) rho B as T (-) s w meets the piece
 at rest: over the whole reference motion T's largest signed value is that of the prism
@@ -33,14 +36,15 @@ TOO_TURNED = 0.25  # mm: a slack this large anywhere near a piece is not worth a
 
 
 @nb.njit(cache=True)
-def _prism_passes(V, P, m, cn, cc, nc, solid, rho, tol, tau, alpha, rmax, hlo, hhi, W, A,
-                  lam, res, buf_a, buf_b):
+def _prism_passes(V, P, m, cn, cc, nc, solid, rho, tol, tau, alpha, far, rmax, hlo, hhi, W,
+                  A, lam, res, buf_a, buf_b):
     """Whether the prism V (6, 3) (tool frame) stays within `tol` of the piece (core P[:m],
-    its sides cn, cc, grown by rho) with the slack of the rotation at its farthest vertex."""
-    far = 0.0
+    its sides cn, cc, grown by rho) with the slack of the turning at its farthest vertex, or
+    at `far` (mm from the tip) if that is nearer: beyond it no point can reach the piece."""
+    r2 = 0.0
     for k in range(V.shape[0]):
-        far = max(far, V[k, 0] ** 2 + V[k, 1] ** 2 + V[k, 2] ** 2)
-    slack = tau * (1.0 + alpha) + alpha * math.sqrt(far) + 1e-9
+        r2 = max(r2, V[k, 0] ** 2 + V[k, 1] ** 2 + V[k, 2] ** 2)
+    slack = tau * (1.0 + alpha) + alpha * min(math.sqrt(r2), far) + 1e-9
     if _quick_upper(V, cn, cc, nc, solid, rho, rmax, hlo, hhi) + slack <= tol:
         return True
     thresh = rho - tol + slack  # dist(prism, K) must reach this
@@ -76,8 +80,9 @@ def _stretch(i, node_lo, node_hi, node_left, node_right, node_start, node_count,
                                                     cc)
         if mc == 0:
             continue
-        # a point that can matter lies within pad of the axis segment, so within `far` of the tip
-        far = max(abs(hlo), abs(hhi)) + rmax + hn + rp + 1.0
+        # a point farther than `far` from the tip is farther from the core than its slack can
+        # make up (the core lies within max|h| + rmax of the tip; alpha far <= TOO_TURNED)
+        far = max(abs(hlo), abs(hhi)) + rmax + hn + rp + 1.0 + max(0.0, -tol[i])
         worst = tau[i] * (1.0 + alpha[i]) + alpha[i] * far
         if worst > TOO_TURNED:
             return False, cand
@@ -97,7 +102,7 @@ def _stretch(i, node_lo, node_hi, node_left, node_right, node_start, node_count,
                 V[v, 0], V[v, 1], V[v, 2] = x - wx, y - wy, z - wz
                 V[v + 3, 0], V[v + 3, 1], V[v + 3, 2] = x + wx, y + wy, z + wz
             if not _prism_passes(V, Pc, mc, cn, cc, nc, solid, rp, tol[i], tau[i], alpha[i],
-                                 rmax, hlo, hhi, W, A, lam, res, buf_a, buf_b):
+                                 far, rmax, hlo, hhi, W, A, lam, res, buf_a, buf_b):
                 return False, cand
     return True, cand
 
