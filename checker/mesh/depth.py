@@ -873,6 +873,17 @@ def _frame(ax, ay, az):
 
 
 @nb.njit(cache=True)
+def _in_tool_frame(tv, t, px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, T):
+    """Triangle t's vertices `tv[t]` (part frame) into rows 0-2 of T in the tool frame with tip
+    p and axes e1, e2, e (mm)."""
+    for v in range(3):
+        dx, dy, dz = tv[t, v, 0] - px, tv[t, v, 1] - py, tv[t, v, 2] - pz
+        T[v, 0] = dx * e1x + dy * e1y + dz * e1z
+        T[v, 1] = dx * e2x + dy * e2y + dz * e2z
+        T[v, 2] = dx * ex + dy * ey + dz * ez
+
+
+@nb.njit(cache=True)
 def _box_top(mlo, mhi, px, py, pz, ex, ey, ez):
     """The highest corner of the mesh's box above the point p along the axis e, mm."""
     hm = -np.inf
@@ -948,11 +959,7 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
         nkeep = 0
         for q in range(k_c):
             t = cand[q]
-            for v in range(3):
-                dx, dy, dz = tv[t, v, 0] - px, tv[t, v, 1] - py, tv[t, v, 2] - pz
-                T[v, 0] = dx * e1x + dy * e1y + dz * e1z
-                T[v, 1] = dx * e2x + dy * e2y + dz * e2z
-                T[v, 2] = dx * ex + dy * ey + dz * ez
+            _in_tool_frame(tv, t, px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, T)
             nx = tn[t, 0] * e1x + tn[t, 1] * e1y + tn[t, 2] * e1z
             ny = tn[t, 0] * e2x + tn[t, 1] * e2y + tn[t, 2] * e2z
             nz = tn[t, 0] * ex + tn[t, 1] * ey + tn[t, 2] * ez

@@ -29,7 +29,16 @@ import numba as nb
 import numpy as np
 
 from checker.mesh.bvh import STACK, MeshIndex, query_capsule
-from checker.mesh.depth import _PV, _box_top, _erode, _frame, _gjk, _piece_core, _quick_upper
+from checker.mesh.depth import (
+    _PV,
+    _box_top,
+    _erode,
+    _frame,
+    _gjk,
+    _in_tool_frame,
+    _piece_core,
+    _quick_upper,
+)
 from checker.mesh.tool import ToolPieces
 
 TOO_TURNED = 0.25  # mm: a slack this large anywhere near a piece is not worth a test
@@ -94,11 +103,9 @@ def _stretch(i, node_lo, node_hi, node_left, node_right, node_start, node_count,
                                   stack)
         for q in range(k_c):
             t = cand[q]
-            for v in range(3):
-                dx, dy, dz = tv[t, v, 0] - px, tv[t, v, 1] - py, tv[t, v, 2] - pz
-                x = dx * e1x + dy * e1y + dz * e1z
-                y = dx * e2x + dy * e2y + dz * e2z
-                z = dx * ex + dy * ey + dz * ez
+            _in_tool_frame(tv, t, px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, V)
+            for v in range(3):  # the triangle swept back and forth by half the stretch
+                x, y, z = V[v, 0], V[v, 1], V[v, 2]
                 V[v, 0], V[v, 1], V[v, 2] = x - wx, y - wy, z - wz
                 V[v + 3, 0], V[v + 3, 1], V[v + 3, 2] = x + wx, y + wy, z + wz
             if not _prism_passes(V, Pc, mc, cn, cc, nc, solid, rp, tol[i], tau[i], alpha[i],
