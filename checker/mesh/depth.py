@@ -1028,6 +1028,16 @@ def _pose(i, node_lo, node_hi, node_left, node_right, node_start, node_count, tv
     return cand, bnd, order
 
 
+@nb.njit(cache=True)
+def _piece_scratch():
+    """One thread's scratch for testing triangles against pieces: the BVH's traversal stack,
+    the profile and its clipped copy, the sides (normals, offsets), GJK's simplex (W, A, lam,
+    res) and the erosion's two buffers."""
+    return (np.empty(STACK, dtype=np.int64), np.empty((_PV, 2)), np.empty((_PV, 2)),
+            np.empty((_PV, 2)), np.empty(_PV), np.empty((4, 3)), np.empty((4, 3)), np.empty(12),
+            np.empty(5), np.empty((_PV, 2)), np.empty((_PV, 2)))
+
+
 @nb.njit(cache=True, parallel=True)
 def _poses(node_lo, node_hi, node_left, node_right, node_start, node_count, tv, tn, tid, mlo,
            mhi, prof, nprof, rho, kind, tool_ptr, pose_tool, tips, axes, floor, reach, method,
@@ -1044,18 +1054,8 @@ def _poses(node_lo, node_hi, node_left, node_right, node_start, node_count, tv, 
         cand = np.empty(256, dtype=np.int64)
         bnd = np.empty((256, NBOUND))
         order = np.empty(256, dtype=np.int64)
-        stack = np.empty(STACK, dtype=np.int64)
-        P = np.empty((_PV, 2))
-        Pc = np.empty((_PV, 2))
-        cn = np.empty((_PV, 2))
-        cc = np.empty(_PV)
+        stack, P, Pc, cn, cc, W, A, lam, res, buf_a, buf_b = _piece_scratch()
         T = np.empty((3, 3))
-        W = np.empty((4, 3))
-        A = np.empty((4, 3))
-        lam = np.empty(12)
-        res = np.empty(5)
-        buf_a = np.empty((_PV, 2))
-        buf_b = np.empty((_PV, 2))
         wit = np.empty(3)
         bq = np.empty(NBOUND)
         ev = np.zeros(7)

@@ -28,15 +28,15 @@ import math
 import numba as nb
 import numpy as np
 
-from checker.mesh.bvh import STACK, MeshIndex, query_capsule
+from checker.mesh.bvh import MeshIndex, query_capsule
 from checker.mesh.depth import (
-    _PV,
     _box_top,
     _erode,
     _frame,
     _gjk,
     _in_tool_frame,
     _piece_core,
+    _piece_scratch,
     _quick_upper,
 )
 from checker.mesh.tool import ToolPieces
@@ -121,18 +121,8 @@ def _stretches(node_lo, node_hi, node_left, node_right, node_start, node_count, 
     out = np.zeros(n, dtype=np.bool_)
     for c in nb.prange(nchunks):
         cand = np.empty(256, dtype=np.int64)
-        stack = np.empty(STACK, dtype=np.int64)
-        P = np.empty((_PV, 2))
-        Pc = np.empty((_PV, 2))
-        cn = np.empty((_PV, 2))
-        cc = np.empty(_PV)
+        stack, P, Pc, cn, cc, W, A, lam, res, buf_a, buf_b = _piece_scratch()
         V = np.empty((6, 3))
-        W = np.empty((4, 3))
-        A = np.empty((4, 3))
-        lam = np.empty(12)
-        res = np.empty(5)
-        buf_a = np.empty((_PV, 2))
-        buf_b = np.empty((_PV, 2))
         for i in range(c * n // nchunks, (c + 1) * n // nchunks):
             out[i], cand = _stretch(i, node_lo, node_hi, node_left, node_right, node_start,
                                     node_count, tv, mlo, mhi, prof, nprof, rho, mids, axes, half,
