@@ -16,7 +16,7 @@ Under the translation a triangle T meets the piece P = K (+) rho B as T (-) s w 
 at rest: over the whole reference motion T's largest signed value is that of the prism
 T (+) [-w/2, w/2] (convex, six vertices), rho - min over the prism of sd_K. It is at most
 tol - slack when dist(prism, K) >= rho - tol + slack (GJK on the prism's vertices; where that
-is not positive, the prism must miss the core eroded by its opposite). Every candidate
+is not positive, the prism must miss the core eroded by tol - slack - rho). Every candidate
 triangle of every piece passing certifies the stretch; one failing leaves it to be halved.
 Exact for a pure translation (alpha = tau = 0): a ball sliding on a plane is certified in one
 test, where the depth bound of `checker.verify` needs stretches of twice the tolerance."""
