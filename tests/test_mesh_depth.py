@@ -101,6 +101,24 @@ def test_ball_centre_just_above_a_floor():
     assert np.allclose(res.point[0], [1.0, 2.0, 0.0], atol=1e-9)
 
 
+def test_a_wall_seen_edge_on_crossing_the_axis():
+    """A triangle of a wall parallel to a ball's axis (r = 3), 0.5 mm from it and crossing it
+    above the ball's centre, turned about the axis to 60 angles, each at 10 random poses:
+    depth 3 - 0.5. Its shadow along the axis is a sliver, whose nearest point rounding used to
+    misplace (5 of these 600 poses reported ~0.2)."""
+    ball = parse_cutter("CUTTER/6,3")
+    t = np.array([-8.0, 9.0, -4.0])  # along the wall, mm
+    z = np.array([2.0, -1.0, 7.0])  # it spans z in [0.59, 4.54] where it crosses the axis
+    rng = np.random.default_rng(5)
+    for phi in np.linspace(0.0, 2.0 * np.pi, 60, endpoint=False):
+        n, d = np.array([np.cos(phi), np.sin(phi)]), np.array([-np.sin(phi), np.cos(phi)])
+        v = np.column_stack([0.5 * n + t[:, None] * d, z])
+        for _ in range(10):
+            Q, off = rotation(rng), rng.normal(0.0, 50.0, 3)
+            res = depth((v @ Q.T + off, np.array([[0, 1, 2]])), ball, [off], Q[:, 2])
+            assert res.depth[0] == pytest.approx(2.5, abs=1e-9), (phi, res.depth[0])
+
+
 def test_bullnose_on_a_floor_and_a_wall():
     """Bull-nose D10 r2 (R = 3): a floor 0.25 above the tip cuts 0.25 (the torus' flat bottom),
     a floor 2.5 above cuts 2.5 (the core disc eroded by 0.5), a floor 6 above cuts the full
