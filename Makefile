@@ -31,12 +31,16 @@ demo: setup
 	PATHCHECK_STORE=out/results.sqlite $(BIN)/pathcheck report -o out/report.html
 
 # two processes (the CI machines have two cores; much of the suite is single-threaded:
-# subprocesses, sockets, parsing), a test file's tests kept together in one of them
+# subprocesses, sockets, parsing), a test file's tests kept together in one of them; the wheel
+# check (mostly one core compiling its kernels cold) beside them, its report after pytest's;
+# pytest's status first (exit 5: no tests)
 test: setup
 	bash tools/test-setup.sh
 	$(BIN)/ruff check checker postproc tests benchmarks samples tools
-	$(BIN)/python -m pytest -q -n 2 --dist loadfile --durations=15
-	bash tools/wheel-check.sh
+	log=$$(mktemp); bash tools/wheel-check.sh >$$log 2>&1 & wheel=$$!; \
+		$(BIN)/python -m pytest -q -n 2 --dist loadfile --durations=15; tests=$$?; \
+		wait $$wheel; checked=$$?; cat $$log; rm -f $$log; \
+		if [ $$tests -ne 0 ]; then exit $$tests; fi; exit $$checked
 
 lint: setup
 	$(BIN)/ruff check checker postproc tests benchmarks samples tools
