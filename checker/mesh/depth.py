@@ -508,11 +508,13 @@ def _quick_upper(T, cn, cc, nc, solid, rho, rmax, hlo, hhi):
 @nb.njit(cache=True)
 def _shadow_w(T):
     """Weights (u, v, w) of a point of triangle T (tool frame) whose shadow along the axis is
-    nearest the axis: where the axis meets the shadow (the three edges see it on one side), its
-    barycentric weights, else the nearest point of the nearest edge. Robust for slivers (a
-    wall seen edge-on, whose shadow is a segment to rounding): Ericson's regions (`_tri_w`)
-    decide from differences of products that rounding swamps there, which put the point 2 mm
-    from the axis where the shadow crosses it."""
+    nearest the axis, and whether the axis meets the shadow (the three edges see it on one
+    side; then the weights are its barycentric ones), else the nearest point of the nearest
+    edge. Robust for slivers (a wall seen edge-on, whose shadow is a segment to rounding):
+    Ericson's regions (`_tri_w`) decide from differences of products that rounding swamps
+    there, which put the point 2 mm from the axis where the shadow crosses it; here a sliver
+    the axis meets to rounding is met (its weights may then be anywhere on T), and one it
+    misses to rounding has an edge within rounding of the axis."""
     ax, ay, bx, by, cx, cy = T[0, 0], T[0, 1], T[1, 0], T[1, 1], T[2, 0], T[2, 1]
     wa = bx * cy - by * cx  # twice the signed areas of (axis, b, c), (axis, c, a), (axis, a, b)
     wb = cx * ay - cy * ax
@@ -520,20 +522,22 @@ def _shadow_w(T):
     total = wa + wb + wc
     if total != 0.0 and ((wa >= 0.0 and wb >= 0.0 and wc >= 0.0)
                          or (wa <= 0.0 and wb <= 0.0 and wc <= 0.0)):
-        return wa / total, wb / total, wc / total
-    return _tri_edges(ax, ay, 0.0, bx, by, 0.0, cx, cy, 0.0)
+        return wa / total, wb / total, wc / total, True
+    u, v, w = _tri_edges(ax, ay, 0.0, bx, by, 0.0, cx, cy, 0.0)
+    return u, v, w, False
 
 
 @nb.njit(cache=True)
 def _upper(T, cn, cc, nc, solid, rho, rmax, hlo, hhi, out):
     """Upper bound (out[0]) of the signed value of triangle T (tool frame) against the piece,
-    the upper bound of t* (out[2]) and T's point nearest the axis (out[3:6]):
-    rho + min_i (c_i - min over T of (a_i r + b_i h)), with min r = the distance from the axis
-    to T's shadow along it (a degenerate core: the bounding cylinder's sides, at most 0)."""
-    u, v, w = _shadow_w(T)
+    the upper bound of t* (out[2]) and a point of T whose shadow is nearest the axis
+    (out[3:6], `_shadow_w`): rho + min_i (c_i - min over T of (a_i r + b_i h)), with min r =
+    the distance from the axis to T's shadow along it (a degenerate core: the bounding
+    cylinder's sides, at most 0)."""
+    u, v, w, met = _shadow_w(T)
     xx = u * T[0, 0] + v * T[1, 0] + w * T[2, 0]
     xy = u * T[0, 1] + v * T[1, 1] + w * T[2, 1]
-    rmin = math.sqrt(xx * xx + xy * xy)
+    rmin = 0.0 if met else math.sqrt(xx * xx + xy * xy)
     ub = _slack(T, cn, cc, nc, solid, rmin, rmax, hlo, hhi)
     out[0] = rho + ub
     out[2] = ub
