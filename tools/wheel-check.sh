@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # The package as a user gets it: build the wheel, install it without extras into a new venv
 # outside the repository, and from another directory, with an empty kernel cache, run
-# `pathcheck info` on a sample, the demo job (check, post with --on-findings stop as `make demo`
-# does, report), and a STEP part (which must say, in one line, which extra to install). Prints
-# the venv size and the times.
+# `pathcheck info` on a sample, `pathcheck warm` (the kernels into the folder
+# PATHCHECK_CACHE_DIR names, none beside the installed sources), the demo job in a new process
+# that must then compile nothing, the demo job again as `make demo` runs it (check, post with
+# --on-findings stop, report), and a STEP part (which must say, in one line, which extra to
+# install). Prints the venv size and the times.
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 work=$(mktemp -d "${TMPDIR:-/tmp}/pathcheck-wheel.XXXXXX")
@@ -23,13 +25,43 @@ unset NUMBA_CACHE_DIR
 "$pc" info "$job" | grep -q "4-axis-Y" || { echo "wheel-check: info failed" >&2; exit 1; }
 seconds() { printf "%d.%d" $(($1 / 1000000000)) $(($1 % 1000000000 / 100000000)); }
 start=$(date +%s%N)
+"$pc" warm >warm.log 2>&1 || { cat warm.log; echo "wheel-check: warm failed" >&2; exit 1; }
+cold=$(seconds $(($(date +%s%N) - start)))
+grep -q "kernels compiled into $work/cache/numba/" warm.log \
+    || { cat warm.log; echo "wheel-check: warm did not compile into PATHCHECK_CACHE_DIR" >&2; exit 1; }
+site=$("$work/venv/bin/python" -c "import checker, os; print(os.path.dirname(checker.__file__))")
+[ -z "$(find "$site" -name '*.nbi')" ] \
+    || { echo "wheel-check: kernels cached beside the installed sources in $site" >&2; exit 1; }
+# the demo job in a new process, with numba's compile events counted: the warm cache serves all
+"$work/venv/bin/python" - "$job" <<'PY' >compiled.log 2>&1 \
+    || { cat compiled.log; echo "wheel-check: the demo after warm failed" >&2; exit 1; }
+import sys
+from numba.core import event
+
+compiled = []
+
+
+class Compiles(event.Listener):
+    def on_start(self, ev):
+        compiled.append(ev.data["dispatcher"].py_func.__qualname__)
+
+    def on_end(self, ev):
+        pass
+
+
+event.register("numba:compile", Compiles())
+from checker.job import check_job  # noqa: E402
+
+check_job(sys.argv[1], output="compiled.nc", on_findings="stop")
+print("compiled:", " ".join(compiled))
+PY
+[ "$(tail -1 compiled.log)" = "compiled: " ] \
+    || { cat compiled.log; echo "wheel-check: the demo compiled kernels after warm" >&2; exit 1; }
+start=$(date +%s%N)
 status=0
 "$pc" "$job" -o job.nc --json job.json --on-findings stop >check.log 2>&1 || status=$?
-cold=$(seconds $(($(date +%s%N) - start)))
-[ "$status" -eq 1 ] || { cat check.log; echo "wheel-check: demo exit $status, expected 1" >&2; exit 1; }
-start=$(date +%s%N)
-"$pc" "$job" -o job.nc --json job.json --on-findings stop >/dev/null 2>&1 || status=$?
 warm=$(seconds $(($(date +%s%N) - start)))
+[ "$status" -eq 1 ] || { cat check.log; echo "wheel-check: demo exit $status, expected 1" >&2; exit 1; }
 "$pc" report -o report.html >/dev/null
 for f in job.nc job.json report.html; do
     [ -s "$f" ] || { echo "wheel-check: $f not written" >&2; exit 1; }
@@ -41,4 +73,4 @@ if [ "$status" -ne 2 ] || [ "$(wc -l <step.out)" -ne 1 ] || ! grep -q "pathcheck
     cat step.out; echo "wheel-check: a STEP part without the [cad] extra: exit $status" >&2; exit 1
 fi
 echo "wheel-check: $(basename "$work"/dist/*.whl) installed without extras ($(du -sh "$work/venv" | cut -f1) venv);" \
-     "demo from $work: cold cache $cold s, warm $warm s; STEP without [cad]: $(cat step.out)"
+     "from $work: warm (empty cache) $cold s, then the demo compiling nothing, and again $warm s; STEP without [cad]: $(cat step.out)"
