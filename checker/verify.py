@@ -98,6 +98,21 @@ class MoveDepths:
     poses: np.ndarray
 
 
+def _machine_ends(moves: Moves, end: np.ndarray, b: np.ndarray, center: np.ndarray):
+    """The machine tips X at both ends of the moves ending at `end`, table angles `b` (per pose,
+    degrees): the part-frame tips turned with the table about Y through `center`."""
+    return (rotate_about_y(moves.tip[end - 1], b[end - 1], center),
+            rotate_about_y(moves.tip[end], b[end], center))
+
+
+def _on_table(ma: np.ndarray, me: np.ndarray, ba: np.ndarray, be: np.ndarray, t: np.ndarray,
+              center: np.ndarray):
+    """(tips, axes) in the part frame at fraction t of machine moves running linearly in X, Y, Z
+    from `ma` to `me` and in B from `ba` to `be` (degrees)."""
+    bt = ba + t * (be - ba)
+    return rotate_about_y(ma + t[:, None] * (me - ma), -bt, center), axis_for_b(bt)
+
+
 def _pose_at(moves: Moves, end: np.ndarray, t: np.ndarray, b: np.ndarray | None,
              center: np.ndarray):
     """(tips, axes) at fraction t of the moves ending at `end`. With table angles `b` (per pose,
@@ -108,10 +123,7 @@ def _pose_at(moves: Moves, end: np.ndarray, t: np.ndarray, b: np.ndarray | None,
         tip = moves.tip[a] + t[:, None] * (moves.tip[e] - moves.tip[a])
         ax = moves.axis[a] + t[:, None] * (moves.axis[e] - moves.axis[a])
         return tip, ax / np.linalg.norm(ax, axis=1)[:, None]
-    ma = rotate_about_y(moves.tip[a], b[a], center)
-    me = rotate_about_y(moves.tip[e], b[e], center)
-    bt = b[a] + t * (b[e] - b[a])
-    return rotate_about_y(ma + t[:, None] * (me - ma), -bt, center), axis_for_b(bt)
+    return _on_table(*_machine_ends(moves, end, b, center), b[a], b[e], t, center)
 
 
 class Stretches(NamedTuple):
@@ -136,16 +148,19 @@ def stretches(moves: Moves, end: np.ndarray, t0: np.ndarray, t1: np.ndarray,
     from the table's axis, largest at an end), at most |p''| / 8 off its chord; the axis is
     within dθ / 2 of the middle one."""
     tm = 0.5 * (t0 + t1)
-    tip0, ax0 = _pose_at(moves, end, t0, b, center)
-    tip1, ax1 = _pose_at(moves, end, t1, b, center)
-    _, axm = _pose_at(moves, end, tm, b, center)
-    mids, half = 0.5 * (tip0 + tip1), 0.5 * (tip1 - tip0)
     if b is None:
+        tip0, ax0 = _pose_at(moves, end, t0, b, center)
+        tip1, ax1 = _pose_at(moves, end, t1, b, center)
+        _, axm = _pose_at(moves, end, tm, b, center)
         cos = np.minimum(np.einsum("ij,ij->i", ax0, axm), np.einsum("ij,ij->i", ax1, axm))
-        return Stretches(mids, axm, half, np.zeros(len(end)), np.arccos(np.clip(cos, -1.0, 1.0)))
+        return Stretches(0.5 * (tip0 + tip1), axm, 0.5 * (tip1 - tip0), np.zeros(len(end)),
+                         np.arccos(np.clip(cos, -1.0, 1.0)))
     a, e = end - 1, end
-    ma = rotate_about_y(moves.tip[a], b[a], center)
-    me = rotate_about_y(moves.tip[e], b[e], center)
+    ma, me = _machine_ends(moves, end, b, center)
+    tip0, _ = _on_table(ma, me, b[a], b[e], t0, center)
+    tip1, _ = _on_table(ma, me, b[a], b[e], t1, center)
+    _, axm = _on_table(ma, me, b[a], b[e], tm, center)
+    mids, half = 0.5 * (tip0 + tip1), 0.5 * (tip1 - tip0)
     dt = t1 - t0
     turn = np.radians(np.abs(b[e] - b[a])) * dt
     run = np.linalg.norm(me - ma, axis=1) * dt

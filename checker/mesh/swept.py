@@ -30,6 +30,7 @@ import numpy as np
 
 from checker.mesh.bvh import MeshIndex, query_capsule
 from checker.mesh.depth import (
+    _arr,
     _box_top,
     _erode,
     _frame,
@@ -142,11 +143,9 @@ def certified_stretches(mesh_index: MeshIndex, pieces: ToolPieces, mids: np.ndar
     if n == 0:
         return np.zeros(0, dtype=bool)
     lo, hi, left, right, start, count, tv, _, _, mlo, mhi = mesh_index.arrays()
-    f = np.ascontiguousarray
     nchunks = max(1, min(n, 8 * nb.get_num_threads(), (n + 15) // 16))
-    return _stretches(lo, hi, left, right, start, count, tv, mlo, mhi,
-                      f(pieces.prof, dtype=np.float64), f(pieces.nprof, dtype=np.int64),
-                      f(pieces.rho, dtype=np.float64), f(mids, dtype=np.float64),
-                      f(axes, dtype=np.float64), f(half, dtype=np.float64),
-                      f(tau, dtype=np.float64), f(alpha, dtype=np.float64),
-                      f(tol, dtype=np.float64), nchunks)
+    f = np.float64
+    return _stretches(lo, hi, left, right, start, count, tv, mlo, mhi, _arr(pieces.prof, f),
+                      _arr(pieces.nprof, np.int64), _arr(pieces.rho, f), _arr(mids, f),
+                      _arr(axes, f), _arr(half, f), _arr(tau, f), _arr(alpha, f), _arr(tol, f),
+                      nchunks)
