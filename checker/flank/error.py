@@ -9,13 +9,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from checker.cutter import Cutter
 from checker.flank.envelope import grazing
 from checker.flank.motion import ToolMotion
 from checker.geometry.evaluate import evaluate
 from checker.geometry.inverse import invert_points
+from checker.geometry.nearest import PointTree
 from checker.part import Surface
 
 HIT_TOL = 1e-6  # mm: a normal line meets the surface when its residual is below this
@@ -33,7 +33,7 @@ def foot_points(surface: Surface, points: np.ndarray, grid: int = 33
     the nearest node of a grid x grid sample."""
     U, V = grid_uv(surface, grid)
     nodes = evaluate(surface, U.ravel(), V.ravel()).points
-    _, k = cKDTree(nodes).query(points)
+    _, k = PointTree(nodes).query(points)
     return invert_points(surface, points, U.ravel()[k], V.ravel()[k])
 
 

@@ -1,16 +1,16 @@
 """Test points for the allowable-cutter search: every surface of a part sampled densely enough
 for the sag tolerance and the spacing limit in config, trimmed-away regions left out, each point
-with its (surface, u, v), in one cKDTree. Cached in memory by (content hash, settings)."""
+with its (surface, u, v), in one k-d tree. Cached in memory by (content hash, settings)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from checker.config import GeometryConfig, default_config
 from checker.geometry.evaluate import evaluate
+from checker.geometry.nearest import PointTree
 from checker.part import MeshPart, Part, Surface
 
 _PROBES_PER_SPAN = 4
@@ -24,7 +24,7 @@ class TestPoints:
     """M test points in mm in the part frame: `points (M, 3)`, unit `normals (M, 3)` (out of the
     material), `surface (M,) int32` (-1 for mesh parts), `uv (M, 2)` (nan for mesh parts),
     `spacing (M,)` mm: the diagonal of the local sample cell, so every kept surface point lies
-    within spacing / 2 (plus the sag tolerance) of a test point; `tree` a cKDTree over points."""
+    within spacing / 2 (plus the sag tolerance) of a test point; `tree` a k-d tree over points."""
 
     __test__ = False  # not a pytest class
 
@@ -33,7 +33,7 @@ class TestPoints:
     surface: np.ndarray
     uv: np.ndarray
     spacing: np.ndarray
-    tree: cKDTree
+    tree: PointTree
     caches: dict[str, dict] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def cache(self, owner: str) -> dict:
@@ -65,7 +65,7 @@ def sample_part(
     else:
         chunks = [_sample_surface(s, sag, cfg) for s in part.surfaces]
         pts, nrm, sid, uv, spc = (np.concatenate([c[i] for c in chunks]) for i in range(5))
-    tp = TestPoints(pts, nrm, sid.astype(np.int32), uv, spc, cKDTree(pts))
+    tp = TestPoints(pts, nrm, sid.astype(np.int32), uv, spc, PointTree(pts))
     if len(_CACHE) >= _CACHE_MAX:
         _CACHE.pop(next(iter(_CACHE)))
     _CACHE[key] = tp

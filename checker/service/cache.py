@@ -105,7 +105,7 @@ def json_key(data: Any, salt: str = "") -> str:
 
 def deep_nbytes(obj: Any, depth: int = 6, _seen: set[int] | None = None) -> int:
     """Approximate memory held by numpy arrays reachable from `obj` (attributes, sequences,
-    dicts; a scipy cKDTree counts its data and index arrays), bytes."""
+    dicts), bytes."""
     seen = _seen if _seen is not None else set()
     if id(obj) in seen or depth < 0:
         return 0
@@ -128,6 +128,4 @@ def _attribute_names(obj: Any) -> list[str]:
     for cls in type(obj).__mro__:
         slots = cls.__dict__.get("__slots__", ())
         names.extend([slots] if isinstance(slots, str) else slots)
-    if not names and type(obj).__name__ in ("cKDTree", "KDTree"):
-        names = ["data", "indices"]
     return [n for n in names if hasattr(obj, n)]
