@@ -2,8 +2,9 @@
 # The package as a user gets it: build the wheel, install it without extras into a new venv
 # outside the repository, and from another directory, with an empty kernel cache, run
 # `pathcheck info` on a sample, `pathcheck warm` (the kernels into the folder
-# PATHCHECK_CACHE_DIR names, none beside the installed sources), the demo job in a new process
-# that must then compile nothing, the demo job again as `make demo` runs it (check, post with
+# PATHCHECK_CACHE_DIR names, none beside the installed sources), the demo job and the large
+# compressor job (the kernels' threaded variants) in a new process that must then compile
+# nothing, the demo job again as `make demo` runs it (check, post with
 # --on-findings stop, report), and a STEP part (which must say, in one line, which extra to
 # install). Prints the venv size and the times.
 set -euo pipefail
@@ -11,6 +12,7 @@ repo=$(cd "$(dirname "$0")/.." && pwd)
 work=$(mktemp -d "${TMPDIR:-/tmp}/pathcheck-wheel.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 job="$repo/samples/compressor/compressor_small_d12.apt"
+large="$repo/samples/compressor/compressor.apt"
 
 "$repo/.venv/bin/python" -m build --wheel --outdir "$work/dist" "$repo" >"$work/build.log" 2>&1 \
     || { cat "$work/build.log"; exit 1; }
@@ -32,9 +34,10 @@ grep -q "kernels compiled into $work/cache/numba/" warm.log \
 site=$("$work/venv/bin/python" -c "import checker, os; print(os.path.dirname(checker.__file__))")
 [ -z "$(find "$site" -name '*.nbi')" ] \
     || { echo "wheel-check: kernels cached beside the installed sources in $site" >&2; exit 1; }
-# the demo job in a new process, with numba's compile events counted: the warm cache serves all
-"$work/venv/bin/python" - "$job" <<'PY' >compiled.log 2>&1 \
-    || { cat compiled.log; echo "wheel-check: the demo after warm failed" >&2; exit 1; }
+# the demo and the large job in a new process, with numba's compile events counted: the warm
+# cache serves all
+"$work/venv/bin/python" - "$job" "$large" <<'PY' >compiled.log 2>&1 \
+    || { cat compiled.log; echo "wheel-check: the jobs after warm failed" >&2; exit 1; }
 import sys
 from numba.core import event
 
@@ -52,11 +55,12 @@ class Compiles(event.Listener):
 event.register("numba:compile", Compiles())
 from checker.job import check_job  # noqa: E402
 
-check_job(sys.argv[1], output="compiled.nc", on_findings="stop")
+for path in sys.argv[1:]:
+    check_job(path, output="compiled.nc", on_findings="stop")
 print("compiled:", " ".join(compiled))
 PY
 [ "$(tail -1 compiled.log)" = "compiled: " ] \
-    || { cat compiled.log; echo "wheel-check: the demo compiled kernels after warm" >&2; exit 1; }
+    || { cat compiled.log; echo "wheel-check: the jobs compiled kernels after warm" >&2; exit 1; }
 start=$(date +%s%N)
 status=0
 "$pc" "$job" -o job.nc --json job.json --on-findings stop >check.log 2>&1 || status=$?
@@ -73,4 +77,4 @@ if [ "$status" -ne 2 ] || [ "$(wc -l <step.out)" -ne 1 ] || ! grep -q "pathcheck
     cat step.out; echo "wheel-check: a STEP part without the [cad] extra: exit $status" >&2; exit 1
 fi
 echo "wheel-check: $(basename "$work"/dist/*.whl) installed without extras ($(du -sh "$work/venv" | cut -f1) venv);" \
-     "from $work: warm (empty cache) $cold s, then the demo compiling nothing, and again $warm s; STEP without [cad]: $(cat step.out)"
+     "from $work: warm (empty cache) $cold s, then the demo and the compressor job compiling nothing, the demo again $warm s; STEP without [cad]: $(cat step.out)"
