@@ -99,17 +99,19 @@ def _engine_advice(job, program, o, c, rows, tips, axes, out: _Advice) -> None:
 
     plan = program.plans.get(o)
     samples = job.test_points()
+    hint = None
     if plan is not None and program.handling[o] == "re-oriented":
         # the contact the plan turned the tool about: the CAM's own (CL -> CC at its B)
         pick = np.searchsorted(plan.rows, rows)
         pc = plan.contacts
         con = type(pc)(pc.cc[pick], pc.normal[pick], pc.surface[pick], pc.uv[pick],
                        pc.gap[pick])
+        hint = plan.orientations.best.allowable_at_best[pick]  # near the chosen B's: time only
     else:
         given = contact_from_toolpath(job.toolpath, job.m.line[rows])
         con = cl_to_cc(job.part, samples, c, tips, axes, contact=given)
     res = allowable(samples, job.part, c, con.cc, con.normal, axes, cc_surface=con.surface,
-                    cc_uv=con.uv, toward=tips - con.cc, config=job.cfg)
+                    cc_uv=con.uv, toward=tips - con.cc, config=job.cfg, hint=hint)
     out.cc[rows], out.normal[rows], out.cc_surface[rows] = con.cc, con.normal, con.surface
     out.size[rows], out.limiting[rows] = res.size, res.limiting_point
     out.limiting_surface[rows], out.margin[rows] = res.limiting_surface, res.margin
