@@ -92,15 +92,10 @@ def _allowable_at_the_warm_up_part(config) -> None:
                                             np.linspace(0.2, 0.8, 20)))
     for u, v, one_axis in ((np.array([0.3, 0.5, 0.7]), np.full(3, 0.5), False), (*grid, True)):
         ev = evaluate(part.surfaces[3], u, v)
-        axes = np.tile(_unit(ev.normals.mean(axis=0)), (u.size, 1)) if one_axis else ev.normals
+        axes = ev.normals.mean(axis=0) if one_axis else ev.normals  # one axis: broadcast
         allowable(tp, part, cutter, ev.points, ev.normals, axes, cc_surface=np.full(u.size, 3),
                   cc_uv=np.column_stack([u, v]), config=config,
                   hint=np.zeros(u.size) if one_axis else None)
-
-
-def _unit(v):
-    """v / |v|."""
-    return v / (v @ v) ** 0.5
 
 
 def warm_kernels() -> tuple[Path, float]:

@@ -1,7 +1,7 @@
 """The warm-up job `pathcheck warm` compiles with is the demo job. (That `warm` compiles into the
-folder PATHCHECK_CACHE_DIR names, never beside the sources, and that the demo job in a new
-process then compiles nothing, `make test` checks on the installed wheel from an empty cache:
-tools/wheel-check.sh.)"""
+folder PATHCHECK_CACHE_DIR names, never beside the sources, and that the demo job and the
+compressor job in a new process then compile nothing, `make test` checks on the installed wheel
+from an empty cache: tools/wheel-check.sh.)"""
 
 from __future__ import annotations
 
