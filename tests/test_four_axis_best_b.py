@@ -8,6 +8,7 @@ import pytest
 from checker.b_axis import axis_for_b, b_for_axis, check_b_range, check_four_axis
 from checker.errors import PathcheckError
 from checker.four_axis.best_b import END_TOLERANCE, best_b
+from checker.four_axis.plan import facing_edges
 
 
 def _two_peaks(rows: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -34,6 +35,84 @@ def test_best_b_matches_a_dense_scan():
         got = [v for iv in result.feasible[row] for v in iv if -90 < v < 90]
         np.testing.assert_allclose(sorted(got), dense[edges + 1 * (~ok[edges])],
                                    atol=END_TOLERANCE)
+
+
+class _Counted:
+    """An allowable-size function that counts the (point, B) rows it evaluated."""
+
+    def __init__(self, fn):
+        self.fn, self.rows = fn, 0
+
+    def __call__(self, rows, b):
+        self.rows += len(rows)
+        return self.fn(rows, b)
+
+
+def _sloped(rows: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """A peak with straight flanks: sizes falling off 0.1 to 0.3 mm per degree either side."""
+    return 8.0 - (0.1 + 0.02 * (rows % 11)) * np.abs(b - 3.0 * (rows % 7))
+
+
+def test_smooth_ends_take_fewer_probes_than_bisection():
+    """Ends of an A(B) falling off straight, from the line through the last two feasible B:
+    within END_TOLERANCE of the true crossing on the feasible side, from at most the two
+    probes either side of the line's crossing per end (five bisection rounds take 6 degrees
+    to 0.2)."""
+    n = 40
+    result = best_b(_sloped, n, b_min=-90, b_max=90, coarse_step=6.0, tolerance=0.01,
+                    required=3.0)
+    dense = np.arange(-90, 90.0001, 0.0005)
+    for row in range(n):
+        (lo, hi), = result.feasible[row]
+        true_lo, true_hi = dense[_sloped(np.full(dense.size, row), dense) >= 3.0][[0, -1]]
+        assert true_lo - 1e-9 <= lo <= true_lo + END_TOLERANCE
+        assert true_hi - END_TOLERANCE <= hi <= true_hi + 1e-9
+    assert _end_probes(_sloped, n, 3.0) <= 2 * (2 * n)
+
+
+def _end_probes(fn, n: int, required: float, edge_fn=None) -> int:
+    """(point, B) probes that best_b's interval ends took."""
+    import checker.four_axis.best_b as bb
+
+    counted = _Counted(fn)
+    original = bb._unless_below
+
+    def probes(f, bound, rows, b, against):
+        counted.rows += len(rows)
+        return original(f, bound, rows, b, against)
+
+    bb._unless_below = probes
+    try:
+        best_b(fn, n, b_min=-90, b_max=90, coarse_step=6.0, tolerance=0.01,
+               required=required, edge_fn=edge_fn)
+    finally:
+        bb._unless_below = original
+    return counted.rows
+
+
+def test_an_end_at_the_facing_edge_takes_one_probe():
+    """Sizes constant up to the B where the normal turns away from the tool axis, 0 past it
+    (n . axis(B) = 0: `facing_edges`): the end within END_TOLERANCE inside that edge, from one
+    probe per end instead of five bisection rounds."""
+    n = 12
+    tilt = np.radians(np.linspace(20.0, 70.0, n))
+    normal = np.column_stack([np.sin(tilt), np.zeros(n), np.cos(tilt)])
+    contacts = type("Contacts", (), {"normal": normal})()
+    edge_b = np.degrees(np.arctan2(normal[:, 2], normal[:, 0]))  # n . axis(edge_b) = 0
+
+    def fn(rows, b):
+        facing = np.einsum("ij,ij->i", normal[rows], axis_for_b(b)) > 1e-12
+        return np.where(facing, 5.0, 0.0)
+
+    result = best_b(fn, n, b_min=-90, b_max=90, coarse_step=6.0, tolerance=0.01, required=3.0,
+                    edge_fn=facing_edges(contacts))
+    for row in range(n):
+        ends = [v for iv in result.feasible[row] for v in iv if -90 < v < 90]
+        assert len(ends) == 1
+        assert edge_b[row] - END_TOLERANCE <= ends[0] < edge_b[row]
+        assert fn(np.array([row]), np.array([ends[0]]))[0] >= 3.0
+    assert _end_probes(fn, n, 3.0, facing_edges(contacts)) == n
+    assert _end_probes(fn, n, 3.0) == 5 * n
 
 
 def test_unbounded_plateau_keeps_the_reference_angle():

@@ -23,6 +23,7 @@ from checker.four_axis.plan import (
     allowable_over_b,
     bound_over_b,
     coarse_config,
+    facing_edges,
     plan_orientations,
 )
 
@@ -55,7 +56,8 @@ def plan_b(*, test_points, part, cutter, contacts, tips: np.ndarray, axes: np.nd
     orientations = plan_orientations(exact.sizes, coarse, b_original, step,
                                      cutter.size + cfg.check.tolerance, cfg, (lo, hi), bound,
                                      searched=lambda: drop_table_grids(test_points),
-                                     tracked=exact if exact.tracks else None)
+                                     tracked=exact if exact.tracks else None,
+                                     edge_fn=facing_edges(contacts))
     b_chosen = orientations.chosen.b
     return orientations, b_chosen, moved_tips(cutter, contacts, tips, b_original, b_chosen)
 
@@ -71,7 +73,7 @@ def best_b_points(doc: dict, test_points, part, cutter, cc: np.ndarray, normals:
     fn = allowable_over_b(test_points, part, cutter, contacts, cfg)
     best = best_b(fn, len(cc), b_min=b_range[0], b_max=b_range[1],
                   coarse_step=cfg.four_axis.b_coarse_step, tolerance=cfg.four_axis.b_tolerance,
-                  required=cutter.size + cfg.check.tolerance)
+                  required=cutter.size + cfg.check.tolerance, edge_fn=facing_edges(contacts))
     for i, point in enumerate(doc["points"]):
         point["b_best"] = round(float(best.b_best[i]), 6)
         at = best.allowable_at_best[i]

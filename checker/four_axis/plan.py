@@ -124,6 +124,23 @@ def allowable_over_b(test_points, part, cutter, contacts, cfg: Config):
     return OverB(test_points, part, cutter, contacts, cfg).sizes
 
 
+def facing_edges(contacts):
+    """`fn(rows, inside, outside) -> (M,)` degrees: the table angle between `inside` and
+    `outside` (less than 180 degrees apart) where CC point `rows` turns away from the tool axis
+    for good up to `outside` (its size 0 there: `_facing`), nan where there is none. n . axis(B)
+    = nz cos B - nx sin B is 0 at atan2(nz, nx) + k 180 degrees."""
+
+    def fn(rows: np.ndarray, inside: np.ndarray, outside: np.ndarray) -> np.ndarray:
+        n = contacts.normal[rows]
+        zero = np.degrees(np.arctan2(n[:, 2], n[:, 0]))
+        lo, hi = np.minimum(inside, outside), np.maximum(inside, outside)
+        edge = zero + 180.0 * np.ceil((lo - zero) / 180.0)  # the first zero at or above lo
+        away = ~_facing(contacts, rows, axis_for_b(outside))
+        return np.where((edge > lo) & (edge < hi) & away, edge, np.nan)
+
+    return fn
+
+
 def bound_over_b(test_points, part, cutter, contacts, cfg: Config):
     """`fn(rows, b_deg) -> sizes`: upper bounds of `allowable_over_b`'s sizes with the same
     arguments (`engine.api.upper_bounds`), for the best-B search to skip rows that cannot
@@ -148,6 +165,7 @@ def plan_orientations(
     bound_fn=None,
     searched=None,
     tracked=None,
+    edge_fn=None,
 ) -> Orientations:
     """Best B and feasible intervals of every CC point (`fn` exact, `coarse_fn` its cheaper
     upper bound for the scan, `bound_fn` a still cheaper one of that: see `best_b`), then the
@@ -155,12 +173,13 @@ def plan_orientations(
     none), `path_length` (N,) mm of the step arriving at each point, `required` the size the
     real cutter needs (mm). `searched()`, when given, is called once the best-B search is done
     (before the shortest path's own memory is taken). `tracked`: `fn` with its limiting points
-    (`OverB`), for a refinement from fewer evaluations (`best_b`)."""
+    (`OverB`), for a refinement from fewer evaluations, `edge_fn` where the points turn away
+    from the axis (`facing_edges`), for the interval ends there (`best_b`)."""
     fa = cfg.four_axis
     n = len(b_original)
     best = best_b(fn, n, b_min=b_range[0], b_max=b_range[1], coarse_step=fa.b_coarse_step,
                   tolerance=fa.b_tolerance, required=required, reference=b_original,
-                  coarse_fn=coarse_fn, bound_fn=bound_fn, tracked=tracked)
+                  coarse_fn=coarse_fn, bound_fn=bound_fn, tracked=tracked, edge_fn=edge_fn)
     if searched is not None:
         searched()
     optima = interval_optima(best.grid, best.samples, best.feasible)
