@@ -51,7 +51,7 @@ def plan_b(*, test_points, part, cutter, contacts, tips: np.ndarray, axes: np.nd
     step = np.r_[0.0, np.linalg.norm(np.diff(contacts.cc, axis=0), axis=1)]
     exact = OverB(test_points, part, cutter, contacts, cfg)
     coarse_cfg = coarse_config(cfg)
-    coarse = allowable_over_b(test_points, part, cutter, contacts, coarse_cfg)
+    coarse = OverB(test_points, part, cutter, contacts, coarse_cfg, exact.last).sizes
     bound = bound_over_b(test_points, part, cutter, contacts, coarse_cfg)
     orientations = plan_orientations(exact.sizes, coarse, b_original, step,
                                      cutter.size + cfg.check.tolerance, cfg, (lo, hi), bound,

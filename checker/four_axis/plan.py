@@ -68,12 +68,14 @@ class OverB:
     """The allowable-cutter engine as a function of the table angle for the CC points
     `contacts` (`cc`, `normal` (N, 3); `surface`, `uv` None when unknown). Each point's last
     size hints the engine's next evaluation of it (the search moves B in small steps; only the
-    time depends on the hint)."""
+    time depends on the hint); `last (N,)` mm: these hints, shared with another `OverB` of
+    the same points (nan: none)."""
 
-    def __init__(self, test_points, part, cutter, contacts, cfg: Config) -> None:
+    def __init__(self, test_points, part, cutter, contacts, cfg: Config,
+                 last: np.ndarray | None = None) -> None:
         self.test_points, self.part, self.cutter, self.cfg = test_points, part, cutter, cfg
         self.contacts = contacts
-        self.last = np.full(len(contacts.cc), np.nan)
+        self.last = np.full(len(contacts.cc), np.nan) if last is None else last
 
     def sizes(self, rows: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
         """The engine's allowable size (M,) mm of CC points `rows` at table angles `b_deg`; 0
