@@ -49,15 +49,17 @@ class _Counted:
 
 
 def _sloped(rows: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """A peak with straight flanks: sizes falling off 0.1 to 0.3 mm per degree either side."""
-    return 8.0 - (0.1 + 0.02 * (rows % 11)) * np.abs(b - 3.0 * (rows % 7))
+    """A peak with curved flanks: sizes falling off 0.05 to 0.12 mm per degree either side,
+    faster further out (a parabola on each flank)."""
+    x = b - 3.0 * (rows % 7)
+    return 8.0 - (0.05 + 0.007 * (rows % 11)) * np.abs(x) - 0.002 * x * x
 
 
 def test_smooth_ends_take_fewer_probes_than_bisection():
-    """Ends of an A(B) falling off straight, from the line through the last two feasible B:
-    within END_TOLERANCE of the true crossing on the feasible side, from at most the two
-    probes either side of the line's crossing per end (five bisection rounds take 6 degrees
-    to 0.2)."""
+    """Ends of an A(B) whose flanks are parabolas, from the parabola through the last three
+    feasible B: within END_TOLERANCE of the true crossing on the feasible side, from the two
+    probes either side of its crossing per end (five bisection rounds take 6 degrees to
+    0.2)."""
     n = 40
     result = best_b(_sloped, n, b_min=-90, b_max=90, coarse_step=6.0, tolerance=0.01,
                     required=3.0)

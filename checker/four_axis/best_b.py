@@ -25,9 +25,10 @@ the section runs on the sizes refined from them, at a fifth of the engine's cost
 engine confirms the result (`_golden_tracked`). The interval ends are of two kinds on the
 compressor job: about half where the CC point turns away from the axis, A(B) near its top up
 to there and 0 past it, which the closed-form edge (`edge_fn`) settles with one probe; the
-others mostly where A(B) falls off smoothly, which probes either side of the crossing of the
-line through the last two feasible B settle in a round or two: 24,000 probes instead of the
-five bisection rounds' 33,600, 17,200 engine rows instead of 20,500.)
+others mostly where A(B) falls off smoothly, which probes either side of where the parabola
+through the last three feasible B meets the level settle in a round or two: 18,900 probes
+instead of the five bisection rounds' 33,600, 14,600 engine rows instead of 20,500 (the line
+through the last two: 23,900 and 17,200).)
 (docs/MATH.md §7.1, §5.3)
 """
 
@@ -53,7 +54,7 @@ COARSE_PLATEAU = 1e-3  # mm: the same for a coarse evaluation (a cheaper upper b
 END_TOLERANCE = 0.2  # degrees: the feasible intervals' ends, kept on the feasible side
 _SCAN_BATCH = 10_000  # (point, B) rows per engine call of the coarse scan
 _TRACKED_PASSES = 3  # sections on tracked limiting points before the section of the engine
-_LINE_STEP = 0.45  # the ends' line probes this many tolerances either side of its crossing
+_LINE_STEP = 0.45  # the ends' probes this many tolerances either side of the crossing
 
 
 class Limited(NamedTuple):
@@ -230,33 +231,40 @@ def _scattered(part: Limited, where: np.ndarray, n: int) -> Limited:
     return out
 
 
-def _extrapolated(a, fa, p, fp, o, level, tol) -> tuple[np.ndarray, np.ndarray]:
-    """Two probes (fractions of the way from `a` to `o`, nan: none) `_LINE_STEP` * `tol`
-    degrees either side of where the line through the feasible (p, fp) and (a, fa) (fp > fa)
-    meets the level."""
-    x = (fa - level) / (fp - fa) * (a - p) / (o - a)
-    h = _LINE_STEP * tol / np.abs(o - a)
-    t1, t2 = x - h, x + h
-    return (np.where((t1 > 0.0) & (t1 < 1.0), t1, np.nan),
-            np.where((t2 > 0.0) & (t2 < 1.0), t2, np.nan))
+def _level_crossing(a, fa, p, fp, q, fq, o, level) -> np.ndarray:
+    """(M,) the fraction of the way from `a` to `o` at which the parabola through the feasible
+    (q, fq), (p, fp), (a, fa) (B beyond `a`, away from `o`) meets the level nearest `a`
+    towards `o`; where q is nan or the parabola does not meet it that way, the line through
+    the last two (fp > fa)."""
+    with np.errstate(all="ignore"):
+        slope = (fp - fa) / (p - a)
+        bend = ((fq - fp) / (q - p) - slope) / (q - a)  # Newton's divided differences
+        b1, c0 = slope - bend * (p - a), fa - level  # bend x^2 + b1 x + c0 = 0, x = B - a
+        root = np.sqrt(b1 * b1 - 4.0 * bend * c0)
+        half = -0.5 * (b1 + np.copysign(root, b1))
+        t = np.column_stack([half / bend, c0 / half]) / (o - a)[:, None]
+        t = np.where(t > 0.0, t, np.inf).min(axis=1)
+        return np.where(np.isfinite(t), t, -c0 / slope / (o - a))
 
 
 def _refine_ends(fn: AllowableFn, rows, inside, outside, f_in, before, f_before, level,
                  tol: float, bound: AllowableFn | None = None,
                  edge: EdgeFn | None = None) -> np.ndarray:
     """The boundary between a feasible B `inside` (size `f_in` >= level) and an infeasible
-    one `outside`, to `tol` degrees, kept on the feasible side; `before`, `f_before`: a
-    feasible B beyond `inside` (away from `outside`) and its size (nan: none). Where `edge`
-    gives a B between them past which fn is 0 up to `outside`, that B replaces `outside` and
-    the first probe is tol / 2 inside it (an end at the facing limit takes that one probe).
-    Then, per row, rounds of probes either side of where the line through the last two
-    feasible B meets the level (a smooth A(B) ends in one round of two probes) or, where the
-    row's last such round did not halve its bracket or there is no such line (a jump from
-    near its top to 0), a bisection: at least a halving every two rounds. Only feasible
-    sizes steer it, so a probe whose `bound` (an upper bound of fn) is below the level is
-    infeasible without fn and every end is the one without the bound."""
-    a, o, p = inside.astype(float), outside.astype(float), before.astype(float)
-    fa, fp = f_in.astype(float), f_before.astype(float)
+    one `outside`, to `tol` degrees, kept on the feasible side; `before (M, 2)`, `f_before
+    (M, 2)`: the two B beyond `inside` (away from `outside`, the nearer first) and their sizes
+    where feasible (nan: not). Where `edge` gives a B between them past which fn is 0 up to
+    `outside`, that B replaces `outside` and the first probe is tol / 2 inside it (an end at
+    the facing limit takes that one probe). Then, per row, rounds of probes either side of
+    where the parabola through the last three feasible B (the line through the last two)
+    meets the level (a smooth A(B) ends in a round of two probes) or, where the row's last
+    such round did not halve its bracket or there is no such curve (a jump from near its top
+    to 0), a bisection: at least a halving every two rounds. Only feasible sizes steer it, so
+    a probe whose `bound` (an upper bound of fn) is below the level is infeasible without fn
+    and every end is the one without the bound."""
+    a, o, p, q = (inside.astype(float), outside.astype(float), before[:, 0].astype(float),
+                  before[:, 1].astype(float))
+    fa, fp, fq = f_in.astype(float), f_before[:, 0].astype(float), f_before[:, 1].astype(float)
     at_edge = np.zeros(rows.size, bool)
     if edge is not None and rows.size:
         e = edge(rows, a, o)
@@ -272,7 +280,10 @@ def _refine_ends(fn: AllowableFn, rows, inside, outside, f_in, before, f_before,
             line = ~bisect[todo] & np.isfinite(fa[todo]) & np.isfinite(fp[todo]) \
                 & (fp[todo] > fa[todo])
             r = todo[line]
-            t1[line], t2[line] = _extrapolated(a[r], fa[r], p[r], fp[r], o[r], level[r], tol)
+            t = _level_crossing(a[r], fa[r], p[r], fp[r], q[r], fq[r], o[r], level[r])
+            h = _LINE_STEP * tol / np.abs(o[r] - a[r])
+            t1[line] = np.where((t - h > 0.0) & (t - h < 1.0), t - h, np.nan)
+            t2[line] = np.where((t + h > 0.0) & (t + h < 1.0), t + h, np.nan)
             line &= np.isfinite(t1) | np.isfinite(t2)
             t1[~line], t2[~line] = 0.5, np.nan
             first = at_edge[todo]  # the probe tol / 2 inside the edge
@@ -290,7 +301,7 @@ def _refine_ends(fn: AllowableFn, rows, inside, outside, f_in, before, f_before,
                 live = np.isfinite(b) & (np.abs(o[todo] - a[todo]) >= np.abs(b - a[todo]))
                 ok = live & (v >= level[todo])
                 r = todo[ok]
-                p[r], fp[r], a[r], fa[r] = a[r], fa[r], b[ok], v[ok]
+                q[r], fq[r], p[r], fp[r], a[r], fa[r] = p[r], fp[r], a[r], fa[r], b[ok], v[ok]
                 o[todo[live & ~ok]] = b[live & ~ok]
             bisect[todo] = line & (np.abs(o[todo] - a[todo]) > 0.5 * width)
             done = np.abs(o[todo] - a[todo]) <= tol
@@ -322,10 +333,11 @@ def _refined_intervals(fn, grid, samples, required, tol, bound=None,
     far = np.abs(inside - value) > step
     inside, f_in = np.where(far, value, inside), np.where(far, np.nan, f_in)
     level = np.broadcast_to(np.asarray(required, float), (len(coarse),))[rows]
-    # the sample before the inside one: a feasible one steers the first probes (a skipped
+    # the two samples before the inside one: feasible ones steer the first probes (a skipped
     # sample holds its bound, below the level: infeasible either way)
-    k_before = np.clip(2 * k_in - k_out, 0, grid.size - 1)
-    f_before = np.where(samples[rows, k_before] >= level, samples[rows, k_before], np.nan)
+    k_before = np.clip(k_in[:, None] + np.outer(k_in - k_out, [1, 2]), 0, grid.size - 1)
+    f_before = samples[rows[:, None], k_before]
+    f_before = np.where(f_before >= level[:, None], f_before, np.nan)
     refined = _refine_ends(fn, rows, inside, outside, f_in, grid[k_before], f_before, level,
                            tol, bound, edge)
     out = [list(ivs) for ivs in coarse]
