@@ -107,7 +107,8 @@ def _scan(fn: AllowableFn, n: int, grid: np.ndarray, bound: AllowableFn | None =
     _SCAN_BATCH rows, one after the other (the engine's kernels use every core themselves).
     With `bound` (an upper bound of fn, mm): first fn at each point's column of the largest
     bound; then a sample whose bound is below `skip_below (n,)` and more than `plateau` below
-    the largest sample so far keeps its bound instead of fn (module docstring)."""
+    the largest sample so far keeps its bound instead of fn (module docstring); fn takes the
+    bounds as its hints (`hint=`: sizes expected, which only its time depends on)."""
     rows = np.tile(np.arange(n), grid.size)  # column by column: the rows of one B together
     b = np.repeat(grid, n)
     if bound is None:
@@ -115,22 +116,26 @@ def _scan(fn: AllowableFn, n: int, grid: np.ndarray, bound: AllowableFn | None =
     out = _batched(bound, rows, b, "best B: bounds over the B range").reshape(grid.size, n).T.copy()
     points = np.arange(n)
     first = np.argmax(out, axis=1)
-    top = fn(points, grid[first])
+    top = fn(points, grid[first], hint=out[points, first])
     exact = (out >= skip_below[:, None]) | (out >= (top - plateau)[:, None])
     exact[points, first] = False
     out[points, first] = top
     k, i = np.nonzero(exact.T)
-    out[i, k] = _batched(fn, i, grid[k], "best B: scan of the B range")
+    out[i, k] = _batched(fn, i, grid[k], "best B: scan of the B range", hint=out[i, k])
     return out
 
 
-def _batched(fn: AllowableFn, rows: np.ndarray, b: np.ndarray, what: str) -> np.ndarray:
-    """fn(rows, b) in batches of about _SCAN_BATCH rows, with progress."""
+def _batched(fn: AllowableFn, rows: np.ndarray, b: np.ndarray, what: str,
+             hint: np.ndarray | None = None) -> np.ndarray:
+    """fn(rows, b) in batches of about _SCAN_BATCH rows, with progress; with `hint`, each
+    batch's hints (`hint=`, mm)."""
     parts = []
     cuts = range(0, rows.size, _SCAN_BATCH)
     with step(what, total=len(cuts)) as advance:
         for a in cuts:
-            parts.append(fn(rows[a:a + _SCAN_BATCH], b[a:a + _SCAN_BATCH]))
+            at = slice(a, a + _SCAN_BATCH)
+            parts.append(fn(rows[at], b[at]) if hint is None
+                         else fn(rows[at], b[at], hint=hint[at]))
             advance(1)
     return np.concatenate(parts) if parts else np.zeros(0)
 
@@ -155,13 +160,13 @@ def _top_local_maxima(samples: np.ndarray, count: int) -> np.ndarray:
 def _unless_below(fn: AllowableFn, bound: AllowableFn | None, rows: np.ndarray, b: np.ndarray,
                   against: np.ndarray) -> np.ndarray:
     """fn(rows, b), but where `bound` (an upper bound of fn) is below `against` (mm, per row):
-    the bound itself (then fn is below `against` too)."""
+    the bound itself (then fn is below `against` too); elsewhere the bound is fn's hint."""
     if bound is None:
         return fn(rows, b)
     out = bound(rows, b)
     need = out >= against
     if need.any():
-        out[need] = fn(rows[need], b[need])
+        out[need] = fn(rows[need], b[need], hint=out[need])
     return out
 
 

@@ -77,10 +77,12 @@ class OverB:
         self.contacts = contacts
         self.last = np.full(len(contacts.cc), np.nan) if last is None else last
 
-    def sizes(self, rows: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
+    def sizes(self, rows: np.ndarray, b_deg: np.ndarray,
+              hint: np.ndarray | None = None) -> np.ndarray:
         """The engine's allowable size (M,) mm of CC points `rows` at table angles `b_deg`; 0
-        where the point faces away from that axis."""
-        return self.limited(rows, b_deg).size
+        where the point faces away from that axis. `hint (M,)` mm: the sizes expected (e.g.
+        upper bounds; default: each point's last size; only the time depends on it)."""
+        return self.limited(rows, b_deg, hint).size
 
     @property
     def tracks(self) -> bool:
@@ -89,9 +91,10 @@ class OverB:
         return (self.part.mesh is None and c.surface is not None and c.uv is not None
                 and bool((np.asarray(c.surface) >= 0).all()))
 
-    def limited(self, rows: np.ndarray, b_deg: np.ndarray) -> Limited:
-        """`sizes(rows, b_deg)` and where they were limited (0 and nowhere where the point
-        faces away from the axis)."""
+    def limited(self, rows: np.ndarray, b_deg: np.ndarray,
+                hint: np.ndarray | None = None) -> Limited:
+        """`sizes(rows, b_deg, hint)` and where they were limited (0 and nowhere where the
+        point faces away from the axis)."""
         axes = axis_for_b(b_deg)
         out = Limited.nowhere(len(rows))
         facing = np.flatnonzero(_facing(self.contacts, rows, axes))
@@ -101,7 +104,8 @@ class OverB:
             r, c = rows[facing], self.contacts
             res = allowable(self.test_points, self.part, self.cutter, c.cc[r], c.normal[r],
                             axes[facing], cc_surface=_take(c.surface, r), cc_uv=_take(c.uv, r),
-                            config=self.cfg, hint=self.last[r])
+                            config=self.cfg,
+                            hint=self.last[r] if hint is None else hint[facing])
             self.last[r] = res.size
             out.size[facing], out.surface[facing], out.uv[facing] = (
                 res.size, res.limiting_surface, res.limiting_uv)
