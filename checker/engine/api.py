@@ -148,7 +148,8 @@ def _tool_frames(tp: TestPoints, cutter, cc: np.ndarray, normals: np.ndarray, ax
     Q, n_t = Q[rows], n_t[rows]
     cc_t = rotate_rows(Q, cc[rows])
     e_t, degen = horizontal_e(n_t, None if toward is None else rotate_rows(Q, toward[rows]))
-    fam = family_bounds(cutter, cc_t, n_t, e_t, degen, part_tops(tp, Q))
+    tops = part_tops(tp, tool_rotations(keys))[group[rows]]  # once per distinct axis
+    fam = family_bounds(cutter, cc_t, n_t, e_t, degen, tops)
     return _ToolFrames(axes, Q, faces_away, rows,
                        RowFrame(cc_t, n_t, e_t, fam, cfg.engine.exclusion))
 
