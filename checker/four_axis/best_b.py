@@ -76,7 +76,8 @@ class Tracked(Protocol):
 
     def sizes(self, rows: np.ndarray, b_deg: np.ndarray) -> np.ndarray: ...
 
-    def limited(self, rows: np.ndarray, b_deg: np.ndarray) -> Limited: ...
+    def limited(self, rows: np.ndarray, b_deg: np.ndarray,
+                hint: np.ndarray | None = None) -> Limited: ...
 
     def near(self, rows: np.ndarray, b_deg: np.ndarray, surface: np.ndarray,
              uv: np.ndarray) -> np.ndarray: ...
@@ -199,7 +200,7 @@ def _golden_max(fn: AllowableFn, rows: np.ndarray, lo: np.ndarray, hi: np.ndarra
 
 
 def _golden_tracked(tracked: Tracked, rows: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                    tol: float):
+                    tol: float, near_top: np.ndarray):
     """`_golden_max` of the engine's A(B) (`tracked.limited`) from 3 of its evaluations per
     row instead of 17: the section runs on g(B), the sizes refined from the points where A was
     limited at the bracket's two inner points (`tracked.near`: sizes at surface points, so
@@ -208,9 +209,10 @@ def _golden_tracked(tracked: Tracked, rows: np.ndarray, lo: np.ndarray, hi: np.n
     bracket (for the maximiser the section finds); elsewhere the point where A(B*) was limited
     joins the tracked ones for another pass, and after _TRACKED_PASSES the section of A itself
     decides. The size reported is min(A(B*), g(B*)): g lies below A where the engine's own
-    search missed a minimum that a tracked point leads to (docs/MATH.md §7.1)."""
+    search missed a minimum that a tracked point leads to (docs/MATH.md §7.1). `near_top (M,)`
+    mm: the scan's size at each row's peak, the first two evaluations' hint (time only)."""
     c, d = hi - GOLDEN * (hi - lo), lo + GOLDEN * (hi - lo)
-    seen = [tracked.limited(rows, c), tracked.limited(rows, d)]
+    seen = [tracked.limited(rows, c, hint=near_top), tracked.limited(rows, d, hint=near_top)]
     b_out, f_out = np.empty(rows.size), np.empty(rows.size)
     todo = np.arange(rows.size)
     for _ in range(_TRACKED_PASSES):
@@ -412,7 +414,7 @@ def best_b(
         lo = np.maximum(grid[k] - step, b_min)
         hi = np.minimum(grid[k] + step, b_max)
         b_ref, f_ref = (_golden_max(fn, rows, lo, hi, tolerance) if tracked is None
-                        else _golden_tracked(tracked, rows, lo, hi, tolerance))
+                        else _golden_tracked(tracked, rows, lo, hi, tolerance, samples[rows, k]))
         f_ref = f_ref.reshape(-1, peaks.shape[1])
         b_ref = b_ref.reshape(-1, peaks.shape[1])
         pick = np.argmax(f_ref, axis=1)
@@ -426,7 +428,7 @@ def best_b(
             at_best[bounded] = np.maximum(chosen_f, coarse_best)
     if coarse_fn is not None:  # flat tops came from upper bounds: their exact size
         rows = np.flatnonzero(flat)
-        at_best[rows] = fn(rows, b_best[rows])
+        at_best[rows] = fn(rows, b_best[rows], hint=top[rows, 0])
     feasible = _refined_intervals(coarse, grid, samples, required, max(tolerance, END_TOLERANCE),
                                   bound_fn, edge_fn)
     return BestB(b_best, at_best, feasible, grid, samples)
