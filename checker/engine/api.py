@@ -139,7 +139,8 @@ def _tool_frames(tp: TestPoints, cutter, cc: np.ndarray, normals: np.ndarray, ax
     """The rows' tool frames (part frame in, unit `normals` and `axes` (N, 3))."""
     keys, group = group_axes(axes)
     axes = keys[group]  # axes equal to 12 decimals are one axis
-    Q = tool_rotations(axes)  # each row's own tool frame
+    Q_keys = tool_rotations(keys)
+    Q = Q_keys[group]  # each row's own tool frame
     n_t = rotate_rows(Q, normals)
     faces_away = n_t[:, 2] <= 1e-12
     rows = np.flatnonzero(~faces_away)
@@ -148,7 +149,7 @@ def _tool_frames(tp: TestPoints, cutter, cc: np.ndarray, normals: np.ndarray, ax
     Q, n_t = Q[rows], n_t[rows]
     cc_t = rotate_rows(Q, cc[rows])
     e_t, degen = horizontal_e(n_t, None if toward is None else rotate_rows(Q, toward[rows]))
-    tops = part_tops(tp, tool_rotations(keys))[group[rows]]  # once per distinct axis
+    tops = part_tops(tp, Q_keys)[group[rows]]  # once per distinct axis
     fam = family_bounds(cutter, cc_t, n_t, e_t, degen, tops)
     return _ToolFrames(axes, Q, faces_away, rows,
                        RowFrame(cc_t, n_t, e_t, fam, cfg.engine.exclusion))

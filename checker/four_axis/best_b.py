@@ -379,7 +379,10 @@ def best_b(
     in the scan only with one candidate peak, where only the top sample is refined).
     `tracked`: `fn` with the points that limit its sizes, for a refinement from far fewer of
     its evaluations (`_golden_tracked`). `edge_fn`: where the sizes drop to 0 (the point turns
-    away from the axis), for the interval ends there (`_refine_ends`)."""
+    away from the axis), for the interval ends there (`_refine_ends`). Sizes known to lie near
+    or above the ones asked for go to the evaluations as `hint=` (mm; only their time may
+    depend on it): `coarse_fn`'s with `bound_fn` (the bounds), `fn`'s with `coarse_fn` (the
+    scan's top at a flat top) and `tracked.limited`'s (the scan's peak), so those take it."""
     coarse = fn if coarse_fn is None else coarse_fn
     grid = coarse_grid(b_min, b_max, coarse_step)
     plateau = PLATEAU if coarse_fn is None else COARSE_PLATEAU
