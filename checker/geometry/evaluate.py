@@ -44,7 +44,7 @@ def _find_span(knots: np.ndarray, p: int, n: int, x: float) -> int:
     return lo
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _basis_ders(knots, p, span, x, nd, ders, ndu, a, left, right):
     """Basis functions N_{span-p..span} and their derivatives up to order nd into ders[k, j]."""
     ndu[0, 0] = 1.0
@@ -90,21 +90,37 @@ def _basis_ders(knots, p, span, x, nd, ders, ndu, a, left, right):
         fac *= p - k
 
 
-@nb.njit(cache=True)
-def _eval_range(G, sid, u, v, order, out, normals, i0, i1):
+class EvalScratch(NamedTuple):
+    """Work arrays of `eval_range` (one set per thread): the basis functions and their
+    derivatives in u and v, Cox-de Boor's tables, the contracted homogeneous derivatives."""
+
+    Nu: np.ndarray
+    Nv: np.ndarray
+    ndu: np.ndarray
+    a: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    A: np.ndarray
+    T: np.ndarray
+
+
+@nb.njit(cache=True, inline="always")
+def eval_scratch() -> EvalScratch:
+    """A fresh `EvalScratch`."""
+    return EvalScratch(np.empty((4, _MAXDEG + 1)), np.empty((4, _MAXDEG + 1)),
+                       np.empty((_MAXDEG + 1, _MAXDEG + 1)), np.empty((2, _MAXDEG + 1)),
+                       np.empty(_MAXDEG + 1), np.empty(_MAXDEG + 1), np.empty((10, 4)),
+                       np.empty((4, 4)))
+
+
+@nb.njit(cache=True, _nrt=False)
+def eval_range(G, sid, u, v, order, out, normals, i0, i1, sc):
     """out[i, m] for m = S, Su, Sv (, Suu, Suv, Svv (, Suuu, Suuv, Suvv, Svvv)) and unit
     normals[i] for i in [i0, i1), point i on packed surface sid[i] (surface 0 when sid is
-    empty); see `_Packed`."""
+    empty); see `_Packed`. `sc`: an `EvalScratch` (compiled callers evaluate a few points at a
+    time with theirs)."""
     knots_u, ou, knots_v, ov, Hw, op, nus, nvs, degu, degv, signs = G
-    # scratch shared by the points of this range
-    Nu = np.empty((4, _MAXDEG + 1))
-    Nv = np.empty((4, _MAXDEG + 1))
-    ndu = np.empty((_MAXDEG + 1, _MAXDEG + 1))
-    a = np.empty((2, _MAXDEG + 1))
-    left = np.empty(_MAXDEG + 1)
-    right = np.empty(_MAXDEG + 1)
-    A = np.empty((10, 4))
-    T = np.empty((4, 4))
+    Nu, Nv, ndu, a, left, right, A, T = sc
     last = 0
     ku = knots_u[ou[0] : ou[1]]
     kv = knots_v[ov[0] : ov[1]]
@@ -187,10 +203,11 @@ def _eval_range(G, sid, u, v, order, out, normals, i0, i1):
 
 @nb.njit(cache=True, parallel=True)
 def _eval_parallel(G, sid, u, v, order, out, normals):
-    """_eval_range over all points in parallel chunks."""
+    """eval_range over all points in parallel chunks."""
     n = u.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
-        _eval_range(G, sid, u, v, order, out, normals, c * _CHUNK, min(n, (c + 1) * _CHUNK))
+        eval_range(G, sid, u, v, order, out, normals, c * _CHUNK, min(n, (c + 1) * _CHUNK),
+                   eval_scratch())
 
 
 @dataclass
@@ -284,7 +301,7 @@ def _run(G: _Packed, sid: np.ndarray, u: np.ndarray, v: np.ndarray, order: int):
     if n >= _PARALLEL_MIN:
         _eval_parallel(G, sid, u, v, order, out, normals)
     else:
-        _eval_range(G, sid, u, v, order, out, normals, 0, n)
+        eval_range(G, sid, u, v, order, out, normals, 0, n, eval_scratch())
     return out, normals
 
 
@@ -407,3 +424,8 @@ def _direction(ev, E, F, G, L, M, N, k) -> np.ndarray:
 def principal_curvatures(surface: Surface, u, v) -> Curvatures:
     """Principal curvatures (1/mm) and directions of `surface` at (u, v) (N,)."""
     return curvatures_of(evaluate(surface, u, v, order=2))
+
+
+def packed_part(part: Part) -> _Packed:
+    """The part's surfaces packed for `eval_range` (cached on the part)."""
+    return _packed(part, part.surfaces)

@@ -1,10 +1,11 @@
-"""Batched local refinement in (u, v): every start (a CC row and a point on one surface) takes
-the same few quadratic-model steps at once. Each step evaluates a 3x3 stencil, fits the
-quadratic (central differences), takes the bounded Newton step when the model is convex (the
-best stencil point otherwise) with backtracking to the first fraction that improves, and
-shrinks the stencil as it converges. Steps stay inside the surface domain; points outside a
-trim count as inf. The answer is the best point evaluated. Starts far above their row's best
-are dropped, and starts that meet (same row, surface and _SAME cell) go on as one.
+"""Local refinement in (u, v), compiled whole: every start (a CC row and a point on one
+surface) takes up to `iterations` quadratic-model steps; the rows run in parallel, each row's
+starts together (`_refine_row`), so that no Python runs per step. Each step evaluates a 3x3
+stencil, fits the quadratic (central differences), takes the bounded Newton step when the model
+is convex (the best stencil point otherwise) with backtracking to the first fraction that
+improves, and shrinks the stencil as it converges. Steps stay inside the surface domain; points
+outside a trim count as inf. The answer is the best point evaluated. Starts far above their
+row's best are dropped, and starts that meet (same row, surface and _SAME cell) go on as one.
 
 Near the CC point the size can have narrow curved valleys: a point a few microns off the
 valley floor has a much larger size, while the floor falls slowly over a millimetre. The
@@ -14,13 +15,15 @@ across the valley (along the Hessian's steep direction), so that steps of a tent
 millimetre stay on the floor.
 
 Surface evaluation is the expensive part, so each step evaluates the surface once per start:
-exactly, with second derivatives, at the point the step picks. The stencil, the Newton step,
-its backtracking and the walk run on the second-order Taylor model of the surface about the
-start's best point (error O(h^3) for a step of length h, so the model becomes exact as the
-steps converge), in one compiled parallel kernel over all starts (`_steps`); only exact values
-are ever reported. The model's value (`_model_value`) is a called function, not inlined: its
-dozen call sites inlined took two minutes to compile; its arguments are few flat arrays
-(`trims.PackedTrims` is two), so that the call costs little.
+exactly, with second derivatives, at the point the step picks (`_exact`). The stencil, the
+Newton step, its backtracking and the walk run on the second-order Taylor model of the surface
+about the start's best point (error O(h^3) for a step of length h, so the model becomes exact
+as the steps converge); only exact values are ever reported. The model's value
+(`_model_value`) is a called function, not inlined: its dozen call sites inlined took two
+minutes to compile. The kernels that allocate nothing are compiled without numba's reference
+counting (`_nrt=False`): with it, every array a call passes or unpacks from a tuple is counted
+up and down atomically, which took ~17 % of a call on one thread and more on two (both threads
+count the same arrays).
 (docs/MATH.md §6)"""
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ import numpy as np
 from checker.engine.grid.frames import rotated, row_height
 from checker.engine.refine.objective import FLOOR_STEPS, Objective
 from checker.engine.sizes import RowFrame, point_size
-from checker.geometry.evaluate import SurfaceEval
+from checker.geometry.evaluate import EvalScratch, eval_range, eval_scratch, packed_part
 from checker.geometry.newton_uv import newton_step
 from checker.geometry.trims import kept
 from checker.part import Part
@@ -48,11 +51,7 @@ _CONVERGED = 1e-5  # a start stops when its stencil is this fraction of the init
 _OFFS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.float64)
 _CENTRE = 4  # index of the stencil centre in _OFFS
 _SAME = 1e-3  # mm: starts whose best points are this close have met
-_CHUNK = 256  # starts per parallel task
-# columns of the per-start flags the compiled steps write: a Newton step or the walk won, a
-# contour step won, the stencil centre was best, model values computed, the walk won
-_F_STEP, _F_ALONG, _F_CENTRE, _F_PROBES, _F_WALK = range(5)
-_F_COLS = 5
+_TASKS = 64  # parallel tasks the rows are interleaved over
 _DELTA = 1e-4  # mm: difference step of the walk's derivatives
 _GROW, _SHRINK = 2.0, 0.25  # trust radius and reach factors after a success and a failure
 _RADIUS_CAP, _CAP_MM = 64.0, 1.0  # longest walk and trust radius: initial radii, at least mm
@@ -60,8 +59,8 @@ _WALK_STEPS = 4  # trust-region steps of a walk
 _ACROSS = 2  # Newton steps across the valley after each of them
 _STILL = 1e-7  # mm: a walk whose model predicts less decrease than this has arrived
 _MOVED = 1e-3  # mm: a start that arrived walks again once it has moved this far
-# rows of a start's Taylor terms (`_Taylor.d[s]`; the point and first derivatives also of the
-# model's value at a point, `e`): the point, S_u, S_v, S_uu, S_uv, S_vv
+# rows of a start's Taylor terms (`d[s]` of the model M below; the point and first derivatives
+# also of the model's value at a point, `e`): the point, S_u, S_v, S_uu, S_uv, S_vv
 _POINT, _DU, _DV, _DUU, _DUV, _DVV = range(6)
 # columns of the per-start walk radii (mm): the trust radius (negative: the walk has arrived),
 # the reach (longest walk) and the cap of both
@@ -122,7 +121,7 @@ def _onto_level(excess, hu, hv, u, v, lo_u, hi_u, lo_v, hi_v):
                        lo_v, hi_v, False, False)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _model_value(M, s, r, sd, u, v, snap, e):
     """The `_ModelValue` of start s's Taylor model (M, above) at (u, v) for CC row r,
     surface sd (rules of `sizes.point_size`, tool frame through Q, inf outside the trim). With a
@@ -191,7 +190,7 @@ def _speeds(d, s):
             np.sqrt(d[s, _DV, 0] ** 2 + d[s, _DV, 1] ** 2 + d[s, _DV, 2] ** 2))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _derivatives(M, s, r, sd, u0, v0, f0, su, sv, e):
     """(ok, gradient (gu, gv), Hessian (huu, huv, hvv)) of start s's model size at (u0, v0)
     (value f0 there), per mm along u and v (su, sv: mm per parameter unit): central differences
@@ -289,7 +288,7 @@ def _boxed_step(gu, gv, huu, huv, hvv, radius, box):
     return pu, pv, pred
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _walk(M, s, r, sd, f0, radius, box, e):
     """Trust-region Newton steps on start s's model from its centre (value f0; derivatives
     from `_derivatives`), each followed by up to _ACROSS Newton steps across the valley (along
@@ -356,64 +355,93 @@ def _walk(M, s, r, sd, f0, radius, box, e):
     return f, u, v, walked, probes
 
 
-@nb.njit(cache=True)
-def _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h, radius,
-                walked, cand, flags, k0, k1):
-    """`_steps` for the active starts a[k0:k1]."""
-    M = (d, uv0, Q, floor, dom, sz, T)
-    e = np.empty((3, 3))
-    F = np.empty(9)
-    U = np.empty((9, 2))
-    vals = np.empty(2 + _FRACTIONS.shape[0])
-    uvs = np.empty((2 + _FRACTIONS.shape[0], 2))
-    box = np.empty(4)
-    for k in range(k0, k1):
-        s = a[k]
-        r, sd = rows[s], sid[s]
-        hu, hv = h[s, 0], h[s, 1]
-        lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
-        cu = min(max(best_uv[s, 0], lo_u + hu), hi_u - hu)
-        cv = min(max(best_uv[s, 1], lo_v + hv), hi_v - hv)
-        for j in range(9):  # the stencil, row-major over du in -1, 0, 1 then dv
-            F[j], U[j, 0], U[j, 1] = _model_value(M, s, r, sd, cu + _OFFS[j, 0] * hu,
-                                                  cv + _OFFS[j, 1] * hv, False, e)
-        jbest = _CENTRE  # the centre unless a point is lower, else the first lowest
-        for j in range(9):
-            if F[j] < F[jbest]:
-                jbest = j
-        ok, clipped, tu, tv = _newton_target(F, cu, cv, hu, hv)
-        if not ok:
-            tu, tv = U[jbest, 0], U[jbest, 1]
-        fc, nu, nv = F[jbest], U[jbest, 0], U[jbest, 1]
-        newton = False
-        probes = 9
-        for t in range(_FRACTIONS.shape[0]):  # backtracking along the step
-            x = min(max(cu + _FRACTIONS[t] * (tu - cu), lo_u), hi_u)
-            y = min(max(cv + _FRACTIONS[t] * (tv - cv), lo_v), hi_v)
-            ft, x, y = _model_value(M, s, r, sd, x, y, False, e)
-            probes += 1
-            if ft < fc:
-                fc, nu, nv, newton = ft, x, y, True
-                break
-        along, trust = False, False
-        if floor.shape[0] and _near_floor(Q, r, d, s, best_p, floor, hu, hv):
-            n = _contour_probes(M, s, r, sd, best_f[s], fc, hu, hv, vals, uvs, e)
-            probes += n
-            for j in range(n):
-                if vals[j] < fc:
-                    fc, nu, nv, along = vals[j], uvs[j, 0], uvs[j, 1], True
-        elif (clipped or not newton) and radius[s, _R_TRUST] > 0.0:  # the stencil stuck: walk
-            ft, x, y, walked[s], n = _walk(M, s, r, sd, best_f[s], radius, box, e)
-            probes += n
-            if ft < fc:
-                fc, nu, nv, trust = ft, x, y, True
-        cand[s, 0], cand[s, 1] = nu, nv
-        flags[s, _F_STEP], flags[s, _F_ALONG], flags[s, _F_CENTRE] = (newton or trust, along,
-                                                                       jbest == _CENTRE)
-        flags[s, _F_PROBES], flags[s, _F_WALK] = probes, trust
+class _Step(NamedTuple):
+    """What one model step of a start found: the best (u, v) it reached, whether a Newton step
+    or the walk won (`newton`), a contour step won (`along`), the stencil centre was best
+    (`centre`), the walk won (`walked`), and the model values computed (`probes`)."""
+
+    u: float
+    v: float
+    newton: bool
+    along: bool
+    centre: bool
+    walked: bool
+    probes: int
 
 
-@nb.njit(cache=True)
+class _StepScratch(NamedTuple):
+    """Work arrays of `_step` (one set per thread): the model's point and derivatives `e`,
+    the stencil's values `F` and (u, v) `U`, the contour probes' `vals` and `uvs`, the walk's
+    domain `box`."""
+
+    e: np.ndarray
+    F: np.ndarray
+    U: np.ndarray
+    vals: np.ndarray
+    uvs: np.ndarray
+    box: np.ndarray
+
+
+@nb.njit(cache=True, inline="always")
+def _step_scratch() -> _StepScratch:
+    """A fresh `_StepScratch`."""
+    m = 2 + _FRACTIONS.shape[0]
+    return _StepScratch(np.empty((3, 3)), np.empty(9), np.empty((9, 2)), np.empty(m),
+                        np.empty((m, 2)), np.empty(4))
+
+
+@nb.njit(cache=True, _nrt=False)
+def _step(M, s, r, sd, best_uv, best_f, best_p, h, radius, walked, sc):
+    """One model step of start s (row r, surface sd) on its Taylor model M: the 3x3 stencil of
+    half-widths h[s] about its best (u, v) (moved inside the domain), the Newton step of the
+    stencil's quadratic (the best stencil point where that is not finite or not convex) with
+    backtracking to the first of _FRACTIONS that improves, and for flat-bottomed cutters, where
+    the start's best point lies on the bottom plane, the steps along its contour, elsewhere,
+    where the stencil stalled, a `_walk` (radii `radius[s]`, columns `_R_*`; the distance
+    walked into `walked[s]`, mm). Returns the `_Step`."""
+    d, _, Q, floor, dom, _, _ = M
+    e, F, U, vals, uvs, box = sc
+    hu, hv = h[s, 0], h[s, 1]
+    lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
+    cu = min(max(best_uv[s, 0], lo_u + hu), hi_u - hu)
+    cv = min(max(best_uv[s, 1], lo_v + hv), hi_v - hv)
+    for j in range(9):  # the stencil, row-major over du in -1, 0, 1 then dv
+        F[j], U[j, 0], U[j, 1] = _model_value(M, s, r, sd, cu + _OFFS[j, 0] * hu,
+                                              cv + _OFFS[j, 1] * hv, False, e)
+    jbest = _CENTRE  # the centre unless a point is lower, else the first lowest
+    for j in range(9):
+        if F[j] < F[jbest]:
+            jbest = j
+    ok, clipped, tu, tv = _newton_target(F, cu, cv, hu, hv)
+    if not ok:
+        tu, tv = U[jbest, 0], U[jbest, 1]
+    fc, nu, nv = F[jbest], U[jbest, 0], U[jbest, 1]
+    newton = False
+    probes = 9
+    for t in range(_FRACTIONS.shape[0]):  # backtracking along the step
+        x = min(max(cu + _FRACTIONS[t] * (tu - cu), lo_u), hi_u)
+        y = min(max(cv + _FRACTIONS[t] * (tv - cv), lo_v), hi_v)
+        ft, x, y = _model_value(M, s, r, sd, x, y, False, e)
+        probes += 1
+        if ft < fc:
+            fc, nu, nv, newton = ft, x, y, True
+            break
+    along, trust = False, False
+    if floor.shape[0] and _near_floor(Q, r, d, s, best_p, floor, hu, hv):
+        n = _contour_probes(M, s, r, sd, best_f[s], fc, hu, hv, vals, uvs, e)
+        probes += n
+        for j in range(n):
+            if vals[j] < fc:
+                fc, nu, nv, along = vals[j], uvs[j, 0], uvs[j, 1], True
+    elif (clipped or not newton) and radius[s, _R_TRUST] > 0.0:  # the stencil stuck: walk
+        ft, x, y, walked[s], n = _walk(M, s, r, sd, best_f[s], radius, box, e)
+        probes += n
+        if ft < fc:
+            fc, nu, nv, trust = ft, x, y, True
+    return _Step(nu, nv, newton or trust, along, jbest == _CENTRE, trust, probes)
+
+
+@nb.njit(cache=True, _nrt=False)
 def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     """Model values `vals` and (u, v) `uvs` along the bottom-plane contour through start s's
     model centre (value f0), every point snapped onto the plane: at -tau and +tau mm (tau from
@@ -455,121 +483,212 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     return n
 
 
+class _Batch(NamedTuple):
+    """Work arrays of one row's exact evaluations (`_exact`), K = its most starts: surfaces
+    `sid`, parameters `u`, `v` (K,), the order-2 evaluation `ev` (K, 6, 3) (rows _POINT.._DVV),
+    `normals` (K, 3), sizes `f` (K,), the NURBS evaluator's scratch `sc`."""
+
+    sid: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    ev: np.ndarray
+    normals: np.ndarray
+    f: np.ndarray
+    sc: EvalScratch
+
+
+@nb.njit(cache=True, inline="always")
+def _batch(k) -> _Batch:
+    """A fresh `_Batch` for up to k points."""
+    return _Batch(np.empty(k, dtype=np.int64), np.empty(k), np.empty(k), np.empty((k, 6, 3)),
+                  np.empty((k, 3)), np.empty(k), eval_scratch())
+
+
+@nb.njit(cache=True, _nrt=False)
+def _exact(G, M, r, k, bt):
+    """Exact sizes bt.f[:k] of row r at the surface points (bt.sid, bt.u, bt.v)[:k] (their
+    order-2 evaluation into bt.ev; packed surfaces G): a point below the bottom plane of a
+    flat-bottomed cutter first moves onto it (up to FLOOR_STEPS Newton steps on the height,
+    clipped to the domain; bt.u, bt.v updated); inf outside the trim (`Objective.exact`)."""
+    _, _, Q, floor, dom, sz, T = M
+    eval_range(G, bt.sid, bt.u, bt.v, 2, bt.ev, bt.normals, 0, k, bt.sc)
+    for j in range(k):
+        sd = bt.sid[j]
+        for _ in range(FLOOR_STEPS if floor.shape[0] else 0):
+            z = row_height(Q, r, bt.ev[j], _POINT)
+            if not z < floor[r]:
+                break
+            du, dv = _onto_level(z - floor[r], row_height(Q, r, bt.ev[j], _DU),
+                                 row_height(Q, r, bt.ev[j], _DV), bt.u[j], bt.v[j],
+                                 dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1])
+            if du == 0.0 and dv == 0.0:
+                break
+            bt.u[j] = min(max(bt.u[j] + du, dom[sd, 0, 0]), dom[sd, 0, 1])
+            bt.v[j] = min(max(bt.v[j] + dv, dom[sd, 1, 0]), dom[sd, 1, 1])
+            eval_range(G, bt.sid, bt.u, bt.v, 2, bt.ev, bt.normals, j, j + 1, bt.sc)
+        x, y, z = rotated(Q, r, bt.ev[j], _POINT)
+        bt.f[j] = point_size(sz, r, x, y, z) if kept(T, sd, bt.u[j], bt.v[j]) else np.inf
+
+
+@nb.njit(cache=True, inline="always")
+def _centre(d, uv0, s, j, bt):
+    """Start s's Taylor model re-centred on the batch's point j."""
+    uv0[s, 0], uv0[s, 1] = bt.u[j], bt.v[j]
+    for m in range(6):
+        for c in range(3):
+            d[s, m, c] = bt.ev[j, m, c]
+
+
+@nb.njit(cache=True, inline="always")
+def _pruned(best_f, best_p, sid, idx, active):
+    """Of a row's starts `idx` (ascending), those far above the row's best no longer active
+    (more than _PRUNE_REL + _PRUNE_ABS), and of the active ones whose best points (part frame)
+    share a cell of _SAME mm on one surface only the lowest (the first of equals): they have
+    met, and go on as one (in place)."""
+    k = idx.shape[0]
+    row_best = np.inf
+    for i in range(k):
+        row_best = min(row_best, best_f[idx[i]])
+    for i in range(k):
+        if best_f[idx[i]] > row_best * (1.0 + _PRUNE_REL) + _PRUNE_ABS:
+            active[i] = False
+    for i in range(k):
+        a = idx[i]
+        for j in range(k):
+            b = idx[j]
+            if j == i or not active[j] or sid[b] != sid[a]:
+                continue
+            if not (best_f[b] < best_f[a] or (best_f[b] == best_f[a] and j < i)):
+                continue
+            same = True
+            for c in range(3):
+                same = same and (np.floor(best_p[b, c] / _SAME) == np.floor(best_p[a, c] / _SAME))
+            if same and active[i]:
+                active[i] = False
+                break
+
+
+@nb.njit(cache=True)
+def _refine_row(G, M, r, idx, sid, hmin, best_uv, best_f, best_p, h, radius, walked, evals,
+                iterations, bt, sc):
+    """All iterations of row r's starts `idx` (ascending): each active start takes a `_step`,
+    the point it picked is evaluated exactly, and a lower value becomes its best and its model's
+    centre; the stencil then follows the step or shrinks, the walk's radii adapt, and a start
+    whose stencil reached 2 hmin (both parameters) has converged. From _PRUNE_AFTER on, starts
+    are `_pruned` before each step."""
+    d, uv0, _, _, dom, _, _ = M
+    k = idx.shape[0]
+    active = np.ones(k, dtype=np.bool_)
+    for it in range(iterations):
+        if it >= _PRUNE_AFTER:
+            _pruned(best_f, best_p, sid, idx, active)
+        if not active.any():
+            return
+        for i in range(k):
+            if not active[i]:
+                continue
+            s = idx[i]
+            sd = sid[s]
+            st = _step(M, s, r, sd, best_uv, best_f, best_p, h, radius, walked, sc)
+            bt.sid[0], bt.u[0], bt.v[0] = sd, st.u, st.v
+            _exact(G, M, r, 1, bt)
+            evals[s] += st.probes + 1
+            won = bt.f[0] < best_f[s]
+            for c in range(2):
+                lo, hi = dom[sd, c, 0], dom[sd, c, 1]
+                centre = min(max(best_uv[s, c], lo + h[s, c]), hi - h[s, c])
+                if won and (st.newton or st.along):  # the stencil follows the step
+                    reach = (_REACH if st.along else 1.0) * h[s, c]
+                    new = min(max(2.0 * abs((bt.u[0], bt.v[0])[c] - centre), 0.125 * h[s, c]),
+                              reach)
+                else:
+                    new = (0.25 if st.centre else 0.5) * h[s, c]
+                h[s, c] = min(max(new, hmin[s, c]), 0.25 * (hi - lo))
+            if won:
+                moved = 0.0
+                for c in range(3):
+                    moved += (bt.ev[0, _POINT, c] - best_p[s, c]) ** 2
+                if np.sqrt(moved) > _MOVED:  # a start that moved may walk again
+                    radius[s, _R_TRUST] = abs(radius[s, _R_TRUST])
+                best_f[s] = bt.f[0]
+                best_uv[s, 0], best_uv[s, 1] = bt.u[0], bt.v[0]
+                for c in range(3):
+                    best_p[s, c] = bt.ev[0, _POINT, c]
+                _centre(d, uv0, s, 0, bt)
+                if st.walked and walked[s] >= 0.99 * radius[s, _R_REACH]:
+                    radius[s, _R_REACH] = min(_GROW * radius[s, _R_REACH], radius[s, _R_CAP])
+            elif st.walked:  # the model misled the walk: shorter walks
+                radius[s, _R_REACH] = max(_SHRINK * walked[s], _DELTA)
+            if h[s, 0] <= 2.0 * hmin[s, 0] and h[s, 1] <= 2.0 * hmin[s, 1]:
+                active[i] = False  # converged
+
+
+@nb.njit(cache=True)
+def _refine_rows(G, M, rows, sid, order, bounds, hmin, best_uv, best_f, best_p, h, radius,
+                 walked, evals, iterations, most, t, tasks):
+    """The starts' first exact values and Taylor models, then `_refine_row`, for the rows
+    g = t, t + tasks, ... (row g's starts are order[bounds[g]:bounds[g + 1]], ascending; `most`
+    the largest such count), with scratch of its own. `radius` starts from the stencil's
+    half-width (mm)."""
+    d, uv0, _, _, _, _, _ = M
+    bt, sc = _batch(most), _step_scratch()
+    for g in range(t, bounds.shape[0] - 1, tasks):
+        idx = order[bounds[g]:bounds[g + 1]]
+        r = rows[idx[0]]
+        for i in range(idx.shape[0]):
+            s = idx[i]
+            bt.sid[i], bt.u[i], bt.v[i] = sid[s], best_uv[s, 0], best_uv[s, 1]
+        _exact(G, M, r, idx.shape[0], bt)
+        for i in range(idx.shape[0]):
+            s = idx[i]
+            best_f[s] = bt.f[i]
+            best_uv[s, 0], best_uv[s, 1] = bt.u[i], bt.v[i]
+            for c in range(3):
+                best_p[s, c] = bt.ev[i, _POINT, c]
+            _centre(d, uv0, s, i, bt)
+            su, sv = _speeds(d, s)
+            r0 = max(h[s, 0] * su, h[s, 1] * sv)
+            radius[s, _R_TRUST], radius[s, _R_REACH] = r0, _REACH * r0
+            radius[s, _R_CAP] = max(_RADIUS_CAP * r0, _CAP_MM)
+        _refine_row(G, M, r, idx, sid, hmin, best_uv, best_f, best_p, h, radius, walked, evals,
+                    iterations, bt, sc)
+
+
 @nb.njit(cache=True, parallel=True)
-def _steps(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h, radius, walked,
-           cand, flags):
-    """One model step of each active start `a (A,)`, in parallel chunks: the 3x3 stencil of
-    half-widths h about its best (u, v) (moved inside the domain), the Newton step of the
-    stencil's quadratic (the best stencil point where that is not finite or not convex) with
-    backtracking to the first of _FRACTIONS that improves, and for flat-bottomed cutters, where
-    the start's best point lies on the bottom plane, the steps along its contour, elsewhere,
-    where the stencil stalled, a `_walk`; all on the start's Taylor model (the fields of M, one
-    by one). `radius (S, 3)` per start: the walk's radii (columns `_R_*`). Writes the best point
-    found, `cand[s]`, the distance walked `walked[s]` mm, and `flags[s]` (columns `_F_*`)."""
-    n = a.shape[0]
-    for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
-        _step_range(d, uv0, Q, floor, dom, sz, T, a, rows, sid, best_uv, best_f, best_p, h,
-                    radius, walked, cand, flags, c * _CHUNK, min(n, (c + 1) * _CHUNK))
-
-
-class _Taylor:
-    """Second-order Taylor model of the surface of every start about `uv0 (S, 2)`, from an
-    order-2 evaluation `ev` there: its terms `d (S, 6, 3)` (rows _POINT.._DVV; part frame, mm
-    per parameter unit)."""
-
-    def __init__(self, uv0: np.ndarray, ev: SurfaceEval) -> None:
-        self.uv0 = np.ascontiguousarray(uv0, dtype=np.float64).copy()
-        self.d = np.stack([ev.points, ev.du, ev.dv, ev.duu, ev.duv, ev.dvv], axis=1)
-
-    def move(self, starts: np.ndarray, uv0: np.ndarray, ev: SurfaceEval) -> None:
-        """Re-centre the models of `starts` on `uv0` with their order-2 evaluation `ev`."""
-        self.uv0[starts] = uv0
-        self.d[starts] = np.stack([ev.points, ev.du, ev.dv, ev.duu, ev.duv, ev.dvv], axis=1)
+def _refine_all(G, d, uv0, Q, floor, dom, sz, T, rows, sid, order, bounds, hmin, best_uv,
+                best_f, best_p, h, radius, walked, evals, iterations, most):
+    """`_refine_rows` over _TASKS parallel tasks, the rows interleaved so that both threads get
+    a share of the rows that take long; the model M (above) passed field by field (a tuple
+    holding `sz` cannot enter a parallel loop)."""
+    tasks = min(bounds.shape[0] - 1, _TASKS)
+    for t in nb.prange(tasks):
+        _refine_rows(G, (d, uv0, Q, floor, dom, sz, T), rows, sid, order, bounds, hmin, best_uv,
+                     best_f, best_p, h, radius, walked, evals, iterations, most, t, tasks)
 
 
 def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray, sid: np.ndarray,
            uv: np.ndarray, step: np.ndarray, iterations: int = 8) -> Refined:
     """Refine S starts: `rows (S,)` CC rows of `frame` (tool frames `Q (N, 3, 3)`, one per row),
     `sid (S,)` surfaces, `uv (S, 2)` start parameters, `step (S, 2)` initial stencil half-widths
-    in parameter units."""
+    in parameter units. One compiled call: the rows' starts refined in parallel (`_refine_all`)."""
     obj = Objective(part, cutter, frame, Q)
-    dom = obj.dom
-    lo, hi = dom[sid, :, 0], dom[sid, :, 1]
+    n = len(rows)
+    rows = np.ascontiguousarray(rows, dtype=np.int64)
+    sid = np.ascontiguousarray(sid, dtype=np.int64)
+    lo, hi = obj.dom[sid, :, 0], obj.dom[sid, :, 1]
     width = hi - lo
     hmin = np.maximum(1e-10 * np.maximum(width, 1e-300), _CONVERGED * step)
-    cur = np.clip(uv, lo, hi)
-    first = obj.exact(rows, sid, cur[:, 0], cur[:, 1])
-    best_f, best_uv, best_p = first.size.copy(), first.uv.copy(), first.point.copy()
-    taylor = _Taylor(first.uv, first.ev)
-    floor = np.zeros(0) if obj.floor is None else obj.floor
+    best_uv = np.clip(uv, lo, hi)
     h = np.clip(step, hmin, 0.25 * width)
-    evals = np.ones(len(rows), dtype=np.int64)
-    active = np.ones(len(rows), dtype=bool)
-    nrow = int(rows.max()) + 1 if rows.size else 0
-    cand = np.empty_like(best_uv)
-    flags = np.zeros((len(rows), _F_COLS), dtype=np.int64)
-    r0 = np.maximum(h[:, 0] * np.linalg.norm(first.ev.du, axis=1),
-                    h[:, 1] * np.linalg.norm(first.ev.dv, axis=1))  # the stencil's half-width, mm
-    radius = np.empty((len(rows), 3))  # columns _R_*
-    radius[:, _R_TRUST], radius[:, _R_REACH] = r0, _REACH * r0
-    radius[:, _R_CAP] = np.maximum(_RADIUS_CAP * r0, _CAP_MM)
-    walked = np.zeros(len(rows))
-    for it in range(iterations):
-        if it >= _PRUNE_AFTER:  # drop starts clearly above the best of their row
-            row_best = np.full(nrow, np.inf)
-            np.minimum.at(row_best, rows, best_f)
-            active &= ~(best_f > row_best[rows] * (1.0 + _PRUNE_REL) + _PRUNE_ABS)
-            _drop_duplicates(active, rows, sid, best_p, best_f)
-        a = np.flatnonzero(active)
-        if a.size == 0:
-            break
-        _steps(taylor.d, taylor.uv0, obj.Q, floor, obj.dom, obj.sz, obj.trims, a, rows, sid,
-               best_uv, best_f, best_p, h, radius, walked, cand, flags)
-        newton, along, centre, trust = (flags[a, j].astype(bool)
-                                        for j in (_F_STEP, _F_ALONG, _F_CENTRE, _F_WALK))
-        evals[a] += flags[a, _F_PROBES]
-        ra, sa, ha = rows[a], sid[a], h[a]
-        c = np.clip(best_uv[a], lo[a] + ha, hi[a] - ha)
-        got = obj.exact(ra, sa, cand[a, 0], cand[a, 1])
-        fe, pe, ue = got.size, got.point, got.uv
-        evals[a] += 1
-        won = fe < best_f[a]
-        t = a[won]
-        moved = t[np.linalg.norm(pe[won] - best_p[t], axis=1) > _MOVED]
-        # a start that moved may walk again
-        radius[moved, _R_TRUST] = np.abs(radius[moved, _R_TRUST])
-        best_f[t], best_uv[t], best_p[t] = fe[won], ue[won], pe[won]
-        taylor.move(t, ue[won], _rows_of(got.ev, won))
-        far = a[trust & won & (walked[a] >= 0.99 * radius[a, _R_REACH])]
-        radius[far, _R_REACH] = np.minimum(_GROW * radius[far, _R_REACH], radius[far, _R_CAP])
-        misled = a[trust & ~won]  # the model misled the walk: shorter walks
-        radius[misled, _R_REACH] = np.maximum(_SHRINK * walked[misled], _DELTA)
-        shrink = np.where(centre, 0.25, 0.5)[:, None] * ha
-        # a Newton step sets the stencil to its length, a step along the contour may grow it
-        reach = np.where(along, _REACH, 1.0)[:, None] * ha
-        jump = np.clip(2.0 * np.abs(ue - c), 0.125 * ha, reach)
-        h[a] = np.clip(np.where((won & (newton | along))[:, None], jump, shrink), hmin[a],
-                       0.25 * width[a])
-        active[a] &= ~(h[a] <= 2.0 * hmin[a]).all(axis=1)  # converged
+    best_f, best_p = np.empty(n), np.empty((n, 3))
+    evals = np.ones(n, dtype=np.int64)
+    if n:
+        order = np.argsort(rows, kind="stable")
+        starts = np.flatnonzero(np.diff(rows[order])) + 1
+        bounds = np.concatenate([[0], starts, [n]]).astype(np.int64)
+        floor = np.zeros(0) if obj.floor is None else obj.floor
+        _refine_all(packed_part(part), np.empty((n, 6, 3)), np.empty((n, 2)), obj.Q, floor,
+                     obj.dom, obj.sz, obj.trims, rows, sid, order, bounds, hmin, best_uv, best_f,
+                     best_p, h, np.empty((n, 3)), np.zeros(n), evals, iterations,
+                     int(np.diff(bounds).max()))
     return Refined(best_f, best_uv, best_p, evals)
-
-
-def _drop_duplicates(active: np.ndarray, rows: np.ndarray, sid: np.ndarray, best_p: np.ndarray,
-                     best_f: np.ndarray) -> None:
-    """Of the active starts of one row and surface whose best points (part frame) share a cell of
-    _SAME mm, only the lowest stays active (in place): they have met, and go on as one."""
-    a = np.flatnonzero(active)
-    if a.size == 0:
-        return
-    cell = np.floor(best_p[a] / _SAME).astype(np.int64)
-    order = np.lexsort((best_f[a], cell[:, 2], cell[:, 1], cell[:, 0], sid[a], rows[a]))
-    key = np.column_stack([rows[a], sid[a], cell])[order]
-    same = np.zeros(a.size, dtype=bool)
-    same[1:] = (key[1:] == key[:-1]).all(axis=1)
-    active[a[order[same]]] = False
-
-
-def _rows_of(ev: SurfaceEval, mask: np.ndarray) -> SurfaceEval:
-    """The evaluation of the points `mask` selects."""
-    return SurfaceEval(ev.points[mask], ev.du[mask], ev.dv[mask], ev.normals[mask],
-                       ev.duu[mask], ev.duv[mask], ev.dvv[mask])
