@@ -49,6 +49,8 @@ _PRUNE_AFTER = 2  # iterations before starts far above their row's best are drop
 _PRUNE_REL, _PRUNE_ABS = 0.01, 0.02  # 'far above': more than 1 % + 0.02 mm
 _CONVERGED = 1e-5  # a start stops when its stencil is this fraction of the initial one
 _OFFS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.float64)
+# the walk's difference points, in _DELTA steps along u and v: +u, -u, +v, -v, +u+v
+_DIFFS = np.array([(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1)], dtype=np.float64)
 _CENTRE = 4  # index of the stencil centre in _OFFS
 _SAME = 1e-3  # mm: starts whose best points are this close have met
 _TASKS = 64  # parallel tasks the rows are interleaved over
@@ -121,7 +123,7 @@ def _onto_level(excess, hu, hv, u, v, lo_u, hi_u, lo_v, hi_v):
                        lo_v, hi_v, False, False)
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, _nrt=False, inline="always")
 def _model_value(M, s, r, sd, u, v, snap, e):
     """The `_ModelValue` of start s's Taylor model (M, above) at (u, v) for CC row r,
     surface sd (rules of `sizes.point_size`, tool frame through Q, inf outside the trim). With a
@@ -144,6 +146,13 @@ def _model_value(M, s, r, sd, u, v, snap, e):
     x, y, z = rotated(Q, r, e, _POINT)
     f = point_size(sz, r, x, y, z) if kept(T, sd, u, v) else np.inf
     return _ModelValue(f, u, v)
+
+
+@nb.njit(cache=True, _nrt=False)
+def _model_value_called(M, s, r, sd, u, v, snap, e):
+    """`_model_value` as a call, for the sites that run seldom (each inlined site compiles the
+    cutter's kernels again)."""
+    return _model_value(M, s, r, sd, u, v, snap, e)
 
 
 @nb.njit(cache=True, inline="always")
@@ -191,16 +200,16 @@ def _speeds(d, s):
 
 
 @nb.njit(cache=True, _nrt=False)
-def _derivatives(M, s, r, sd, u0, v0, f0, su, sv, e):
+def _derivatives(M, s, r, sd, u0, v0, f0, su, sv, e, F):
     """(ok, gradient (gu, gv), Hessian (huu, huv, hvv)) of start s's model size at (u0, v0)
     (value f0 there), per mm along u and v (su, sv: mm per parameter unit): central differences
-    of width _DELTA, the cross term forward; ok False where a value is not finite."""
+    of width _DELTA, the cross term forward (the values at _DIFFS into F); ok False where a value
+    is not finite."""
     du, dv = _DELTA / su, _DELTA / sv
-    fup = _model_value(M, s, r, sd, u0 + du, v0, False, e).size
-    fum = _model_value(M, s, r, sd, u0 - du, v0, False, e).size
-    fvp = _model_value(M, s, r, sd, u0, v0 + dv, False, e).size
-    fvm = _model_value(M, s, r, sd, u0, v0 - dv, False, e).size
-    fpp = _model_value(M, s, r, sd, u0 + du, v0 + dv, False, e).size
+    for j in range(_DIFFS.shape[0]):
+        F[j] = _model_value(M, s, r, sd, u0 + _DIFFS[j, 0] * du, v0 + _DIFFS[j, 1] * dv, False,
+                            e).size
+    fup, fum, fvp, fvm, fpp = F[0], F[1], F[2], F[3], F[4]
     if not np.isfinite(fup + fum + fvp + fvm + fpp + f0):
         return False, 0.0, 0.0, 0.0, 0.0, 0.0
     return (True, (fup - fum) / (2 * _DELTA), (fvp - fvm) / (2 * _DELTA),
@@ -289,7 +298,7 @@ def _boxed_step(gu, gv, huu, huv, hvv, radius, box):
 
 
 @nb.njit(cache=True, _nrt=False)
-def _walk(M, s, r, sd, f0, radius, box, e):
+def _walk(M, s, r, sd, f0, radius, box, e, F):
     """Trust-region Newton steps on start s's model from its centre (value f0; derivatives
     from `_derivatives`), each followed by up to _ACROSS Newton steps across the valley (along
     the Hessian's steep direction), which keeps long steps on the floor of narrow curved
@@ -297,8 +306,8 @@ def _walk(M, s, r, sd, f0, radius, box, e):
     the trust radius radius[s, _R_TRUST] mm grows after a full-length step that improved,
     shrinks after one that did not, and turns negative where the model predicts no more
     decrease (in place). A step that reaches below the bottom plane of a flat-bottomed cutter
-    ends the walk (the contour steps go on from there). Returns (value, u, v, the distance
-    walked in mm, model values computed)."""
+    ends the walk (the contour steps go on from there). `F` (>= 5): scratch for model values.
+    Returns (value, u, v, the distance walked in mm, model values computed)."""
     d, uv0, _, _, dom, _, _ = M
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
     su, sv = _speeds(d, s)
@@ -306,7 +315,7 @@ def _walk(M, s, r, sd, f0, radius, box, e):
     u, v = uv0[s, 0], uv0[s, 1]
     f, walked, probes = f0, 0.0, 0  # f: the value at (u, v), where the walk stands
     for _ in range(_WALK_STEPS):
-        ok, gu, gv, huu, huv, hvv = _derivatives(M, s, r, sd, u, v, f, su, sv, e)
+        ok, gu, gv, huu, huv, hvv = _derivatives(M, s, r, sd, u, v, f, su, sv, e, F)
         probes += 5
         step = min(radius[s, _R_TRUST], radius[s, _R_REACH] - walked)
         if not ok or step < _DELTA:
@@ -328,10 +337,11 @@ def _walk(M, s, r, sd, f0, radius, box, e):
         _, _, x1, y1 = _eigen(huu, huv, hvv)
         tu, tv = -y1, x1  # across the valley: the eigenvector of the larger eigenvalue
         for _ in range(_ACROSS):  # Newton steps across the valley, back onto its floor
-            fp = _model_value(M, s, r, sd, x + _DELTA * tu / su, y + _DELTA * tv / sv, False,
-                              e).size
-            fm = _model_value(M, s, r, sd, x - _DELTA * tu / su, y - _DELTA * tv / sv, False,
-                              e).size
+            for j in range(2):  # the values a _DELTA either side
+                side = 1.0 - 2.0 * j
+                F[j] = _model_value(M, s, r, sd, x + side * (_DELTA * tu / su),
+                                    y + side * (_DELTA * tv / sv), False, e).size
+            fp, fm = F[0], F[1]
             probes += 3
             curv = (fp - 2.0 * ft + fm) / _DELTA**2
             if not (curv > 0.0 and np.isfinite(fp + fm)):
@@ -434,7 +444,7 @@ def _step(M, s, r, sd, best_uv, best_f, best_p, h, radius, walked, sc):
             if vals[j] < fc:
                 fc, nu, nv, along = vals[j], uvs[j, 0], uvs[j, 1], True
     elif (clipped or not newton) and radius[s, _R_TRUST] > 0.0:  # the stencil stuck: walk
-        ft, x, y, walked[s], n = _walk(M, s, r, sd, best_f[s], radius, box, e)
+        ft, x, y, walked[s], n = _walk(M, s, r, sd, best_f[s], radius, box, e, F)
         probes += n
         if ft < fc:
             fc, nu, nv, trust = ft, x, y, True
@@ -462,7 +472,7 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     for t in (-tau, tau):
         x = min(max(uv0[s, 0] + t * tu, lo_u), hi_u)
         y = min(max(uv0[s, 1] + t * tv, lo_v), hi_v)
-        vals[n], uvs[n, 0], uvs[n, 1] = _model_value(M, s, r, sd, x, y, True, e)
+        vals[n], uvs[n, 0], uvs[n, 1] = _model_value_called(M, s, r, sd, x, y, True, e)
         n += 1
     fm, fp = vals[0], vals[1]
     curv = fm - 2.0 * f0 + fp
@@ -476,7 +486,7 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     for j in range(_FRACTIONS.shape[0]):
         x = min(max(uv0[s, 0] + vertex * _FRACTIONS[j] * tu, lo_u), hi_u)
         y = min(max(uv0[s, 1] + vertex * _FRACTIONS[j] * tv, lo_v), hi_v)
-        vals[n], uvs[n, 0], uvs[n, 1] = _model_value(M, s, r, sd, x, y, True, e)
+        vals[n], uvs[n, 0], uvs[n, 1] = _model_value_called(M, s, r, sd, x, y, True, e)
         n += 1
         if vals[n - 1] < min(fc, fm, fp):
             break
