@@ -17,15 +17,13 @@ from checker.engine.grid.frames import group_axes, rotate_rows, tool_rotations
 from checker.engine.refine.best import RowBest, sampled
 from checker.engine.refine.contour_walk import along_contours
 from checker.engine.refine.limits import curvature_limit
+from checker.engine.refine.rings import ring_evaluations, ring_radii, ring_starts
 from checker.engine.refine.starts import (
     ON_SURFACE,
     Starts,
     contact_pairs,
     contour_starts,
     per_parameter,
-    ring_evaluations,
-    ring_radii,
-    ring_starts,
     seam_starts,
     seed_starts,
 )
