@@ -12,16 +12,20 @@ points `contour(sigma)` (the start's contour tangent, sigma mm along it, moved o
 by Newton steps on the height) at sigma growing by doubling up to `reach`, then golden-section
 search between the neighbours of the smallest, on the side whose samples reach lower. Exact
 sizes of real surface points throughout, so a result can only lower a row's answer soundly.
-Tool frame through Q; mm."""
+One compiled parallel kernel over the starts. Tool frame through Q; mm."""
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
+import numba as nb
 import numpy as np
 
-from checker.engine.grid.frames import heights
+from checker.engine.grid.frames import heights, row_height
 from checker.engine.refine.best import RowBest
-from checker.engine.refine.objective import Objective, SurfaceSizes
+from checker.engine.refine.objective import CONTOUR_STEPS, Objective, onto_floor, surface_size
 from checker.engine.sizes import RowFrame
+from checker.geometry.evaluate import EvalScratch, eval_range, eval_scratch
 from checker.part import Part
 
 FIRST_STEP = 0.005  # mm along the contour: the first probe from the start
@@ -30,6 +34,20 @@ _GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
 _ON_CONTOUR = 1e-6  # mm: a best point this near its row's bottom plane lies on its contour
 _CONTOUR_REACH = 2.0  # test-point spacings searched along the contour either way
 _UNBOUNDED_REACH = 8.0  # the same from Pcc, for a row with no size at all
+_CHUNK = 16  # starts per parallel task
+
+
+class _Probe(NamedTuple):
+    """Work arrays of one task: the points probed along a contour (surface `sid`, `u`, `v`,
+    their order-1 evaluation `ev` and `normals`, sizes `size`), the NURBS scratch `sc`."""
+
+    sid: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    ev: np.ndarray
+    normals: np.ndarray
+    size: np.ndarray
+    sc: EvalScratch
 
 
 def along_contours(part: Part, cutter, frame: RowFrame, Q: np.ndarray, best: RowBest,
@@ -57,7 +75,12 @@ def along_contours(part: Part, cutter, frame: RowFrame, Q: np.ndarray, best: Row
         return
     obj = Objective(part, cutter, frame, Q)
     for rows, sid, uv, reach in walks:
-        f, p, q = _contour_minimum(obj, rows, sid, uv, reach * spacing)
+        k = len(rows)
+        f, p, q = np.empty(k), np.empty((k, 3)), np.empty((k, 2))
+        _walk_all(obj.G, obj.Q, obj.floor, obj.dom, obj.sz, obj.trims,
+                  np.ascontiguousarray(rows, dtype=np.int64),
+                  np.ascontiguousarray(sid, dtype=np.int64),
+                  np.ascontiguousarray(uv, dtype=np.float64), _sigmas(reach * spacing), f, p, q)
         best.evaluations[rows] += _contour_evaluations(reach * spacing)
         best.lower(rows, f, p, sid, q)
 
@@ -69,63 +92,115 @@ def _sigmas(reach: float) -> np.ndarray:
 
 
 def _contour_evaluations(reach: float) -> int:
-    """Exact size evaluations per start of `_contour_minimum` (at most)."""
+    """Exact size evaluations per start of `along_contours` (at most)."""
     return 2 * len(_sigmas(reach)) + GOLDEN_ROUNDS + 3
 
 
-def _contour_minimum(obj: Objective, rows: np.ndarray, sid: np.ndarray, uv: np.ndarray,
-                     reach: float):
-    """(size (K,), point (K, 3) part frame, uv (K, 2)): the smallest size found on the contour
-    through each start (rows, surfaces, uv (K, 2)), up to `reach` mm from it either way."""
-    rows2, sid2 = np.tile(rows, 2), np.tile(sid, 2)
-    start = obj.on_contour(rows2, sid2, np.tile(uv[:, 0], 2), np.tile(uv[:, 1], 2))
-    f0, p0, uv0 = start.size, start.point, start.uv
-    tangent = _contour_tangent(obj, rows2, start.ev) * np.repeat([1.0, -1.0], len(rows))[:, None]
-    sigma = _sigmas(reach)  # (m,)
+@nb.njit(cache=True, _nrt=False)
+def _on_contour(G, Q, floor, dom, sz, T, r, w, j):
+    """Probe j (w.sid, w.u, w.v) moved onto row r's bottom plane from either side (its
+    contour), evaluated to order 1; its size into w.size[j]."""
+    eval_range(G, w.sid, w.u, w.v, 1, w.ev, w.normals, j, j + 1, w.sc)
+    onto_floor(G, Q, dom, r, floor[r], w.sid, w.u, w.v, w.ev, w.normals, w.sc, j, 1, True,
+               CONTOUR_STEPS)
+    w.size[j] = surface_size(Q, sz, T, r, w.sid[j], w.u[j], w.v[j], w.ev, j)
 
-    lo, hi = obj.dom[sid2, :, 0], obj.dom[sid2, :, 1]
 
-    def at(s: np.ndarray, k: np.ndarray) -> SurfaceSizes:
-        """The sizes at sigma `s` along the contours of walkers `k`."""
-        w = np.clip(uv0[k] + s[:, None] * tangent[k], lo[k], hi[k])
-        return obj.on_contour(rows2[k], sid2[k], w[:, 0], w[:, 1])
+@nb.njit(cache=True, _nrt=False)
+def _at(G, Q, floor, dom, sz, T, r, sd, u0, v0, tu, tv, sigma, w, j):
+    """Probe j at `sigma` mm along the contour tangent (tu, tv) ((u, v) per mm) from (u0, v0),
+    clipped to the domain and moved onto the contour; its size."""
+    w.sid[j] = sd
+    w.u[j] = min(max(u0 + sigma * tu, dom[sd, 0, 0]), dom[sd, 0, 1])
+    w.v[j] = min(max(v0 + sigma * tv, dom[sd, 1, 0]), dom[sd, 1, 1])
+    _on_contour(G, Q, floor, dom, sz, T, r, w, j)
+    return w.size[j]
 
-    k2, m, half = len(rows2), len(sigma), len(rows)
-    grid = at(np.tile(sigma[1:], k2), np.repeat(np.arange(k2), m - 1))
-    fg, pg, qg = grid.size, grid.point, grid.uv
-    f_grid = np.column_stack([f0, fg.reshape(k2, m - 1)])
-    p_grid = np.concatenate([p0[:, None], pg.reshape(k2, m - 1, 3)], axis=1)
-    q_grid = np.concatenate([uv0[:, None], qg.reshape(k2, m - 1, 2)], axis=1)
-    j = np.argmin(f_grid, axis=1)
-    # per start the direction whose samples reach lower, refined by golden section there
-    ar = np.arange(half)
-    side = np.where(f_grid[ar, j[:half]] <= f_grid[ar + half, j[half:]], ar, ar + half)
-    f, p, q = f_grid[side, j[side]], p_grid[side, j[side]], q_grid[side, j[side]]
-    go = np.flatnonzero(np.isfinite(f))
-    walkers, jg = side[go], j[side[go]]
-    a, b = sigma[np.maximum(jg - 1, 0)], sigma[np.minimum(jg + 1, m - 1)]
+
+@nb.njit(cache=True, _nrt=False, inline="always")
+def _slot(side, i, m):
+    """The probe slot of sample i (sigma[i]) on `side` (0: along the tangent, 1: against it):
+    the start is slot 0 for both, then m - 1 slots a side."""
+    return 0 if i == 0 else side * (m - 1) + i
+
+
+@nb.njit(cache=True, _nrt=False)
+def _walk(G, Q, floor, dom, sz, T, r, sd, u, v, sigma, w, out_p, out_q, k):
+    """The smallest size on the contour through (u, v) on surface sd, up to sigma[-1] mm either
+    way (module docstring; samples at `sigma (m,)`, sigma[0] = 0 the start); its point and
+    (u, v) into out_p[k], out_q[k]."""
+    m = sigma.shape[0]
+    w.sid[0], w.u[0], w.v[0] = sd, u, v
+    _on_contour(G, Q, floor, dom, sz, T, r, w, 0)  # the start, on the contour
+    u0, v0 = w.u[0], w.v[0]
+    hu, hv = row_height(Q, r, w.ev[0], 1), row_height(Q, r, w.ev[0], 2)
+    length = 0.0
+    for c in range(3):
+        length += (-hv * w.ev[0, 1, c] + hu * w.ev[0, 2, c]) ** 2
+    length = max(np.sqrt(length), 1e-300)
+    tu, tv = -hv / length, hu / length  # (u, v) per mm along the contour
+    lowest = 0, 0  # each side's smallest sample (the first of equals)
+    for side in range(2):
+        sign = 1.0 - 2.0 * side
+        jb = 0
+        for i in range(1, m):
+            j = _slot(side, i, m)
+            _at(G, Q, floor, dom, sz, T, r, sd, u0, v0, tu * sign, tv * sign, sigma[i], w, j)
+            if w.size[j] < w.size[_slot(side, jb, m)]:
+                jb = i
+        lowest = (jb, lowest[1]) if side == 0 else (lowest[0], jb)
+    side = 0 if w.size[_slot(0, lowest[0], m)] <= w.size[_slot(1, lowest[1], m)] else 1
+    jb = lowest[side]
+    at = _slot(side, jb, m)
+    f = w.size[at]
+    for c in range(3):
+        out_p[k, c] = w.ev[at, 0, c]
+    out_q[k, 0], out_q[k, 1] = w.u[at], w.v[at]
+    if not np.isfinite(f):
+        return f
+    sign = 1.0 - 2.0 * side  # golden sections between the smallest sample's neighbours
+    su, sv = tu * sign, tv * sign
+    j = 2 * m - 1  # the slot of their probes
+    a, b = sigma[max(jb - 1, 0)], sigma[min(jb + 1, m - 1)]
     c, d = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
-    fc, fd = at(c, walkers).size, at(d, walkers).size
+    fc = _at(G, Q, floor, dom, sz, T, r, sd, u0, v0, su, sv, c, w, j)
+    fd = _at(G, Q, floor, dom, sz, T, r, sd, u0, v0, su, sv, d, w, j)
     for _ in range(GOLDEN_ROUNDS):
-        left = fc <= fd
-        b, a = np.where(left, d, b), np.where(left, a, c)
-        probe = np.where(left, b - _GOLDEN * (b - a), a + _GOLDEN * (b - a))
-        fp = at(probe, walkers).size
-        c, fc, d, fd = (np.where(left, probe, d), np.where(left, fp, fd),
-                        np.where(left, c, probe), np.where(left, fc, fp))
-    last = at(np.where(fc <= fd, c, d), walkers)
-    fg, pg, qg = last.size, last.point, last.uv
-    better = fg < f[go]
-    f[go[better]], p[go[better]], q[go[better]] = fg[better], pg[better], qg[better]
-    return f, p, q
+        if fc <= fd:
+            b = d
+            probe = b - _GOLDEN * (b - a)
+            fp = _at(G, Q, floor, dom, sz, T, r, sd, u0, v0, su, sv, probe, w, j)
+            c, fc, d, fd = probe, fp, c, fc
+        else:
+            a = c
+            probe = a + _GOLDEN * (b - a)
+            fp = _at(G, Q, floor, dom, sz, T, r, sd, u0, v0, su, sv, probe, w, j)
+            c, fc, d, fd = d, fd, probe, fp
+    last = _at(G, Q, floor, dom, sz, T, r, sd, u0, v0, su, sv, c if fc <= fd else d, w, j)
+    if last < f:
+        f = last
+        for i in range(3):
+            out_p[k, i] = w.ev[j, 0, i]
+        out_q[k, 0], out_q[k, 1] = w.u[j], w.v[j]
+    return f
 
 
-def _contour_tangent(obj: Objective, rows: np.ndarray, ev) -> np.ndarray:
-    """(K, 2) the (u, v) step per mm along the contour (the height's level line) at points of
-    order-1 evaluation `ev`: (-h_v, h_u) scaled to unit length in space."""
-    hu = heights(obj.Q, ev.du, rows)
-    hv = heights(obj.Q, ev.dv, rows)
-    w = np.column_stack([-hv, hu])
-    length = np.linalg.norm(w[:, :1] * ev.du + w[:, 1:] * ev.dv, axis=1)
-    return w / np.maximum(length, 1e-300)[:, None]
+@nb.njit(cache=True)
+def _walk_range(G, Q, floor, dom, sz, T, rows, sid, uv, sigma, f, p, q, k0, k1):
+    """`_walk` for the starts k0..k1, with probe scratch of their own."""
+    n = 2 * sigma.shape[0]
+    w = _Probe(np.empty(n, dtype=np.int64), np.empty(n), np.empty(n), np.empty((n, 3, 3)),
+               np.empty((n, 3)), np.empty(n), eval_scratch())
+    for k in range(k0, k1):
+        f[k] = _walk(G, Q, floor, dom, sz, T, rows[k], sid[k], uv[k, 0], uv[k, 1], sigma, w, p,
+                     q, k)
 
+
+@nb.njit(cache=True, parallel=True)
+def _walk_all(G, Q, floor, dom, sz, T, rows, sid, uv, sigma, f, p, q):
+    """`_walk` for every start (rows, surfaces, uv (K, 2)) in parallel chunks: the smallest size
+    f (K,), its point p (K, 3) (part frame) and (u, v) q (K, 2)."""
+    n = rows.shape[0]
+    for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
+        _walk_range(G, Q, floor, dom, sz, T, rows, sid, uv, sigma, f, p, q, c * _CHUNK,
+                    min(n, (c + 1) * _CHUNK))

@@ -3,99 +3,115 @@ what the refinement, the walk along the contour and the PSO baseline evaluate.
 
 Flat-bottomed cutters (R family, psi = 0) cut nothing below their bottom plane, so the size
 jumps to inf there and the minimum often lies on the contour line of the part at that height.
-Points below it are moved onto the contour (Newton steps on the height in (u, v)), which turns
-that jump into a smooth boundary the local steps can follow."""
+Points below it are moved onto the contour (Newton steps on the height in (u, v), `onto_floor`),
+which turns that jump into a smooth boundary the local steps can follow. The compiled pieces
+(`onto_floor`, `surface_size`) serve the compiled refinement and contour walk point by point;
+`Objective.exact` runs them over a batch."""
 
 from __future__ import annotations
 
 from typing import NamedTuple
 
+import numba as nb
 import numpy as np
 
-from checker.engine.grid.frames import heights, rotate_rows
-from checker.engine.sizes import RowFrame, pair_sizes, size_args
-from checker.geometry.evaluate import SurfaceEval, evaluate_mixed
-from checker.geometry.newton_uv import newton_steps
-from checker.geometry.trims import pack_trims
+from checker.engine.grid.frames import rotated, row_height
+from checker.engine.sizes import RowFrame, point_size, size_args
+from checker.geometry.evaluate import eval_range, eval_scratch, packed_part
+from checker.geometry.newton_uv import newton_step
+from checker.geometry.trims import kept, pack_trims
 from checker.part import Part
 
 FLOOR_STEPS = 3  # Newton steps that bring a point below the bottom plane onto it
-_CONTOUR_STEPS = 8  # the same, for points predicted along the contour (contour_walk.py)
+CONTOUR_STEPS = 8  # the same, for points moved onto the contour from either side
 _ABOVE = 1e-9  # mm above the bottom plane: on it the kernels already count a point as uncut
 _ON_PLANE = 1e-11  # mm: a point moved onto the plane from either side is on it within this
+_POINT, _DU, _DV = range(3)  # rows of an evaluation: the point, S_u, S_v
 
 
 class SurfaceSizes(NamedTuple):
     """Sizes at K surface points: `size (K,)` mm (inf outside the trim), `point (K, 3)` part
-    frame, `uv (K, 2)` (moved onto the bottom plane where that applies) and the surfaces'
-    evaluation `ev` there."""
+    frame and `uv (K, 2)` (moved onto the bottom plane where that applies)."""
 
     size: np.ndarray
     point: np.ndarray
     uv: np.ndarray
-    ev: SurfaceEval
+
+
+@nb.njit(cache=True, _nrt=False)
+def onto_floor(G, Q, dom, r, level, sid, u, v, ev, normals, sc, j, order, both_sides, steps):
+    """Point j (surface sid[j] at (u[j], v[j]), its evaluation of `order` in ev[j]; packed
+    surfaces G) moved onto row r's bottom plane at tool-frame height `level` mm: where it lies
+    below (`both_sides`: off it by more than _ON_PLANE), up to `steps` projected Newton steps
+    on the height (`newton_uv.newton_step` on excess^2 / 2), clipped to the domain; u, v, ev
+    updated in place."""
+    lo_u, hi_u, lo_v, hi_v = dom[sid[j], 0, 0], dom[sid[j], 0, 1], dom[sid[j], 1, 0], \
+        dom[sid[j], 1, 1]
+    for _ in range(steps):
+        z = row_height(Q, r, ev[j], _POINT)
+        if not (abs(z - level) > _ON_PLANE if both_sides else z < level):
+            return
+        excess = z - level
+        hu, hv = row_height(Q, r, ev[j], _DU), row_height(Q, r, ev[j], _DV)
+        du, dv = newton_step(excess * hu, excess * hv, hu * hu, hu * hv, hv * hv, u[j], v[j],
+                             lo_u, hi_u, lo_v, hi_v, False, False)
+        if du == 0.0 and dv == 0.0:
+            return
+        u[j] = min(max(u[j] + du, lo_u), hi_u)
+        v[j] = min(max(v[j] + dv, lo_v), hi_v)
+        eval_range(G, sid, u, v, order, ev, normals, j, j + 1, sc)
+
+
+@nb.njit(cache=True, _nrt=False)
+def surface_size(Q, sz, T, r, sd, u, v, ev, j):
+    """The size (mm) for row r of the evaluated point ev[j] (part frame) at (u, v) on surface
+    sd: `sizes.point_size` in the row's tool frame (Q), inf outside the trim (packed trims T)."""
+    if not kept(T, sd, u, v):
+        return np.inf
+    x, y, z = rotated(Q, r, ev[j], _POINT)
+    return point_size(sz, r, x, y, z)
+
+
+@nb.njit(cache=True)
+def _exact(G, Q, floor, dom, sz, T, rows, sid, u, v, order, size, point):
+    """`Objective.exact` over the K points (u, v updated in place)."""
+    ev = np.empty((rows.shape[0], 3 if order < 2 else 6, 3))
+    normals = np.empty((rows.shape[0], 3))
+    sc = eval_scratch()
+    eval_range(G, sid, u, v, order, ev, normals, 0, rows.shape[0], sc)
+    for j in range(rows.shape[0]):
+        r = rows[j]
+        if floor.shape[0]:
+            onto_floor(G, Q, dom, r, floor[r], sid, u, v, ev, normals, sc, j, order, False,
+                       FLOOR_STEPS)
+        size[j] = surface_size(Q, sz, T, r, sid[j], u[j], v[j], ev, j)
+        for c in range(3):
+            point[j, c] = ev[j, _POINT, c]
 
 
 class Objective:
-    """Imaginary size of surface points for the rows of `frame` (module docstring). `Q (N, 3,
-    3)`: the rotation part frame -> tool frame of every row of `frame`."""
+    """Imaginary size of surface points for the rows of `frame` (module docstring) as the
+    kernels take it: `Q (N, 3, 3)` the rotation part frame -> tool frame of every row, `G` the
+    part's packed surfaces, `dom` their domains, `floor (N,)` the rows' bottom planes
+    (tool-frame height, mm; empty: not a flat-bottomed cutter), `sz` the rows' `SizeArgs`,
+    `trims` the packed trims."""
 
     def __init__(self, part: Part, cutter, frame: RowFrame, Q: np.ndarray) -> None:
-        self.part, self.cutter, self.frame, self.Q = part, cutter, frame, Q
-        self.trimmed = [s.id for s in part.surfaces if s.trim is not None]
+        self.Q = np.ascontiguousarray(Q)
+        self.G = packed_part(part)
         self.dom = part.domains
-        flat = cutter.flat_bottomed
-        self.floor = frame.fam.z0 + _ABOVE if flat else None
+        self.floor = frame.fam.z0 + _ABOVE if cutter.flat_bottomed else np.zeros(0)
         self.sz = size_args(cutter, frame, np.arange(len(frame.cc)))
         self.trims = pack_trims([s.trim for s in part.surfaces])
 
-    def exact(self, rows, sid, u, v, order: int = 2) -> SurfaceSizes:
-        """The sizes on the surfaces, with their evaluation of that order."""
-        u, v = u.copy(), v.copy()
-        ev = evaluate_mixed(self.part, sid, u, v, order=order)
-        if self.floor is not None:
-            self._onto_floor(rows, sid, u, v, ev, order)
-        return self._sizes(rows, sid, u, v, ev)
-
-    def on_contour(self, rows, sid, u, v) -> SurfaceSizes:
-        """The sizes of the points moved onto their row's bottom plane from either side (its
-        contour), with their order-1 evaluation."""
-        u, v = u.copy(), v.copy()
-        ev = evaluate_mixed(self.part, sid, u, v)
-        self._onto_floor(rows, sid, u, v, ev, 1, both_sides=True, steps=_CONTOUR_STEPS)
-        return self._sizes(rows, sid, u, v, ev)
-
-    def _sizes(self, rows, sid, u, v, ev: SurfaceEval) -> SurfaceSizes:
-        """Sizes of the evaluated points, inf outside their surface's trim."""
-        pts = ev.points
-        f = pair_sizes(self.cutter, self.frame, rows, rotate_rows(self.Q, pts, rows))
-        for s in self.trimmed:
-            sel = np.flatnonzero(sid == s)
-            if sel.size:
-                out = ~np.asarray(self.part.surfaces[s].trim.contains(u[sel], v[sel]), dtype=bool)
-                f[sel[out]] = np.inf
-        return SurfaceSizes(f, pts, np.column_stack([u, v]), ev)
-
-    def _onto_floor(self, rows, sid, u, v, ev, order: int, both_sides: bool = False,
-                    steps: int = FLOOR_STEPS) -> None:
-        """Move points below their row's bottom plane (with `both_sides`, also those above it)
-        onto it in up to `steps` Newton steps (in place: u, v, ev)."""
-        for _ in range(steps):
-            z = heights(self.Q, ev.points, rows)
-            off = np.flatnonzero(np.abs(z - self.floor[rows]) > _ON_PLANE if both_sides
-                                 else z < self.floor[rows])
-            if off.size == 0:
-                return
-            d = self.dom[sid[off]]
-            a = np.column_stack([heights(self.Q, ev.du[off], rows[off]),
-                                 heights(self.Q, ev.dv[off], rows[off])])  # height gradient
-            excess = z[off] - self.floor[rows[off]]
-            step = newton_steps(excess[:, None] * a, a[:, :, None] * a[:, None, :],
-                                np.column_stack([u[off], v[off]]), d[:, :, 0], d[:, :, 1])
-            ok = (step != 0.0).any(axis=1)
-            off, step, d = off[ok], step[ok], d[ok]
-            u[off] = np.clip(u[off] + step[:, 0], d[:, 0, 0], d[:, 0, 1])
-            v[off] = np.clip(v[off] + step[:, 1], d[:, 1, 0], d[:, 1, 1])
-            sub = evaluate_mixed(self.part, sid[off], u[off], v[off], order=order)
-            for name in ("points", "du", "dv", "duu", "duv", "dvv")[:3 * order]:
-                getattr(ev, name)[off] = getattr(sub, name)
+    def exact(self, rows, sid, u, v, order: int = 1) -> SurfaceSizes:
+        """The sizes on the surfaces (points below the bottom plane moved onto it first)."""
+        rows = np.ascontiguousarray(rows, dtype=np.int64)
+        sid = np.ascontiguousarray(sid, dtype=np.int64)
+        u = np.array(u, dtype=np.float64)
+        v = np.array(v, dtype=np.float64)
+        size, point = np.empty(len(rows)), np.empty((len(rows), 3))
+        if len(rows):
+            _exact(self.G, self.Q, self.floor, self.dom, self.sz, self.trims, rows, sid, u, v,
+                   order, size, point)
+        return SurfaceSizes(size, point, np.column_stack([u, v]))

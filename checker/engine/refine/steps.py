@@ -35,9 +35,9 @@ import numba as nb
 import numpy as np
 
 from checker.engine.grid.frames import rotated, row_height
-from checker.engine.refine.objective import FLOOR_STEPS, Objective
+from checker.engine.refine.objective import FLOOR_STEPS, Objective, onto_floor, surface_size
 from checker.engine.sizes import RowFrame, point_size
-from checker.geometry.evaluate import EvalScratch, eval_range, eval_scratch, packed_part
+from checker.geometry.evaluate import EvalScratch, eval_range, eval_scratch
 from checker.geometry.newton_uv import newton_step
 from checker.geometry.trims import kept
 from checker.part import Part
@@ -517,27 +517,15 @@ def _batch(k) -> _Batch:
 @nb.njit(cache=True, _nrt=False)
 def _exact(G, M, r, k, bt):
     """Exact sizes bt.f[:k] of row r at the surface points (bt.sid, bt.u, bt.v)[:k] (their
-    order-2 evaluation into bt.ev; packed surfaces G): a point below the bottom plane of a
-    flat-bottomed cutter first moves onto it (up to FLOOR_STEPS Newton steps on the height,
-    clipped to the domain; bt.u, bt.v updated); inf outside the trim (`Objective.exact`)."""
+    order-2 evaluation into bt.ev; packed surfaces G), points below the bottom plane of a
+    flat-bottomed cutter moved onto it first (bt.u, bt.v updated; objective.py)."""
     _, _, Q, floor, dom, sz, T = M
     eval_range(G, bt.sid, bt.u, bt.v, 2, bt.ev, bt.normals, 0, k, bt.sc)
     for j in range(k):
-        sd = bt.sid[j]
-        for _ in range(FLOOR_STEPS if floor.shape[0] else 0):
-            z = row_height(Q, r, bt.ev[j], _POINT)
-            if not z < floor[r]:
-                break
-            du, dv = _onto_level(z - floor[r], row_height(Q, r, bt.ev[j], _DU),
-                                 row_height(Q, r, bt.ev[j], _DV), bt.u[j], bt.v[j],
-                                 dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1])
-            if du == 0.0 and dv == 0.0:
-                break
-            bt.u[j] = min(max(bt.u[j] + du, dom[sd, 0, 0]), dom[sd, 0, 1])
-            bt.v[j] = min(max(bt.v[j] + dv, dom[sd, 1, 0]), dom[sd, 1, 1])
-            eval_range(G, bt.sid, bt.u, bt.v, 2, bt.ev, bt.normals, j, j + 1, bt.sc)
-        x, y, z = rotated(Q, r, bt.ev[j], _POINT)
-        bt.f[j] = point_size(sz, r, x, y, z) if kept(T, sd, bt.u[j], bt.v[j]) else np.inf
+        if floor.shape[0]:
+            onto_floor(G, Q, dom, r, floor[r], bt.sid, bt.u, bt.v, bt.ev, bt.normals, bt.sc, j,
+                       2, False, FLOOR_STEPS)
+        bt.f[j] = surface_size(Q, sz, T, r, bt.sid[j], bt.u[j], bt.v[j], bt.ev, j)
 
 
 @nb.njit(cache=True, inline="always")
@@ -696,8 +684,7 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
         order = np.argsort(rows, kind="stable")
         starts = np.flatnonzero(np.diff(rows[order])) + 1
         bounds = np.concatenate([[0], starts, [n]]).astype(np.int64)
-        floor = np.zeros(0) if obj.floor is None else obj.floor
-        _refine_all(packed_part(part), np.empty((n, 6, 3)), np.empty((n, 2)), obj.Q, floor,
+        _refine_all(obj.G, np.empty((n, 6, 3)), np.empty((n, 2)), obj.Q, obj.floor,
                      obj.dom, obj.sz, obj.trims, rows, sid, order, bounds, hmin, best_uv, best_f,
                      best_p, h, np.empty((n, 3)), np.zeros(n), evals, iterations,
                      int(np.diff(bounds).max()))
