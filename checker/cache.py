@@ -16,6 +16,11 @@ import tempfile
 from pathlib import Path
 
 CACHE_ENV = "PATHCHECK_CACHE_DIR"
+LOCATORS_ENV = "NUMBA_CACHE_LOCATOR_CLASSES"
+# pathcheck's own kernels by their place in the package (kernel_locator.py), anything else as
+# numba does by default
+_LOCATORS = ("checker.kernel_locator.PackageLocator,UserProvidedCacheLocator,InTreeCacheLocator,"
+             "UserWideCacheLocator,IPythonCacheLocator,ZipCacheLocator")
 KEEP_VERSIONS = 4  # kernel folders of the most recent versions of the sources kept
 
 
@@ -70,8 +75,10 @@ def prune_versions(parent: Path, keep: int = KEEP_VERSIONS) -> None:
 
 def use_kernel_cache() -> Path:
     """Point numba's cache at `kernel_cache_dir()` (before numba is imported; inherited by
-    child processes), falling back to the temporary directory when it cannot be written. A
-    folder made for a new version of the sources prunes the oldest versions'."""
+    child processes), falling back to the temporary directory when it cannot be written, with
+    pathcheck's kernels kept by their place in the package (`kernel_locator`, unless the user
+    chose numba's locators). A folder made for a new version of the sources prunes the oldest
+    versions'."""
     folder = kernel_cache_dir()
     new = not folder.exists()
     if not _writable(folder):
@@ -81,6 +88,7 @@ def use_kernel_cache() -> Path:
     if new and not os.environ.get("NUMBA_CACHE_DIR"):
         prune_versions(folder.parent)
     os.environ["NUMBA_CACHE_DIR"] = str(folder)
+    os.environ.setdefault(LOCATORS_ENV, _LOCATORS)
     if "numba" in sys.modules:  # imported before pathcheck: make it read the folder again
         sys.modules["numba"].core.config.reload_config()
     return folder

@@ -1,11 +1,11 @@
 """Compile the kernels once per install, into the per-user cache (`checker.cache`). Two
 processes compile the big independent families at once (on 2 cores, about half the time):
 the exact tool-vs-triangle depth (`checker.mesh`: a tool over a few triangles, its allowable
-size there) with the 4-axis plan (the best-B scan's coarse engine, the orientation along a
-path), and the allowable-cutter engine (`checker.engine`: CC points of the warm-up
-part); then the bundled warm-up job (the demo job: the 4-axis compressor sample with a ball
-D12, 90 CC points, flagged) is checked and posted as `pathcheck JOB -o JOB.nc` does, loading
-those and compiling what is left. The engine also runs on many CC points with one axis, for
+size there) with the orientation along a 4-axis path, and the allowable-cutter engine
+(`checker.engine`: CC points of the warm-up part; the best-B scan's coarse engine runs the
+same kernels); then the bundled warm-up job (the demo job: the 4-axis compressor sample with a
+ball D12, 90 CC points, flagged) is checked and posted as `pathcheck JOB -o JOB.nc` does,
+loading those and compiling what is left. The engine also runs on many CC points with one axis, for
 the kernels' threaded variants, which a large job takes: without them the compressor sample's
 first run after `warm` compiled six kernels (21.8 s instead of 14, peak 566 MB instead of 490).
 Afterwards neither job compiles anything; a job that needs more (a flat end-mill's contour
@@ -29,8 +29,7 @@ _WARM_ROWS = 4000  # CC points: enough for the threaded kernels (see _allowable_
 
 def compile_mesh_and_plan() -> None:
     """The mesh kernels (the tree, the depth of a tool's pieces, a stretch certified whole, the
-    allowable size) and the 4-axis plan's (the coarse engine of the best-B scan, the shortest
-    path over B)."""
+    allowable size) and the 4-axis plan's own (the shortest path over B)."""
     import numpy as np
 
     from checker.cutter import parse_cutter
@@ -55,11 +54,8 @@ def _plan() -> None:
 
     from checker.config import default_config
     from checker.four_axis.orientation import shortest_path_orientation
-    from checker.four_axis.plan import coarse_config
 
-    cfg = default_config()
-    _allowable_at_the_warm_up_part(coarse_config(cfg))
-    fa = cfg.four_axis
+    fa = default_config().four_axis
     n = 4
     shortest_path_orientation(
         [[(-10.0, 10.0)]] * n, np.zeros(n), np.zeros(n), np.ones(n), b_min=-30.0, b_max=30.0,
@@ -69,10 +65,10 @@ def _plan() -> None:
 
 def compile_engine() -> None:
     """The engine's kernels: the allowable size at CC points of the warm-up part."""
-    _allowable_at_the_warm_up_part(None)
+    _allowable_at_the_warm_up_part()
 
 
-def _allowable_at_the_warm_up_part(config) -> None:
+def _allowable_at_the_warm_up_part() -> None:
     """The allowable size of a ball D12 on the warm-up part's blade: at three points with their
     own tool axes (the kernels' serial variants), and at _WARM_ROWS points with one axis
     (enough rows in one bin of axes for their threaded variants, which a large job's batches
@@ -94,8 +90,7 @@ def _allowable_at_the_warm_up_part(config) -> None:
         ev = evaluate(part.surfaces[3], u, v)
         axes = ev.normals.mean(axis=0) if one_axis else ev.normals  # one axis: broadcast
         allowable(tp, part, cutter, ev.points, ev.normals, axes, cc_surface=np.full(u.size, 3),
-                  cc_uv=np.column_stack([u, v]), config=config,
-                  hint=np.zeros(u.size) if one_axis else None)
+                  cc_uv=np.column_stack([u, v]), hint=np.zeros(u.size) if one_axis else None)
 
 
 def warm_kernels() -> tuple[Path, float]:

@@ -70,3 +70,57 @@ def test_only_the_newest_versions_kernels_are_kept(tmp_path):
     prune_versions(tmp_path)
     assert sorted(f.name for f in tmp_path.iterdir()) == [
         "note.txt", *(f"v{age}" for age in range(KEEP_VERSIONS))]
+
+
+_ROTATE = textwrap.dedent("""
+    import numpy as np
+    from numba.core import event
+
+    compiled = []
+
+
+    class Compiles(event.Listener):
+        def on_start(self, ev):
+            compiled.append(ev.data["dispatcher"].py_func.__qualname__)
+
+        def on_end(self, ev):
+            pass
+
+
+    event.register("numba:compile", Compiles())
+    import checker
+    from checker.engine.grid.frames import rotate_rows
+
+    q = np.array([[[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]])
+    p = rotate_rows(q, np.array([[1.0, 2, 3]]), np.array([0]))
+    print(checker.__file__, p.tolist(), compiled)
+""")
+
+
+def test_a_kernel_compiled_in_one_install_serves_another_install_of_the_same_sources(tmp_path):
+    """The cache folder of a kernel is its file's place in the package (kernel_locator.py),
+    not the absolute folder numba would hash: a second copy of the package elsewhere (a wheel
+    in a venv, another checkout) loads what the first compiled."""
+    import shutil
+
+    import checker
+
+    package = os.path.dirname(checker.__file__)
+    runs = []
+    for name in ("first", "second"):
+        shutil.copytree(package, tmp_path / name / "checker",
+                        ignore=shutil.ignore_patterns("__pycache__"))
+        env = {k: v for k, v in os.environ.items()
+               if k not in ("NUMBA_CACHE_DIR", "NUMBA_CACHE_LOCATOR_CLASSES")}
+        env.update(PYTHONPATH=str(tmp_path / name), PATHCHECK_CACHE_DIR=str(tmp_path / "cache"))
+        done = subprocess.run([sys.executable, "-c", _ROTATE], capture_output=True, text=True,
+                              env=env, timeout=300, cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        runs.append(done.stdout.split(" ", 1))
+    (first_file, first), (second_file, second) = runs
+    assert first_file.startswith(str(tmp_path / "first"))
+    assert second_file.startswith(str(tmp_path / "second"))
+    assert first == "[[-2.0, 1.0, 3.0]] ['_rotate_indexed']\n"
+    assert second == "[[-2.0, 1.0, 3.0]] []\n", "the second install compiled again"
+    cached = tmp_path / "cache" / "numba" / source_key() / "checker" / "engine" / "grid"
+    assert any(cached.glob("frames._rotate_indexed-*.nbi"))
