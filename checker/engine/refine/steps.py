@@ -60,6 +60,7 @@ _RADIUS_CAP, _CAP_MM = 64.0, 1.0  # longest walk and trust radius: initial radii
 _WALK_STEPS = 4  # trust-region steps of a walk
 _ACROSS = 2  # Newton steps across the valley after each of them
 _STILL = 1e-7  # mm: a walk whose model predicts less decrease than this has arrived
+_SECULAR_STEPS = 60  # at most this many steps to the trust region's boundary lambda
 _MOVED = 1e-3  # mm: a start that arrived walks again once it has moved this far
 # rows of a start's Taylor terms (`d[s]` of the model M below; the point and first derivatives
 # also of the model's value at a point, `e`): the point, S_u, S_v, S_uu, S_uv, S_vv
@@ -233,27 +234,58 @@ def _eigen(huu, huv, hvv):
 
 
 @nb.njit(cache=True, inline="always")
+def _boundary_lambda(g1, g2, l1, l2, radius, lo, hi):
+    """The lambda in [lo, hi] at which the step of H + lambda I, (-g1 / (l1 + lambda),
+    -g2 / (l2 + lambda)) in H's eigenbasis (eigenvalues l1 <= l2, gradient (g1, g2)), is
+    `radius` long, the step being longer at lo (>= -l1) and no longer at hi: Newton's method on
+    phi = 1 / radius - 1 / |p|, convex and decreasing in lambda (Moré and Sorensen), whose
+    iterates close in from the left of the root, kept inside the bracket by bisection; to
+    rounding in a few iterations where bisection took 60."""
+    tol = 1e-15 * hi
+    lam = hi
+    for _ in range(_SECULAR_STEPS):
+        a1, a2 = l1 + lam, l2 + lam
+        if not a1 > 0.0:  # at the pole: no step there
+            new = 0.5 * (lo + hi)
+        else:
+            p1, p2 = g1 / a1, g2 / a2
+            n2 = p1 * p1 + p2 * p2
+            if n2 > radius * radius:
+                lo = lam
+            else:
+                hi = lam
+            q2 = p1 * p1 / a1 + p2 * p2 / a2  # -d|p|^2 / dlambda / 2
+            if not (n2 > 0.0 and q2 > 0.0):
+                return hi
+            new = lam + n2 / q2 * (np.sqrt(n2) - radius) / radius
+            if not lo < new < hi:
+                new = 0.5 * (lo + hi)
+        if abs(new - lam) <= tol:
+            return new
+        lam = new
+    return hi
+
+
+@nb.njit(cache=True, inline="always")
 def _trust_region(gu, gv, huu, huv, hvv, radius):
     """The step (pu, pv) that minimises the quadratic g.p + p.H.p / 2 over |p| <= radius (2D,
     through H's eigenvectors: the Newton step where H is positive definite and the step is
-    short enough, else H + lambda I on the boundary, found by bisection on lambda)."""
+    short enough, else H + lambda I on the boundary, `_boundary_lambda`)."""
     l1, l2, x1, y1 = _eigen(huu, huv, hvv)
     x2, y2 = -y1, x1
     g1, g2 = gu * x1 + gv * y1, gu * x2 + gv * y2
     lam = 0.0
     if not (l1 > 0.0 and (g1 / l1) ** 2 + (g2 / l2) ** 2 <= radius * radius):
         lo = max(0.0, -l1)
-        lam = lo + np.sqrt(gu * gu + gv * gv) / radius + 1e-300  # |step| <= radius here
-        for _ in range(60):
-            mid = 0.5 * (lo + lam)
-            if mid > -l1 and (g1 / (l1 + mid)) ** 2 + (g2 / (l2 + mid)) ** 2 > radius * radius:
-                lo = mid
-            else:
-                lam = mid
+        lam = _boundary_lambda(g1, g2, l1, l2, radius, lo,
+                               lo + np.sqrt(gu * gu + gv * gv) / radius + 1e-300)
     a1, a2 = l1 + lam, l2 + lam
     c1, c2 = -g1 / a1 if a1 > 0.0 else 0.0, -g2 / a2 if a2 > 0.0 else 0.0
     if l1 < 0.0:  # the hard case: the rest of the radius along the negative curvature
         c1 += (1.0 if c1 >= 0.0 else -1.0) * np.sqrt(max(radius * radius - c1 * c1 - c2 * c2, 0.0))
+    length = np.sqrt(c1 * c1 + c2 * c2)
+    if length > radius:  # lambda next to -l1 leaves l1 + lambda to rounding: back to the radius
+        c1, c2 = c1 * radius / length, c2 * radius / length
     return c1 * x1 + c2 * x2, c1 * y1 + c2 * y2
 
 
