@@ -3,8 +3,9 @@
 directory when that one cannot be written. numba keeps its files under `numba/<key>/` there,
 `<key>` a hash of the package's sources: numba checks a cached kernel against the text of its
 own file only, so a kernel that calls a kernel of another file kept that one's old code after
-the other file changed (an upgrade, a checkout), until this key. A numba cache folder set by the
-user (`NUMBA_CACHE_DIR`) wins, as it is."""
+the other file changed (an upgrade, a checkout), until this key. Inside it each kernel lies at
+its file's place in the package (kernel_locator.py), so every install of the same sources
+shares the folder. A numba cache folder set by the user (`NUMBA_CACHE_DIR`) wins, as it is."""
 
 from __future__ import annotations
 
