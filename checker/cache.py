@@ -14,6 +14,8 @@ import os
 import shutil
 import sys
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 CACHE_ENV = "PATHCHECK_CACHE_DIR"
@@ -93,3 +95,26 @@ def use_kernel_cache() -> Path:
     if "numba" in sys.modules:  # imported before pathcheck: make it read the folder again
         sys.modules["numba"].core.config.reload_config()
     return folder
+
+
+@contextmanager
+def kernels_compiled() -> Iterator[list[str]]:
+    """The names of the kernels numba compiles inside the block (from its compile events), in
+    order: none where the cache served everything (the wheel check, tests)."""
+    from numba.core import event
+
+    names: list[str] = []
+
+    class _Compiles(event.Listener):
+        def on_start(self, ev) -> None:
+            names.append(ev.data["dispatcher"].py_func.__qualname__)
+
+        def on_end(self, ev) -> None:
+            pass
+
+    listener = _Compiles()
+    event.register("numba:compile", listener)
+    try:
+        yield names
+    finally:
+        event.unregister("numba:compile", listener)

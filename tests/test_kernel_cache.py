@@ -74,25 +74,14 @@ def test_only_the_newest_versions_kernels_are_kept(tmp_path):
 
 _ROTATE = textwrap.dedent("""
     import numpy as np
-    from numba.core import event
 
-    compiled = []
-
-
-    class Compiles(event.Listener):
-        def on_start(self, ev):
-            compiled.append(ev.data["dispatcher"].py_func.__qualname__)
-
-        def on_end(self, ev):
-            pass
-
-
-    event.register("numba:compile", Compiles())
     import checker
+    from checker.cache import kernels_compiled
     from checker.engine.grid.frames import rotate_rows
 
     q = np.array([[[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]])
-    p = rotate_rows(q, np.array([[1.0, 2, 3]]), np.array([0]))
+    with kernels_compiled() as compiled:
+        p = rotate_rows(q, np.array([[1.0, 2, 3]]), np.array([0]))
     print(checker.__file__, p.tolist(), compiled)
 """)
 

@@ -40,24 +40,13 @@ site=$("$work/venv/bin/python" -c "import checker, os; print(os.path.dirname(che
 "$work/venv/bin/python" - "$job" "$large" <<'PY' >compiled.log 2>&1 \
     || { cat compiled.log; echo "wheel-check: the jobs after warm failed" >&2; exit 1; }
 import sys
-from numba.core import event
 
-compiled = []
+from checker.cache import kernels_compiled
+from checker.job import check_job
 
-
-class Compiles(event.Listener):
-    def on_start(self, ev):
-        compiled.append(ev.data["dispatcher"].py_func.__qualname__)
-
-    def on_end(self, ev):
-        pass
-
-
-event.register("numba:compile", Compiles())
-from checker.job import check_job  # noqa: E402
-
-for path in sys.argv[1:]:
-    check_job(path, output="compiled.nc", on_findings="stop")
+with kernels_compiled() as compiled:
+    for path in sys.argv[1:]:
+        check_job(path, output="compiled.nc", on_findings="stop")
 print("compiled:", " ".join(compiled))
 PY
 [ "$(tail -1 compiled.log)" = "compiled: " ] \

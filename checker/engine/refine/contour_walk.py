@@ -16,16 +16,20 @@ One compiled parallel kernel over the starts. Tool frame through Q; mm."""
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numba as nb
 import numpy as np
 
 from checker.engine.grid.frames import heights, row_height
 from checker.engine.refine.best import RowBest
-from checker.engine.refine.objective import CONTOUR_STEPS, Objective, onto_floor, surface_size
+from checker.engine.refine.objective import (
+    CONTOUR_STEPS,
+    Objective,
+    onto_floor,
+    point_batch,
+    surface_size,
+)
 from checker.engine.sizes import RowFrame
-from checker.geometry.evaluate import EvalScratch, eval_range, eval_scratch
+from checker.geometry.evaluate import eval_range
 from checker.part import Part
 
 FIRST_STEP = 0.005  # mm along the contour: the first probe from the start
@@ -35,19 +39,6 @@ _ON_CONTOUR = 1e-6  # mm: a best point this near its row's bottom plane lies on 
 _CONTOUR_REACH = 2.0  # test-point spacings searched along the contour either way
 _UNBOUNDED_REACH = 8.0  # the same from Pcc, for a row with no size at all
 _CHUNK = 16  # starts per parallel task
-
-
-class _Probe(NamedTuple):
-    """Work arrays of one task: the points probed along a contour (surface `sid`, `u`, `v`,
-    their order-1 evaluation `ev` and `normals`, sizes `size`), the NURBS scratch `sc`."""
-
-    sid: np.ndarray
-    u: np.ndarray
-    v: np.ndarray
-    ev: np.ndarray
-    normals: np.ndarray
-    size: np.ndarray
-    sc: EvalScratch
 
 
 def along_contours(part: Part, cutter, frame: RowFrame, Q: np.ndarray, best: RowBest,
@@ -189,8 +180,7 @@ def _walk(G, Q, floor, dom, sz, T, r, sd, u, v, sigma, w, out_p, out_q, k):
 def _walk_range(G, Q, floor, dom, sz, T, rows, sid, uv, sigma, f, p, q, k0, k1):
     """`_walk` for the starts k0..k1, with probe scratch of their own."""
     n = 2 * sigma.shape[0]
-    w = _Probe(np.empty(n, dtype=np.int64), np.empty(n), np.empty(n), np.empty((n, 3, 3)),
-               np.empty((n, 3)), np.empty(n), eval_scratch())
+    w = point_batch(n, 3)
     for k in range(k0, k1):
         f[k] = _walk(G, Q, floor, dom, sz, T, rows[k], sid[k], uv[k, 0], uv[k, 1], sigma, w, p,
                      q, k)

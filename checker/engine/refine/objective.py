@@ -17,7 +17,7 @@ import numpy as np
 
 from checker.engine.grid.frames import rotated, row_height
 from checker.engine.sizes import RowFrame, point_size, size_args
-from checker.geometry.evaluate import eval_range, eval_scratch, packed_part
+from checker.geometry.evaluate import EvalScratch, eval_range, eval_scratch, packed_part
 from checker.geometry.newton_uv import newton_step
 from checker.geometry.trims import kept, pack_trims
 from checker.part import Part
@@ -36,6 +36,28 @@ class SurfaceSizes(NamedTuple):
     size: np.ndarray
     point: np.ndarray
     uv: np.ndarray
+
+
+class PointBatch(NamedTuple):
+    """Work arrays of a compiled caller for up to K surface points at a time: surfaces `sid`,
+    parameters `u`, `v` (K,), their evaluation `ev` (K, slots, 3) (the point, S_u, S_v (, S_uu,
+    S_uv, S_vv)), `normals` (K, 3), sizes `size` (K,), the NURBS evaluator's scratch `sc`."""
+
+    sid: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    ev: np.ndarray
+    normals: np.ndarray
+    size: np.ndarray
+    sc: EvalScratch
+
+
+@nb.njit(cache=True, inline="always")
+def point_batch(k, slots) -> PointBatch:
+    """A fresh `PointBatch` for up to k points, evaluations of `slots` rows (3: order 1,
+    6: order 2)."""
+    return PointBatch(np.empty(k, dtype=np.int64), np.empty(k), np.empty(k),
+                      np.empty((k, slots, 3)), np.empty((k, 3)), np.empty(k), eval_scratch())
 
 
 @nb.njit(cache=True, _nrt=False)

@@ -23,9 +23,10 @@ import numba as nb
 import numpy as np
 
 from checker.engine.grid.frames import rotated
+from checker.engine.refine.objective import point_batch
 from checker.engine.refine.starts import Contacts, Starts
 from checker.engine.sizes import RowFrame, point_size, size_args
-from checker.geometry.evaluate import EvalScratch, eval_range, eval_scratch, packed_part
+from checker.geometry.evaluate import eval_range, packed_part
 from checker.part import Part
 
 _FIRST_RING = 16  # directions on the first ring around a CC point
@@ -58,24 +59,6 @@ class _Tangents(NamedTuple):
     inv: float
 
 
-class _RingScratch(NamedTuple):
-    """Work arrays of one task: a ring's surfaces `sid`, parameters `u`, `v`, evaluation `ev`,
-    `normals` and sizes `size`, the contact's `_Tangents` arrays `t1`, `t2`, `su`, `sv`, the
-    NURBS scratch `sc`."""
-
-    sid: np.ndarray
-    u: np.ndarray
-    v: np.ndarray
-    ev: np.ndarray
-    normals: np.ndarray
-    size: np.ndarray
-    t1: np.ndarray
-    t2: np.ndarray
-    su: np.ndarray
-    sv: np.ndarray
-    sc: EvalScratch
-
-
 def ring_radii(ring: float, spacing: float) -> list[float]:
     """The rings probed around a CC point (mm): `ring` (its own curvature), then radii growing by
     at most _RING_RATIO up to half the test-point spacing, and 1.5 spacings."""
@@ -91,13 +74,13 @@ def ring_evaluations(radii: list[float]) -> int:
 
 
 @nb.njit(cache=True)
-def _tangents(G, sd, u, v, w) -> _Tangents:
-    """The tangent plane of surface sd at (u, v) (module docstring), its arrays those of the
-    scratch w. Counted references (not `_nrt=False`): it returns arrays, which its caller
-    releases."""
+def _tangents(G, sd, u, v, w, tan) -> _Tangents:
+    """The tangent plane of surface sd at (u, v) (module docstring), evaluated through the
+    `PointBatch` w; its vectors are the rows t1, t2, S_u, S_v of `tan (4, 3)`. Counted
+    references (not `_nrt=False`): it returns arrays, which its caller releases."""
     w.sid[0], w.u[0], w.v[0] = sd, u, v
     eval_range(G, w.sid, w.u, w.v, 1, w.ev, w.normals, 0, 1, w.sc)
-    su, sv = w.su, w.sv
+    t1, t2, su, sv = tan[0], tan[1], tan[2], tan[3]
     for m in range(3):
         su[m], sv[m] = w.ev[0, 1, m], w.ev[0, 2, m]
     nx = su[1] * sv[2] - su[2] * sv[1]  # the parametrisation's normal: the rings' sense
@@ -106,7 +89,6 @@ def _tangents(G, sd, u, v, w) -> _Tangents:
     nn = max(np.sqrt(nx * nx + ny * ny + nz * nz), 1e-300)
     nx, ny, nz = nx / nn, ny / nn, nz / nn
     a = su[0] * nx + su[1] * ny + su[2] * nz
-    t1, t2 = w.t1, w.t2
     t1[0], t1[1], t1[2] = su[0] - a * nx, su[1] - a * ny, su[2] - a * nz
     m = max(np.sqrt(t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]), 1e-300)
     t1[0], t1[1], t1[2] = t1[0] / m, t1[1] / m, t1[2] / m
@@ -201,13 +183,10 @@ def _contacts(G, Q, sz, dom, rows, sid, uv, toward, radii, k0, k1, start, half, 
     first ring's radius, then half the ring's); the limit at the CC point into limit[k] where
     the closed form's direction `toward[k]` (part frame) is nan."""
     most = max(_FIRST_RING, _WIDER_RING)
-    w = _RingScratch(np.empty(most, dtype=np.int64), np.empty(most), np.empty(most),
-                     np.empty((most, 3, 3)), np.empty((most, 3)), np.empty(most), np.empty(3),
-                     np.empty(3), np.empty(3), np.empty(3), eval_scratch())
-    angles = np.empty(most)
+    w, tan, angles = point_batch(most, 3), np.empty((4, 3)), np.empty(most)
     for k in range(k0, k1):
         r, sd, u, v = rows[k], sid[k], uv[k, 0], uv[k, 1]
-        tg = _tangents(G, sd, u, v, w)
+        tg = _tangents(G, sd, u, v, w, tan)
         per_u = 1.0 / max(np.sqrt(tg.su[0] ** 2 + tg.su[1] ** 2 + tg.su[2] ** 2), 1e-12)
         per_v = 1.0 / max(np.sqrt(tg.sv[0] ** 2 + tg.sv[1] ** 2 + tg.sv[2] ** 2), 1e-12)
         m = _FIRST_RING

@@ -35,9 +35,15 @@ import numba as nb
 import numpy as np
 
 from checker.engine.grid.frames import rotated, row_height
-from checker.engine.refine.objective import FLOOR_STEPS, Objective, onto_floor, surface_size
+from checker.engine.refine.objective import (
+    FLOOR_STEPS,
+    Objective,
+    onto_floor,
+    point_batch,
+    surface_size,
+)
 from checker.engine.sizes import RowFrame, point_size
-from checker.geometry.evaluate import EvalScratch, eval_range, eval_scratch
+from checker.geometry.evaluate import eval_range
 from checker.geometry.newton_uv import newton_step
 from checker.geometry.trims import kept
 from checker.part import Part
@@ -525,30 +531,9 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     return n
 
 
-class _Batch(NamedTuple):
-    """Work arrays of one row's exact evaluations (`_exact`), K = its most starts: surfaces
-    `sid`, parameters `u`, `v` (K,), the order-2 evaluation `ev` (K, 6, 3) (rows _POINT.._DVV),
-    `normals` (K, 3), sizes `f` (K,), the NURBS evaluator's scratch `sc`."""
-
-    sid: np.ndarray
-    u: np.ndarray
-    v: np.ndarray
-    ev: np.ndarray
-    normals: np.ndarray
-    f: np.ndarray
-    sc: EvalScratch
-
-
-@nb.njit(cache=True, inline="always")
-def _batch(k) -> _Batch:
-    """A fresh `_Batch` for up to k points."""
-    return _Batch(np.empty(k, dtype=np.int64), np.empty(k), np.empty(k), np.empty((k, 6, 3)),
-                  np.empty((k, 3)), np.empty(k), eval_scratch())
-
-
 @nb.njit(cache=True, _nrt=False)
 def _exact(G, M, r, k, bt):
-    """Exact sizes bt.f[:k] of row r at the surface points (bt.sid, bt.u, bt.v)[:k] (their
+    """Exact sizes bt.size[:k] of row r at the surface points (bt.sid, bt.u, bt.v)[:k] (their
     order-2 evaluation into bt.ev; packed surfaces G), points below the bottom plane of a
     flat-bottomed cutter moved onto it first (bt.u, bt.v updated; objective.py)."""
     _, _, Q, floor, dom, sz, T = M
@@ -557,7 +542,7 @@ def _exact(G, M, r, k, bt):
         if floor.shape[0]:
             onto_floor(G, Q, dom, r, floor[r], bt.sid, bt.u, bt.v, bt.ev, bt.normals, bt.sc, j,
                        2, False, FLOOR_STEPS)
-        bt.f[j] = surface_size(Q, sz, T, r, bt.sid[j], bt.u[j], bt.v[j], bt.ev, j)
+        bt.size[j] = surface_size(Q, sz, T, r, bt.sid[j], bt.u[j], bt.v[j], bt.ev, j)
 
 
 @nb.njit(cache=True, inline="always")
@@ -623,7 +608,7 @@ def _refine_row(G, M, r, idx, sid, hmin, best_uv, best_f, best_p, h, radius, wal
             bt.sid[0], bt.u[0], bt.v[0] = sd, st.u, st.v
             _exact(G, M, r, 1, bt)
             evals[s] += st.probes + 1
-            won = bt.f[0] < best_f[s]
+            won = bt.size[0] < best_f[s]
             for c in range(2):
                 lo, hi = dom[sd, c, 0], dom[sd, c, 1]
                 centre = min(max(best_uv[s, c], lo + h[s, c]), hi - h[s, c])
@@ -640,7 +625,7 @@ def _refine_row(G, M, r, idx, sid, hmin, best_uv, best_f, best_p, h, radius, wal
                     moved += (bt.ev[0, _POINT, c] - best_p[s, c]) ** 2
                 if np.sqrt(moved) > _MOVED:  # a start that moved may walk again
                     radius[s, _R_TRUST] = abs(radius[s, _R_TRUST])
-                best_f[s] = bt.f[0]
+                best_f[s] = bt.size[0]
                 best_uv[s, 0], best_uv[s, 1] = bt.u[0], bt.v[0]
                 for c in range(3):
                     best_p[s, c] = bt.ev[0, _POINT, c]
@@ -661,7 +646,7 @@ def _refine_rows(G, M, rows, sid, order, bounds, hmin, best_uv, best_f, best_p, 
     the largest such count), with scratch of its own. `radius` starts from the stencil's
     half-width (mm)."""
     d, uv0, _, _, _, _, _ = M
-    bt, sc = _batch(most), _step_scratch()
+    bt, sc = point_batch(most, 6), _step_scratch()
     for g in range(t, bounds.shape[0] - 1, tasks):
         idx = order[bounds[g]:bounds[g + 1]]
         r = rows[idx[0]]
@@ -671,7 +656,7 @@ def _refine_rows(G, M, rows, sid, order, bounds, hmin, best_uv, best_f, best_p, 
         _exact(G, M, r, idx.shape[0], bt)
         for i in range(idx.shape[0]):
             s = idx[i]
-            best_f[s] = bt.f[i]
+            best_f[s] = bt.size[i]
             best_uv[s, 0], best_uv[s, 1] = bt.u[i], bt.v[i]
             for c in range(3):
                 best_p[s, c] = bt.ev[i, _POINT, c]
