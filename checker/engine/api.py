@@ -132,7 +132,7 @@ def _rows(cc, normals, axes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             _unit(_rows3(axes, len(cc), "axes"), "axes"))
 
 
-def _tool_frames(tp: TestPoints, cutter, cc: np.ndarray, normals: np.ndarray, axes: np.ndarray,
+def tool_frames(tp: TestPoints, cutter, cc: np.ndarray, normals: np.ndarray, axes: np.ndarray,
                  toward: np.ndarray | None, cfg: Config) -> _ToolFrames:
     """The rows' tool frames (part frame in, unit `normals` and `axes` (N, 3))."""
     keys, group = group_axes(axes)
@@ -185,7 +185,7 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
     lim_s = np.full(n_rows, -1, dtype=np.int64)
     lim_uv = np.full((n_rows, 2), np.nan)
     evals = np.zeros(n_rows, dtype=np.int64)
-    tf = _tool_frames(tp, cutter, cc, normals, axes, tw, cfg)
+    tf = tool_frames(tp, cutter, cc, normals, axes, tw, cfg)
     rows, faces_away = tf.rows, tf.faces_away
     if rows.size:
         uv_own = None if cc_uv is None else \
@@ -230,7 +230,7 @@ def upper_bounds(test_points: TestPoints, part: Part, cutter, cc, normals, axes,
     if cc_surface is None:
         snapped = _snap(tp, part, cc, normals)
         cc, normals = snapped.cc, snapped.normals
-    tf = _tool_frames(tp, cutter, cc, normals, axes, None, cfg)
+    tf = tool_frames(tp, cutter, cc, normals, axes, None, cfg)
     bound[tf.faces_away] = 0.0
     rows = tf.rows
     m = len(tp.points)
@@ -261,7 +261,7 @@ def sizes_near(test_points: TestPoints, part: Part, cutter, cc, normals, axes, s
     cfg = config or default_config()
     cc, normals, axes = _rows(cc, normals, axes)
     out = np.zeros(len(cc))
-    tf = _tool_frames(test_points, cutter, cc, normals, axes, None, cfg)
+    tf = tool_frames(test_points, cutter, cc, normals, axes, None, cfg)
     rows = tf.rows
     if not rows.size:
         return out
