@@ -251,9 +251,7 @@ def _boundary_lambda(g1, g2, l1, l2, radius, lo, hi):
     lam = hi
     for _ in range(_SECULAR_STEPS):
         a1, a2 = l1 + lam, l2 + lam
-        if not a1 > 0.0:  # at the pole: no step there
-            new = 0.5 * (lo + hi)
-        else:
+        if a1 > 0.0:  # else at the pole: bisect
             p1, p2 = g1 / a1, g2 / a2
             n2 = p1 * p1 + p2 * p2
             if n2 > radius * radius:
@@ -264,11 +262,14 @@ def _boundary_lambda(g1, g2, l1, l2, radius, lo, hi):
             if not (n2 > 0.0 and q2 > 0.0):
                 return hi
             new = lam + n2 / q2 * (np.sqrt(n2) - radius) / radius
-            if not lo < new < hi:
-                new = 0.5 * (lo + hi)
-        if abs(new - lam) <= tol:
-            return new
-        lam = new
+            if abs(new - lam) <= tol:  # converged to rounding
+                return min(max(new, lo), hi)
+            if lo < new < hi:
+                lam = new
+                continue
+        lam = 0.5 * (lo + hi)
+        if hi - lo <= tol:
+            return hi
     return hi
 
 
