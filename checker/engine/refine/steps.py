@@ -42,10 +42,10 @@ from checker.engine.refine.objective import (
     point_batch,
     surface_size,
 )
-from checker.engine.sizes import RowFrame, point_size
+from checker.engine.sizes import RowFrame, SizeArgs, point_size
 from checker.geometry.evaluate import eval_range
 from checker.geometry.newton_uv import newton_step
-from checker.geometry.trims import kept
+from checker.geometry.trims import PackedTrims, kept
 from checker.part import Part
 
 _ON_FLOOR = 1e-6  # mm: points this close above the bottom plane lie on its contour
@@ -78,13 +78,20 @@ _R_TRUST, _R_REACH, _R_CAP = range(3)
 _U_LO, _U_HI, _V_LO, _V_HI = range(4)
 
 
-# The model the compiled steps evaluate the starts with, M = (d, uv0, Q, floor, dom, sz, T):
-# the starts' Taylor terms d (S, 6, 3) (rows _POINT.._DVV) about their (u, v) uv0 (S, 2), the
-# rows' rotations Q (N, 3, 3) part -> tool frame and bottom planes floor (N,) (tool-frame
-# height; empty: none), the surfaces' domains dom (surfaces, 2, 2), the rows' sz
-# (sizes.size_args) and the packed trims T; always unpacked whole. A plain tuple: as a
-# NamedTuple, the calls that take it (not inlined) made the refinement 7 % slower (mould
-# sample, numba 0.68).
+class _Model(NamedTuple):
+    """The model the compiled steps evaluate the starts with (`M` in the kernels): the starts'
+    Taylor terms `d (S, 6, 3)` (rows _POINT.._DVV) about their (u, v) `uv0 (S, 2)`, the rows'
+    rotations `Q (N, 3, 3)` part -> tool frame and bottom planes `floor (N,)` (tool-frame
+    height; empty: none), the surfaces' domains `dom (surfaces, 2, 2)`, the rows' `sz`
+    (sizes.size_args) and the packed trims `T`; always unpacked whole."""
+
+    d: np.ndarray
+    uv0: np.ndarray
+    Q: np.ndarray
+    floor: np.ndarray
+    dom: np.ndarray
+    sz: SizeArgs
+    T: PackedTrims
 
 
 class _ModelValue(NamedTuple):
@@ -674,12 +681,13 @@ def _refine_rows(G, M, rows, sid, order, bounds, hmin, best_uv, best_f, best_p, 
 def _refine_all(G, d, uv0, Q, floor, dom, sz, T, rows, sid, order, bounds, hmin, best_uv,
                 best_f, best_p, h, radius, walked, evals, iterations, most):
     """`_refine_rows` over _TASKS parallel tasks, the rows interleaved so that both threads get
-    a share of the rows that take long; the model M (above) passed field by field (a tuple
-    holding `sz` cannot enter a parallel loop)."""
+    a share of the rows that take long; the `_Model` passed field by field (a tuple holding
+    `sz` cannot enter a parallel loop)."""
     tasks = min(bounds.shape[0] - 1, _TASKS)
     for t in nb.prange(tasks):
-        _refine_rows(G, (d, uv0, Q, floor, dom, sz, T), rows, sid, order, bounds, hmin, best_uv,
-                     best_f, best_p, h, radius, walked, evals, iterations, most, t, tasks)
+        _refine_rows(G, _Model(d, uv0, Q, floor, dom, sz, T), rows, sid, order, bounds, hmin,
+                     best_uv, best_f, best_p, h, radius, walked, evals, iterations, most, t,
+                     tasks)
 
 
 def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray, sid: np.ndarray,
@@ -714,6 +722,7 @@ def compile_step(part: Part, cutter, frame: RowFrame, Q: np.ndarray) -> None:
     `refine` passes it (one start of row 0 of `frame` on a flat model): `pathcheck warm` builds
     it in one process while another compiles the rest of the engine, which then loads it."""
     obj = Objective(part, cutter, frame, Q)
-    model = (np.zeros((1, 6, 3)), np.zeros((1, 2)), obj.Q, obj.floor, obj.dom, obj.sz, obj.trims)
+    model = _Model(np.zeros((1, 6, 3)), np.zeros((1, 2)), obj.Q, obj.floor, obj.dom, obj.sz,
+                   obj.trims)
     _step(model, 0, 0, 0, np.zeros((1, 2)), np.zeros(1), np.zeros((1, 3)), np.full((1, 2), 1e-3),
           np.ones((1, 3)), np.zeros(1), _step_scratch())
