@@ -116,6 +116,22 @@ def _slot(side, i, m):
 
 
 @nb.njit(cache=True, _nrt=False)
+def _side(G, Q, floor, dom, sz, T, r, sd, u0, v0, tu, tv, sigma, side, w):
+    """The samples at sigma[1:] mm from the start (slot 0) along the contour tangent (tu, tv)
+    on `side` (0: along it, 1: against it), into their slots; the index into sigma of the
+    smallest of them and the start (the first of equals)."""
+    m = sigma.shape[0]
+    sign = 1.0 - 2.0 * side
+    jb = 0
+    for i in range(1, m):
+        j = _slot(side, i, m)
+        _at(G, Q, floor, dom, sz, T, r, sd, u0, v0, tu * sign, tv * sign, sigma[i], w, j)
+        if w.size[j] < w.size[_slot(side, jb, m)]:
+            jb = i
+    return jb
+
+
+@nb.njit(cache=True, _nrt=False)
 def _walk(G, Q, floor, dom, sz, T, r, sd, u, v, sigma, w, out_p, out_q, k):
     """The smallest size on the contour through (u, v) on surface sd, up to sigma[-1] mm either
     way (module docstring; samples at `sigma (m,)`, sigma[0] = 0 the start); its point and
@@ -130,18 +146,9 @@ def _walk(G, Q, floor, dom, sz, T, r, sd, u, v, sigma, w, out_p, out_q, k):
         length += (-hv * w.ev[0, 1, c] + hu * w.ev[0, 2, c]) ** 2
     length = max(np.sqrt(length), 1e-300)
     tu, tv = -hv / length, hu / length  # (u, v) per mm along the contour
-    lowest = 0, 0  # each side's smallest sample (the first of equals)
-    for side in range(2):
-        sign = 1.0 - 2.0 * side
-        jb = 0
-        for i in range(1, m):
-            j = _slot(side, i, m)
-            _at(G, Q, floor, dom, sz, T, r, sd, u0, v0, tu * sign, tv * sign, sigma[i], w, j)
-            if w.size[j] < w.size[_slot(side, jb, m)]:
-                jb = i
-        lowest = (jb, lowest[1]) if side == 0 else (lowest[0], jb)
-    side = 0 if w.size[_slot(0, lowest[0], m)] <= w.size[_slot(1, lowest[1], m)] else 1
-    jb = lowest[side]
+    j0 = _side(G, Q, floor, dom, sz, T, r, sd, u0, v0, tu, tv, sigma, 0, w)
+    j1 = _side(G, Q, floor, dom, sz, T, r, sd, u0, v0, tu, tv, sigma, 1, w)
+    side, jb = (0, j0) if w.size[_slot(0, j0, m)] <= w.size[_slot(1, j1, m)] else (1, j1)
     at = _slot(side, jb, m)
     f = w.size[at]
     for c in range(3):

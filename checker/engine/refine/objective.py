@@ -94,6 +94,17 @@ def surface_size(Q, sz, T, r, sd, u, v, ev, j):
     return point_size(sz, r, x, y, z)
 
 
+@nb.njit(cache=True, _nrt=False)
+def exact_size(G, Q, floor, dom, sz, T, r, sid, u, v, ev, normals, sc, j, order):
+    """The size (mm) for row r of the evaluated point j (`onto_floor`'s arguments): moved onto
+    the bottom plane first where it lies below it (a flat-bottomed cutter: `floor` not empty),
+    then `surface_size`."""
+    if floor.shape[0]:
+        onto_floor(G, Q, dom, r, floor[r], sid, u, v, ev, normals, sc, j, order, False,
+                   FLOOR_STEPS)
+    return surface_size(Q, sz, T, r, sid[j], u[j], v[j], ev, j)
+
+
 @nb.njit(cache=True)
 def _exact(G, Q, floor, dom, sz, T, rows, sid, u, v, order, size, point):
     """`Objective.exact` over the K points (u, v updated in place)."""
@@ -102,11 +113,8 @@ def _exact(G, Q, floor, dom, sz, T, rows, sid, u, v, order, size, point):
     sc = eval_scratch()
     eval_range(G, sid, u, v, order, ev, normals, 0, rows.shape[0], sc)
     for j in range(rows.shape[0]):
-        r = rows[j]
-        if floor.shape[0]:
-            onto_floor(G, Q, dom, r, floor[r], sid, u, v, ev, normals, sc, j, order, False,
-                       FLOOR_STEPS)
-        size[j] = surface_size(Q, sz, T, r, sid[j], u[j], v[j], ev, j)
+        size[j] = exact_size(G, Q, floor, dom, sz, T, rows[j], sid, u, v, ev, normals, sc, j,
+                             order)
         for c in range(3):
             point[j, c] = ev[j, _POINT, c]
 

@@ -23,10 +23,10 @@ import numba as nb
 import numpy as np
 
 from checker.engine.grid.frames import rotated
-from checker.engine.refine.objective import point_batch
+from checker.engine.refine.objective import Objective, point_batch
 from checker.engine.refine.starts import Contacts, Starts
-from checker.engine.sizes import RowFrame, point_size, size_args
-from checker.geometry.evaluate import eval_range, packed_part
+from checker.engine.sizes import RowFrame, point_size
+from checker.geometry.evaluate import eval_range
 from checker.part import Part
 
 _FIRST_RING = 16  # directions on the first ring around a CC point
@@ -239,9 +239,9 @@ def ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, contacts: Co
     k, j = len(rows), len(radii)
     start, half, limit = np.empty((k, j, 2)), np.empty((k, j, 2)), np.empty(k)
     if k:
-        _all_contacts(packed_part(part), np.ascontiguousarray(Q),
-                      size_args(cutter, frame, np.arange(len(frame.cc))), part.domains, rows,
-                      sid, uv, np.ascontiguousarray(toward, dtype=np.float64),
+        obj = Objective(part, cutter, frame, Q)
+        _all_contacts(obj.G, obj.Q, obj.sz, obj.dom, rows, sid, uv,
+                      np.ascontiguousarray(toward, dtype=np.float64),
                       np.asarray(radii, dtype=np.float64), start, half, limit)
     ok = np.isfinite(start[..., 0])
     starts = Starts.join([Starts(rows[ok[:, i]], sid[ok[:, i]], start[ok[:, i], i],

@@ -35,13 +35,7 @@ import numba as nb
 import numpy as np
 
 from checker.engine.grid.frames import rotated, row_height
-from checker.engine.refine.objective import (
-    FLOOR_STEPS,
-    Objective,
-    onto_floor,
-    point_batch,
-    surface_size,
-)
+from checker.engine.refine.objective import FLOOR_STEPS, Objective, exact_size, point_batch
 from checker.engine.sizes import RowFrame, SizeArgs, point_size
 from checker.geometry.evaluate import eval_range
 from checker.geometry.newton_uv import newton_step
@@ -547,10 +541,8 @@ def _exact(G, M, r, k, bt):
     _, _, Q, floor, dom, sz, T = M
     eval_range(G, bt.sid, bt.u, bt.v, 2, bt.ev, bt.normals, 0, k, bt.sc)
     for j in range(k):
-        if floor.shape[0]:
-            onto_floor(G, Q, dom, r, floor[r], bt.sid, bt.u, bt.v, bt.ev, bt.normals, bt.sc, j,
-                       2, False, FLOOR_STEPS)
-        bt.size[j] = surface_size(Q, sz, T, r, bt.sid[j], bt.u[j], bt.v[j], bt.ev, j)
+        bt.size[j] = exact_size(G, Q, floor, dom, sz, T, r, bt.sid, bt.u, bt.v, bt.ev,
+                                bt.normals, bt.sc, j, 2)
 
 
 @nb.njit(cache=True, inline="always")
