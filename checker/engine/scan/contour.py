@@ -161,6 +161,7 @@ def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, sep, slots):
     cc, n, e, floor, prm = sz.cc, sz.n, sz.e, sz.z0, sz.prm
     out_p, out_q, out_f, out_v, out_x = slots.p, slots.q, slots.fraction, slots.size, slots.xy
     m = out_p.shape[1]
+    worst = np.inf  # the largest size in the row's slots (inf while one is empty)
     for k in range(count):
         p = cand[k]
         xp, yp, zp = rotated(rot, i, xyz, p)
@@ -178,7 +179,7 @@ def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, sep, slots):
             y = yp + f * (yq - yp)
             v = kernels.apt_size(x - cc[i, 0], y - cc[i, 1], floor[i] + 1e-9 - cc[i, 2],
                                  n[i, 0], n[i, 1], n[i, 2], e[i, 0], e[i, 1], True, prm)
-            if not v < np.inf:
+            if not v < worst:  # above every slot: no slot takes it
                 continue
             slot = -1  # the seed of the same place, else the worst seed
             for s in range(m):
@@ -194,3 +195,6 @@ def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, sep, slots):
             if v < out_v[i, slot]:
                 out_v[i, slot], out_p[i, slot], out_q[i, slot], out_f[i, slot] = v, p, q, f
                 out_x[i, slot, 0], out_x[i, slot, 1] = x, y
+                worst = out_v[i, 0]
+                for s in range(1, m):
+                    worst = max(worst, out_v[i, s])
