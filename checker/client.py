@@ -100,6 +100,9 @@ class Client:
         if self._sock is None:
             sock = self._ctx.socket(zmq.REQ if self.kind == "req" else zmq.DEALER)
             sock.setsockopt(zmq.LINGER, 0)
+            # a send waits for a connected peer; one that never comes (a refused CURVE
+            # handshake drops the connection) must not hold the caller past its timeout
+            sock.setsockopt(zmq.SNDTIMEO, max(1, round(self.timeout_s * 1000)))
             if self._curve is not None:
                 sock.curve_serverkey, sock.curve_publickey, sock.curve_secretkey = self._curve
             sock.connect(self.address)
@@ -107,13 +110,18 @@ class Client:
         return self._sock
 
     def _attempt(self, body: bytes, want_id: Any) -> dict | None:
-        """One send and wait; None on timeout (the REQ socket is then reset)."""
+        """One send and wait, together at most `timeout_s`; None on timeout (the socket is then
+        reset)."""
         sock = self._socket()
-        if self.kind == "req":
-            sock.send(body)
-        else:
-            sock.send_multipart([b"", body])
         deadline = time.monotonic() + self.timeout_s
+        try:
+            if self.kind == "req":
+                sock.send(body)
+            else:
+                sock.send_multipart([b"", body])
+        except zmq.Again:  # no peer to take it within the timeout
+            self.close()
+            return None
         while True:
             if not sock.poll(max(0.0, deadline - time.monotonic()) * 1000):
                 self.close()

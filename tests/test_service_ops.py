@@ -117,7 +117,7 @@ def test_a_plane_never_limits_a_ball_or_a_bull_nose(state):
         assert all(p["limiting_point"] is None for p in reply["points"])
 
 
-def test_best_b_is_at_least_the_size_at_every_b_of_the_scan(state, mould_rows):
+def test_best_b_is_at_least_the_size_at_every_b_of_the_scan(mould_rows):
     from checker.b_axis import axis_for_b
     from checker.cutter import parse_cutter
 
@@ -125,7 +125,7 @@ def test_best_b_is_at_least_the_size_at_every_b_of_the_scan(state, mould_rows):
     base = default_config()  # a coarse refinement keeps the test short; the scan is the same
     coarse = base.model_copy(update={
         "four_axis": base.four_axis.model_copy(update={"b_tolerance": 0.5})})
-    state = WorkerState(config=coarse, cache=state.cache)
+    state = WorkerState(config=coarse, cache=PartCache(1 << 30))  # holding the mould only
     reply = _call(state, op="allowable", part={"path": str(MOULD)}, cc=row.tolist(),
                   cutter=CUTTER, b_range=[-4.0, 4.0])
     assert reply["ok"], reply
