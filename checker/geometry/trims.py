@@ -161,6 +161,18 @@ def pack_trims(trims: list) -> PackedTrims:
     return PackedTrims(ints, reals)
 
 
+def packed_trims(part) -> PackedTrims:
+    """`pack_trims` of the trims of `part`'s surfaces, cached on the part for as long as its
+    surfaces keep the same trim objects."""
+    trims = [s.trim for s in part.surfaces]
+    hit = part.__dict__.get("_packed_trims")
+    if hit is None or len(hit[0]) != len(trims) or any(a is not b for a, b in zip(hit[0], trims,
+                                                                                   strict=True)):
+        hit = (trims, pack_trims(trims))
+        part.__dict__["_packed_trims"] = hit
+    return hit[1]
+
+
 @nb.njit(cache=True, inline="always")
 def _odd(T, k, u, v):
     """Whether (u, v) lies inside an odd number of the loops of set k of `PackedTrims` T."""

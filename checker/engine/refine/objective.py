@@ -19,7 +19,7 @@ from checker.engine.grid.frames import rotated, row_height
 from checker.engine.sizes import RowFrame, point_size, size_args
 from checker.geometry.evaluate import EvalScratch, eval_range, eval_scratch, packed_part
 from checker.geometry.newton_uv import newton_step
-from checker.geometry.trims import kept, pack_trims
+from checker.geometry.trims import kept, packed_trims
 from checker.part import Part
 
 FLOOR_STEPS = 3  # Newton steps that bring a point below the bottom plane onto it
@@ -132,7 +132,7 @@ class Objective:
         self.dom = part.domains
         self.floor = frame.fam.z0 + _ABOVE if cutter.flat_bottomed else np.zeros(0)
         self.sz = size_args(cutter, frame, np.arange(len(frame.cc)))
-        self.trims = pack_trims([s.trim for s in part.surfaces])
+        self.trims = packed_trims(part)
 
     def exact(self, rows, sid, u, v, order: int = 1) -> SurfaceSizes:
         """The sizes on the surfaces (points below the bottom plane moved onto it first)."""
