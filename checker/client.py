@@ -100,8 +100,8 @@ class Client:
         if self._sock is None:
             sock = self._ctx.socket(zmq.REQ if self.kind == "req" else zmq.DEALER)
             sock.setsockopt(zmq.LINGER, 0)
-            # a send waits for a connected peer; one that never comes (a refused CURVE
-            # handshake drops the connection) must not hold the caller past its timeout
+            # a send can block until a peer takes it (the CURVE test once hung in it for
+            # 600 s under CI load): it must not hold the caller past its timeout either
             sock.setsockopt(zmq.SNDTIMEO, max(1, round(self.timeout_s * 1000)))
             if self._curve is not None:
                 sock.curve_serverkey, sock.curve_publickey, sock.curve_secretkey = self._curve
