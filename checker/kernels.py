@@ -25,12 +25,14 @@ Ball family: docs/MATH.md §3.5; the thesis's errata the kernels correct: §4.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
 EPS_H = 1e-9  # |n_xy| below this: the normal is vertical, e is not defined by the surface
 EPS_N = 1e-9  # slack on n_z >= sin(theta) (a wall parallel to the taper is still touchable)
+_ROUNDING_MM = 1e-9  # mm: bounds this near a decision leave it to the exact kernel
 INF = np.inf
 
 FAMILY_APT = 0  # R variable: flat, bull-nose, general APT
@@ -116,7 +118,7 @@ def _apt_tip_contact(qx, qy, qz, prm):
     return max(min(max(root, lo), r2), 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _axis_dir(nx, ny, ex, ey, has_e):
     """Unit horizontal e (fillet centre -> axis) from n, else from the caller's e; (0, 0, True)
     when neither defines it (worst case over directions)."""
@@ -129,7 +131,7 @@ def _axis_dir(nx, ny, ex, ey, has_e):
     return 0.0, 0.0, True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _fillet_size(dx, dy, dz, ux, uy, worst, prm):
     """R for fillet contact: (dx, dy, dz) = P - O with O = Pcc + r n, e = (ux, uy)."""
     k = _k_band(dz, prm)
@@ -149,7 +151,7 @@ def _fillet_size(dx, dy, dz, ux, uy, worst, prm):
     return max((dd - k * k) / (2.0 * den), 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def apt_size(qx, qy, qz, nx, ny, nz, ex, ey, has_e, prm):
     """R of the imaginary APT-family cutter through P = Pcc + q, touching Pcc with normal n."""
     if nz <= 0.0 or nz < prm[_SIN_T] - EPS_N:
@@ -161,6 +163,50 @@ def apt_size(qx, qy, qz, nx, ny, nz, ex, ey, has_e, prm):
     r = prm[_R]
     ux, uy, worst = _axis_dir(nx, ny, ex, ey, has_e)
     return _fillet_size(qx - r * nx, qy - r * ny, qz - r * nz, ux, uy, worst, prm)
+
+
+class PlaneDisc(NamedTuple):
+    """What `plane_disc_bound` needs of one CC row, from `plane_disc`: `usable` (False where
+    `apt_size` can be 0 at every point, n_z too small), the fillet centre's horizontal position
+    (ox, oy) relative to Pcc, the axis direction (ux, uy) (`worst`: none, worst case over
+    directions) and the band k at the plane's height."""
+
+    usable: bool
+    ox: float
+    oy: float
+    ux: float
+    uy: float
+    worst: bool
+    k: float
+
+
+@njit(cache=True)
+def plane_disc(qz, nx, ny, nz, ex, ey, prm):
+    """The `PlaneDisc` of a flat-bottomed APT-family cutter (psi = 0) touching Pcc with normal
+    n, for points at height qz above Pcc (`apt_size` with has_e True)."""
+    usable = prm[_FLAT] > 0.5 and nz > 0.0 and nz >= prm[_SIN_T] - EPS_N
+    r = prm[_R]
+    ux, uy, worst = _axis_dir(nx, ny, ex, ey, True)
+    return PlaneDisc(usable, r * nx, r * ny, ux, uy, worst, _k_band(qz - r * nz, prm))
+
+
+@njit(cache=True, inline="always")
+def plane_disc_bound(pd, qx, qy, rho):
+    """A lower bound (mm; -inf: none) of `apt_size` over the points at the height of `pd`
+    (`plane_disc`) within rho mm horizontally of q = (qx, qy) (relative to Pcc): with
+    d = q - O, |d| >= D - rho and e.d + k <= e.d_q + rho + k, so R = (|d|^2 - k^2) /
+    (2 (e.d + k)) >= ((D - rho)^2 - k^2) / (2 (e.d_q + rho + k)), inf where that denominator
+    bound is < 0 (R = inf throughout); (|d| - k) / 2 for the worst case over directions."""
+    if not pd.usable or pd.k == -INF:
+        return -INF
+    dx, dy = qx - pd.ox, qy - pd.oy
+    near = max(math.sqrt(dx * dx + dy * dy) - rho, 0.0)
+    if pd.worst:
+        return 0.5 * (near - pd.k)
+    den = pd.ux * dx + pd.uy * dy + rho + pd.k
+    if den <= _ROUNDING_MM:  # R = inf throughout, unless rounding could decide
+        return INF if den < -_ROUNDING_MM else -INF
+    return (near * near - pd.k * pd.k) / (2.0 * den)
 
 
 @njit(cache=True)

@@ -19,6 +19,7 @@ from checker.engine.grid.candidates import CellGrid, cell_heights
 from checker.engine.grid.frames import rotated
 
 _EPS_Z = 1e-6  # mm by which a cell must clear the bottom plane to be passed over
+_SKIP_MM = 1e-9  # relative and absolute (mm) margin of a bound over the slots against rounding
 REACH, LOW = 0, 1  # columns of `EdgeData.edges`
 
 
@@ -139,10 +140,11 @@ def straddles(view, grid, nb_lo, nb_hi, c, floor):
 
 
 @nb.njit(cache=True, inline="always")
-def _may_cross(i, rot, xyz, p, zp, floor, edges):
-    """Whether a neighbour of point p (at height zp >= floor in row i's frame) can lie below
-    the floor: exactly from the neighbours' lowest height where the row's z axis is the grid's,
-    else bounded through the row's tilt (|rot[i, 2] - e_z|) and the longest edge."""
+def may_cross(i, rot, xyz, p, zp, floor, edges):
+    """Whether a neighbour of point p (at height zp >= floor in row i's frame; `xyz` the grid's
+    points by id) can lie below the floor: exactly from the neighbours' lowest height where the
+    row's z axis is the grid's, else bounded through the row's tilt (|rot[i, 2] - e_z|) and the
+    longest edge."""
     reach, low = edges[p, REACH], edges[p, LOW]
     if zp - floor > reach:
         return False
@@ -156,17 +158,24 @@ def _may_cross(i, rot, xyz, p, zp, floor, edges):
 def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, sep, slots):
     """Up to m crossings of row i, at least `sep` mm apart (the best of each place), from its
     candidate points `cand[:count]` (ids into `xyz`, the grid's frame; the row sees
-    `rot[i] @ xyz[p]`), into row i of `slots` (`CrossingSlots`, m slots a row). The bottom
-    plane is at the height z0 of the row in `sz` (sizes.size_args); `edges` from `edge_data`."""
+    `rot[i] @ xyz[p]`; each at or above the plane and admitted by `may_cross`), into row i of
+    `slots` (`CrossingSlots`, m slots a row). The bottom plane is at the height z0 of the row in
+    `sz` (sizes.size_args); `edges` from `edge_data`. Once the slots are full, a point whose
+    crossings all lie above every slot (`kernels.plane_disc_bound` over its longest edge) is
+    passed over."""
     cc, n, e, floor, prm = sz.cc, sz.n, sz.e, sz.z0, sz.prm
     out_p, out_q, out_f, out_v, out_x = slots.p, slots.q, slots.fraction, slots.size, slots.xy
     m = out_p.shape[1]
     worst = np.inf  # the largest size in the row's slots (inf while one is empty)
+    qz = floor[i] + 1e-9 - cc[i, 2]  # the crossings' height above Pcc
+    pd = kernels.plane_disc(qz, n[i, 0], n[i, 1], n[i, 2], e[i, 0], e[i, 1], prm)
     for k in range(count):
         p = cand[k]
         xp, yp, zp = rotated(rot, i, xyz, p)
-        if zp < floor[i] or not _may_cross(i, rot, xyz, p, zp, floor[i], edges):
-            continue
+        if worst < np.inf:  # every crossing from p lies within its longest edge of it
+            low = kernels.plane_disc_bound(pd, xp - cc[i, 0], yp - cc[i, 1], edges[p, REACH])
+            if low > worst + _SKIP_MM * (1.0 + worst):
+                continue  # above every slot
         for t in range(knn.shape[1]):
             q = knn[p, t]
             if q < 0:
@@ -177,7 +186,7 @@ def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, sep, slots):
             f = (zp - floor[i]) / (zp - zq)
             x = xp + f * (xq - xp)
             y = yp + f * (yq - yp)
-            v = kernels.apt_size(x - cc[i, 0], y - cc[i, 1], floor[i] + 1e-9 - cc[i, 2],
+            v = kernels.apt_size(x - cc[i, 0], y - cc[i, 1], qz,
                                  n[i, 0], n[i, 1], n[i, 2], e[i, 0], e[i, 1], True, prm)
             if not v < worst:  # above every slot: no slot takes it
                 continue

@@ -26,6 +26,7 @@ from checker.engine.scan.contour import (
     Crossings,
     CrossingSlots,
     EdgeData,
+    may_cross,
     row_crossings,
     straddles,
 )
@@ -74,11 +75,12 @@ class _CrossingInputs(NamedTuple):
 
 
 @nb.njit(cache=True)
-def _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, ids, vals, cand):
+def _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, edges, ids, vals, cand):
     """Row i: the sizes `vals` of its candidates (the points of its region `reg[i]`) that also
     lie in `lim[i]`, with their ids `ids`, in grid order; with crossings `on`, the candidates at
-    or above the row's bottom plane (z0 in `sz`) in cells that straddle it go to `cand` (boxes
-    `nb_lo`, `nb_hi` from contour.edge_data). Returns both counts."""
+    or above the row's bottom plane (z0 in `sz`) in cells that straddle it and with a neighbour
+    that may lie below it go to `cand` (boxes `nb_lo`, `nb_hi` and `edges` from
+    contour.edge_data). Returns both counts."""
     xyz, order, start, ny = grid.xyz_cells, grid.order, grid.start, grid.ny
     floor = sz.z0[i]
     view, view_lim = grid_view(reg, i, rot), grid_view(lim, i, rot)
@@ -106,7 +108,7 @@ def _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, ids, vals, cand):
                 if not inside(reg, i, x, y, z):
                     continue
                 p = order[t]
-                if crossing and z >= floor:
+                if crossing and z >= floor and may_cross(i, rot, grid.xyz, p, z, floor, edges):
                     cand[nc] = p
                     nc += 1
                 if evaluate and inside(lim, i, x, y, z):
@@ -132,7 +134,7 @@ def _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, fou
     pos = np.empty(npts, dtype=np.int64)
     low = np.empty(npts)
     for i in range(b, reg.shape[0], nblocks):
-        ne, nc = _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, ids, vals, cand)
+        ne, nc = _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, edges, ids, vals, cand)
         evals[i] = ne
         for k in range(ne):
             if vals[k] < best[i]:
