@@ -19,11 +19,11 @@ exactly, with second derivatives, at the point the step picks (`_exact`). The st
 Newton step, its backtracking and the walk run on the second-order Taylor model of the surface
 about the start's best point (error O(h^3) for a step of length h, so the model becomes exact
 as the steps converge); only exact values are ever reported. The model's value
-(`_model_value`) is a called function, not inlined: its dozen call sites inlined took two
-minutes to compile. The kernels that allocate nothing are compiled without numba's reference
-counting (`_nrt=False`): with it, every array a call passes or unpacks from a tuple is counted
-up and down atomically, which took ~17 % of a call on one thread and more on two (both threads
-count the same arrays).
+(`_model_value`) is inlined at its seven sites (a call passed the whole model, about a hundred
+words, for every value), each site compiling the cutter's kernels again. The kernels that
+allocate nothing are compiled without numba's reference counting (`_nrt=False`): with it, every
+array a call passes or unpacks from a tuple is counted up and down atomically, which took ~17 %
+of a call on one thread and more on two (both threads count the same arrays).
 (docs/MATH.md §6)"""
 
 from __future__ import annotations
@@ -156,13 +156,6 @@ def _model_value(M, s, r, sd, u, v, snap, e):
     return _ModelValue(f, u, v)
 
 
-@nb.njit(cache=True, _nrt=False)
-def _model_value_called(M, s, r, sd, u, v, snap, e):
-    """`_model_value` as a call, for the sites that run seldom (each inlined site compiles the
-    cutter's kernels again)."""
-    return _model_value(M, s, r, sd, u, v, snap, e)
-
-
 @nb.njit(cache=True, inline="always")
 def _near_floor(Q, r, d, s, best_p, floor, hu, hv):
     """Whether start s's best point lies on row r's bottom plane or within the height range of
@@ -207,7 +200,7 @@ def _speeds(d, s):
             np.sqrt(d[s, _DV, 0] ** 2 + d[s, _DV, 1] ** 2 + d[s, _DV, 2] ** 2))
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, _nrt=False, inline="always")
 def _derivatives(M, s, r, sd, u0, v0, f0, su, sv, e, F):
     """(ok, gradient (gu, gv), Hessian (huu, huv, hvv)) of start s's model size at (u0, v0)
     (value f0 there), per mm along u and v (su, sv: mm per parameter unit): central differences
@@ -495,8 +488,8 @@ def _step(M, s, r, sd, best_uv, best_f, best_p, h, radius, walked, sc):
 def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     """Model values `vals` and (u, v) `uvs` along the bottom-plane contour through start s's
     model centre (value f0), every point snapped onto the plane: at -tau and +tau mm (tau from
-    the stencil half-widths), then at the fractions of the parabola's vertex. Returns their
-    count."""
+    the stencil half-widths), then at the fractions of the parabola's vertex, until one is
+    below fc and both of the first. Returns their count."""
     d, uv0, Q, _, dom, _, _ = M
     lo_u, hi_u, lo_v, hi_v = dom[sd, 0, 0], dom[sd, 0, 1], dom[sd, 1, 0], dom[sd, 1, 1]
     gu = row_height(Q, r, d[s], _DU)  # the height's derivatives in u and v
@@ -508,13 +501,26 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     tu, tv = -gv / mm, gu / mm  # (u, v) per mm along the contour
     su, sv = _speeds(d, s)
     tau = 0.5 * (hu * su + hv * sv)
-    n = 0
-    for t in (-tau, tau):
+    vertex = 0.0
+    for n in range(2 + _FRACTIONS.shape[0]):  # one site of the inlined model value
+        if n < 2:
+            t = tau if n else -tau
+        else:
+            if n == 2:
+                vertex = _vertex(f0, vals[0], vals[1], tau)
+            t = vertex * _FRACTIONS[n - 2]
         x = min(max(uv0[s, 0] + t * tu, lo_u), hi_u)
         y = min(max(uv0[s, 1] + t * tv, lo_v), hi_v)
-        vals[n], uvs[n, 0], uvs[n, 1] = _model_value_called(M, s, r, sd, x, y, True, e)
-        n += 1
-    fm, fp = vals[0], vals[1]
+        vals[n], uvs[n, 0], uvs[n, 1] = _model_value(M, s, r, sd, x, y, True, e)
+        if n >= 2 and vals[n] < min(fc, vals[0], vals[1]):
+            return n + 1
+    return 2 + _FRACTIONS.shape[0]
+
+
+@nb.njit(cache=True, inline="always")
+def _vertex(f0, fm, fp, tau):
+    """The offset (mm) of the vertex of the parabola through the values fm, f0, fp at -tau, 0
+    and tau, at most _REACH tau either way (towards the lower side where it opens downwards)."""
     curv = fm - 2.0 * f0 + fp
     if curv > 0:
         vertex = tau * (fm - fp) / (2.0 * curv)
@@ -522,15 +528,7 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
         vertex = (1.0 if fm > fp else -1.0) * _REACH * tau
     else:
         vertex = 0.0
-    vertex = min(max(vertex if np.isfinite(vertex) else 0.0, -_REACH * tau), _REACH * tau)
-    for j in range(_FRACTIONS.shape[0]):
-        x = min(max(uv0[s, 0] + vertex * _FRACTIONS[j] * tu, lo_u), hi_u)
-        y = min(max(uv0[s, 1] + vertex * _FRACTIONS[j] * tv, lo_v), hi_v)
-        vals[n], uvs[n, 0], uvs[n, 1] = _model_value_called(M, s, r, sd, x, y, True, e)
-        n += 1
-        if vals[n - 1] < min(fc, fm, fp):
-            break
-    return n
+    return min(max(vertex if np.isfinite(vertex) else 0.0, -_REACH * tau), _REACH * tau)
 
 
 @nb.njit(cache=True, _nrt=False)
