@@ -84,12 +84,31 @@ def identity_rows(n: int) -> np.ndarray:
 
 
 @nb.njit(cache=True, inline="always")
+def is_identity(rot, i):
+    """Whether row i's rotation `rot[i]` is exactly the identity."""
+    for a in range(3):
+        for b in range(3):
+            if rot[i, a, b] != (1.0 if a == b else 0.0):
+                return False
+    return True
+
+
+@nb.njit(cache=True, inline="always")
 def rotated(rot, i, xyz, p):
     """Point `xyz[p]` (grid frame) in the frame of row i: rot[i] @ xyz[p] as (x, y, z)."""
     x, y, z = xyz[p, 0], xyz[p, 1], xyz[p, 2]
     return (rot[i, 0, 0] * x + rot[i, 0, 1] * y + rot[i, 0, 2] * z,
             rot[i, 1, 0] * x + rot[i, 1, 1] * y + rot[i, 1, 2] * z,
             rot[i, 2, 0] * x + rot[i, 2, 1] * y + rot[i, 2, 2] * z)
+
+
+@nb.njit(cache=True, inline="always")
+def in_row_frame(same, rot, i, xyz, p):
+    """`rotated(rot, i, xyz, p)`, or `xyz[p]` itself where `same` (`is_identity(rot, i)`: the
+    row's frame is the grid's, so nothing is multiplied per point)."""
+    if same:
+        return xyz[p, 0], xyz[p, 1], xyz[p, 2]
+    return rotated(rot, i, xyz, p)
 
 
 @nb.njit(cache=True, inline="always")

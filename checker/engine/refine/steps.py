@@ -553,11 +553,11 @@ def _centre(d, uv0, s, j, bt):
 
 
 @nb.njit(cache=True, inline="always")
-def _pruned(best_f, best_p, sid, idx, active):
+def _pruned(best_f, best_p, sid, idx, active, cells):
     """Of a row's starts `idx` (ascending), those far above the row's best no longer active
     (more than _PRUNE_REL + _PRUNE_ABS), and of the active ones whose best points (part frame)
     share a cell of _SAME mm on one surface only the lowest (the first of equals): they have
-    met, and go on as one (in place)."""
+    met, and go on as one (in place; `cells (k, 3)`: scratch for the cells)."""
     k = idx.shape[0]
     row_best = np.inf
     for i in range(k):
@@ -565,18 +565,20 @@ def _pruned(best_f, best_p, sid, idx, active):
     for i in range(k):
         if best_f[idx[i]] > row_best * (1.0 + _PRUNE_REL) + _PRUNE_ABS:
             active[i] = False
+        for c in range(3):
+            cells[i, c] = np.floor(best_p[idx[i], c] / _SAME)
     for i in range(k):
         a = idx[i]
+        if not active[i]:
+            continue
         for j in range(k):
             b = idx[j]
             if j == i or not active[j] or sid[b] != sid[a]:
                 continue
             if not (best_f[b] < best_f[a] or (best_f[b] == best_f[a] and j < i)):
                 continue
-            same = True
-            for c in range(3):
-                same = same and (np.floor(best_p[b, c] / _SAME) == np.floor(best_p[a, c] / _SAME))
-            if same and active[i]:
+            if cells[j, 0] == cells[i, 0] and cells[j, 1] == cells[i, 1] \
+                    and cells[j, 2] == cells[i, 2]:
                 active[i] = False
                 break
 
@@ -592,9 +594,10 @@ def _refine_row(G, M, r, idx, sid, hmin, best_uv, best_f, best_p, h, radius, wal
     d, uv0, _, _, dom, _, _ = M
     k = idx.shape[0]
     active = np.ones(k, dtype=np.bool_)
+    cells = np.empty((k, 3))
     for it in range(iterations):
         if it >= _PRUNE_AFTER:
-            _pruned(best_f, best_p, sid, idx, active)
+            _pruned(best_f, best_p, sid, idx, active, cells)
         if not active.any():
             return
         for i in range(k):

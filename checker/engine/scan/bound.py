@@ -21,7 +21,7 @@ from checker.engine.grid.candidates import (
     grid_view,
     inside,
 )
-from checker.engine.grid.frames import rotated
+from checker.engine.grid.frames import in_row_frame, is_identity, rotated
 from checker.engine.sizes import SizeArgs, point_size
 
 _COARSE_POINTS = 512  # at most about this many cells per row are sampled by `coarse_bounds`
@@ -40,6 +40,7 @@ def _descend(i, xyz, rot, sz, knn, best, p):
     """Row i: steepest descent along the sample graph `knn` from test point p (-1: none) of
     size `best` (`xyz` the grid's points); returns (size reached, evaluations)."""
     ne = 0
+    same = is_identity(rot, i)
     while p >= 0:
         here = p
         p = -1
@@ -47,7 +48,7 @@ def _descend(i, xyz, rot, sz, knn, best, p):
             q = knn[here, t]
             if q < 0:
                 continue
-            x, y, z = rotated(rot, i, xyz, q)
+            x, y, z = in_row_frame(same, rot, i, xyz, q)
             v = point_size(sz, i, x, y, z)
             ne += 1
             if v < best:
@@ -65,6 +66,7 @@ def _coarse_row(i, grid, rot, reg, sz, knn, u, evals):
     cells = max(i1 - i0 + 1, 0) * max(j1 - j0 + 1, 0)
     k = max(1, int(math.ceil(math.sqrt(cells / _COARSE_POINTS))))
     view = grid_view(reg, i, rot)
+    same = is_identity(rot, i)
     best = np.inf
     arg = -1
     ne = 0
@@ -73,7 +75,7 @@ def _coarse_row(i, grid, rot, reg, sz, knn, u, evals):
             t = start[c]
             if t == start[c + 1] or cell_misses(reg, i, view, grid, c):
                 continue
-            x, y, z = rotated(rot, i, xyz_c, t)
+            x, y, z = in_row_frame(same, rot, i, xyz_c, t)
             if not inside(reg, i, x, y, z):
                 continue
             v = point_size(sz, i, x, y, z)

@@ -16,7 +16,7 @@ import numpy as np
 
 from checker import kernels
 from checker.engine.grid.candidates import CellGrid, cell_heights
-from checker.engine.grid.frames import rotated
+from checker.engine.grid.frames import in_row_frame, is_identity
 
 _EPS_Z = 1e-6  # mm by which a cell must clear the bottom plane to be passed over
 _SKIP_MM = 1e-9  # relative and absolute (mm) margin of a bound over the slots against rounding
@@ -169,9 +169,10 @@ def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, sep, slots):
     worst = np.inf  # the largest size in the row's slots (inf while one is empty)
     qz = floor[i] + 1e-9 - cc[i, 2]  # the crossings' height above Pcc
     pd = kernels.plane_disc(qz, n[i, 0], n[i, 1], n[i, 2], e[i, 0], e[i, 1], prm)
+    same = is_identity(rot, i)
     for k in range(count):
         p = cand[k]
-        xp, yp, zp = rotated(rot, i, xyz, p)
+        xp, yp, zp = in_row_frame(same, rot, i, xyz, p)
         if worst < np.inf:  # every crossing from p lies within its longest edge of it
             low = kernels.plane_disc_bound(pd, xp - cc[i, 0], yp - cc[i, 1], edges[p, REACH])
             if low > worst + _SKIP_MM * (1.0 + worst):
@@ -180,7 +181,7 @@ def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, sep, slots):
             q = knn[p, t]
             if q < 0:
                 continue
-            xq, yq, zq = rotated(rot, i, xyz, q)
+            xq, yq, zq = in_row_frame(same, rot, i, xyz, q)
             if zq >= floor[i]:
                 continue
             f = (zp - floor[i]) / (zp - zq)

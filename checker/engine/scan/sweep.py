@@ -19,7 +19,7 @@ from checker.engine.grid.candidates import (
     grid_view,
     inside,
 )
-from checker.engine.grid.frames import rotated
+from checker.engine.grid.frames import in_row_frame, is_identity
 from checker.engine.scan.basins import row_seeds
 from checker.engine.scan.contour import (
     ContourSeeds,
@@ -88,6 +88,7 @@ def _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, edges, ids, vals, ca
     k0, k1, l0, l1 = cell_range(lim, i, grid)
     if not on:  # then only the cells that meet `lim` matter
         i0, i1, j0, j1 = max(i0, k0), min(i1, k1), max(j0, l0), min(j1, l1)
+    same = is_identity(rot, i)  # the row's frame is the grid's: no rotation per point
     ne = 0
     nc = 0
     for a in range(i0, i1 + 1):
@@ -104,7 +105,7 @@ def _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, edges, ids, vals, ca
             if not (evaluate or crossing) or cell_misses(reg, i, view, grid, c):
                 continue
             for t in range(start[c], start[c + 1]):
-                x, y, z = rotated(rot, i, xyz, t)
+                x, y, z = in_row_frame(same, rot, i, xyz, t)
                 if not inside(reg, i, x, y, z):
                     continue
                 p = order[t]
