@@ -583,18 +583,18 @@ def _pruned(best_f, best_p, sid, idx, active, cells):
                 break
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _refine_row(G, M, r, idx, sid, hmin, best_uv, best_f, best_p, h, radius, walked, evals,
-                iterations, bt, sc):
+                iterations, bt, sc, flags, cells):
     """All iterations of row r's starts `idx` (ascending): each active start takes a `_step`,
     the point it picked is evaluated exactly, and a lower value becomes its best and its model's
     centre; the stencil then follows the step or shrinks, the walk's radii adapt, and a start
     whose stencil reached 2 hmin (both parameters) has converged. From _PRUNE_AFTER on, starts
-    are `_pruned` before each step."""
+    are `_pruned` before each step. `flags`, `cells`: scratch of at least len(idx) rows."""
     d, uv0, _, _, dom, _, _ = M
     k = idx.shape[0]
-    active = np.ones(k, dtype=np.bool_)
-    cells = np.empty((k, 3))
+    active = flags[:k]
+    active[:] = True
     for it in range(iterations):
         if it >= _PRUNE_AFTER:
             _pruned(best_f, best_p, sid, idx, active, cells)
@@ -648,6 +648,7 @@ def _refine_rows(G, M, rows, sid, order, bounds, hmin, best_uv, best_f, best_p, 
     half-width (mm)."""
     d, uv0, _, _, _, _, _ = M
     bt, sc = point_batch(most, 6), _step_scratch()
+    flags, cells = np.empty(most, dtype=np.bool_), np.empty((most, 3))
     for g in range(t, bounds.shape[0] - 1, tasks):
         idx = order[bounds[g]:bounds[g + 1]]
         r = rows[idx[0]]
@@ -667,7 +668,7 @@ def _refine_rows(G, M, rows, sid, order, bounds, hmin, best_uv, best_f, best_p, 
             radius[s, _R_TRUST], radius[s, _R_REACH] = r0, _REACH * r0
             radius[s, _R_CAP] = max(_RADIUS_CAP * r0, _CAP_MM)
         _refine_row(G, M, r, idx, sid, hmin, best_uv, best_f, best_p, h, radius, walked, evals,
-                    iterations, bt, sc)
+                    iterations, bt, sc, flags, cells)
 
 
 @nb.njit(cache=True, parallel=True)
