@@ -21,7 +21,7 @@ def _lowest_neighbour(i, p, knn, values, stamp, pos):
     return low
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _keep(i, p, v, taken, seeds, seed_size):
     """Put seed p (size v) into the slots of row i, of which `taken` are filled: into a free
     one, else in place of the largest if v is below it. Returns the slots filled."""
@@ -40,7 +40,7 @@ def _keep(i, p, v, taken, seeds, seed_size):
     return taken
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _follows_seed(i, p, low, knn, values, pos, seeds, taken):
     """Whether test point p is one of the first `taken` seeds of row i or its smallest
     neighbour (size `low`) is: p then falls into that seed's basin."""
@@ -54,7 +54,7 @@ def _follows_seed(i, p, low, knn, values, pos, seeds, taken):
     return False
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def row_seeds(i, ids, values, count, knn, limit, stamp, pos, low, seeds, seed_size):
     """Up to m = `seeds.shape[1]` seeds of row i into `seeds[i]` (test point ids) and
     `seed_size[i]` (mm): among the evaluated points `ids[:count]` with sizes `values[:count]`

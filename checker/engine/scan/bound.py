@@ -35,7 +35,7 @@ class Bounds(NamedTuple):
     evaluations: np.ndarray
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _descend(i, xyz, rot, sz, knn, best, p):
     """Row i: steepest descent along the sample graph `knn` from test point p (-1: none) of
     size `best` (`xyz` the grid's points); returns (size reached, evaluations)."""
@@ -57,7 +57,7 @@ def _descend(i, xyz, rot, sz, knn, best, p):
     return best, ne
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _coarse_row(i, grid, rot, reg, sz, knn, u, evals):
     """Row i: the first point of every k-th cell column and row under its region (k from
     `_COARSE_POINTS`), where in the region, then the descent from the smallest."""
@@ -87,7 +87,7 @@ def _coarse_row(i, grid, rot, reg, sz, knn, u, evals):
     evals[i] = ne + more
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _warm_row(i, xyz, rot, sz, knn, starts, u, evals):
     """Row i: the sizes at its start points, then the descent from the smallest (from the
     first start when none is finite)."""

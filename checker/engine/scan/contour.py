@@ -154,7 +154,7 @@ def may_cross(i, rot, xyz, p, zp, floor, edges):
     return zp + (low - xyz[p, 2]) - tilt * reach - 1e-9 < floor
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def row_crossings(i, cand, count, xyz, rot, knn, edges, sz, sep, slots):
     """Up to m crossings of row i, at least `sep` mm apart (the best of each place), from its
     candidate points `cand[:count]` (ids into `xyz`, the grid's frame; the row sees

@@ -74,7 +74,7 @@ class _CrossingInputs(NamedTuple):
     separation: float
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _traverse(i, grid, rot, reg, lim, sz, on, nb_lo, nb_hi, edges, ids, vals, cand):
     """Row i: the sizes `vals` of its candidates (the points of its region `reg[i]`) that also
     lie in `lim[i]`, with their ids `ids`, in grid order; with crossings `on`, the candidates at
