@@ -73,11 +73,11 @@ def ring_evaluations(radii: list[float]) -> int:
     return _FIRST_RING + _WIDER_RING * (len(radii) - 1)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def _tangents(G, sd, u, v, w, tan) -> _Tangents:
     """The tangent plane of surface sd at (u, v) (module docstring), evaluated through the
-    `PointBatch` w; its vectors are the rows t1, t2, S_u, S_v of `tan (4, 3)`. Counted
-    references (not `_nrt=False`): it returns arrays, which its caller releases."""
+    `PointBatch` w; its vectors are the rows t1, t2, S_u, S_v of `tan (4, 3)` (views, not
+    counted: its callers count no references either)."""
     w.sid[0], w.u[0], w.v[0] = sd, u, v
     eval_range(G, w.sid, w.u, w.v, 1, w.ev, w.normals, 0, 1, w.sc)
     t1, t2, su, sv = tan[0], tan[1], tan[2], tan[3]
@@ -176,14 +176,14 @@ def _limit_at_cc(G, Q, sz, dom, r, sd, u, v, tg, angle, rho, w):
     return max(min(2.0 * near - far, near), 0.0)
 
 
-@nb.njit(cache=True)
-def _contacts(G, Q, sz, dom, rows, sid, uv, toward, radii, k0, k1, start, half, limit):
+@nb.njit(cache=True, _nrt=False)
+def _contacts(G, Q, sz, dom, rows, sid, uv, toward, radii, k0, k1, start, half, limit, w, tan,
+              angles):
     """Rings of `radii` (mm) around contacts k0..k1: ring j's best point into start[k, j] (nan
     where no size is finite) with its stencil half-widths half[k, j] (parameter units: the
     first ring's radius, then half the ring's); the limit at the CC point into limit[k] where
-    the closed form's direction `toward[k]` (part frame) is nan."""
-    most = max(_FIRST_RING, _WIDER_RING)
-    w, tan, angles = point_batch(most, 3), np.empty((4, 3)), np.empty(most)
+    the closed form's direction `toward[k]` (part frame) is nan. `w`, `tan`, `angles`: scratch
+    (`_scratch`)."""
     for k in range(k0, k1):
         r, sd, u, v = rows[k], sid[k], uv[k, 0], uv[k, 1]
         tg = _tangents(G, sd, u, v, w, tan)
@@ -218,13 +218,22 @@ def _contacts(G, Q, sz, dom, rows, sid, uv, toward, radii, k0, k1, start, half, 
                 angles[2 + i] = i * np.pi / 4
 
 
+@nb.njit(cache=True, inline="always")
+def _scratch():
+    """The work arrays of `_contacts`: a `PointBatch` for the largest ring, the tangent plane's
+    vectors and the rings' angles."""
+    most = max(_FIRST_RING, _WIDER_RING)
+    return point_batch(most, 3), np.empty((4, 3)), np.empty(most)
+
+
 @nb.njit(cache=True, parallel=True)
 def _all_contacts(G, Q, sz, dom, rows, sid, uv, toward, radii, start, half, limit):
     """`_contacts` in parallel chunks of _CHUNK contacts."""
     n = rows.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
+        w, tan, angles = _scratch()
         _contacts(G, Q, sz, dom, rows, sid, uv, toward, radii, c * _CHUNK,
-                  min(n, (c + 1) * _CHUNK), start, half, limit)
+                  min(n, (c + 1) * _CHUNK), start, half, limit, w, tan, angles)
 
 
 def ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, contacts: Contacts,
