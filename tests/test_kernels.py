@@ -373,3 +373,56 @@ def test_conical_band_uses_corrected_k():
     r_thesis = (d @ d - k_thesis**2) / (2 * (e @ d + k_thesis))
     assert got == pytest.approx(want, rel=1e-9)
     assert 0 < got < 100 and abs(r_thesis - want) > 0.05 * want
+
+
+@pytest.mark.parametrize("name", ["CUTTER/10", "CUTTER/10,2", "CUTTER/12,3", "CUTTER/8,4"])
+def test_plane_disc_bound_is_below_every_size_in_its_disc(name):
+    """`plane_disc_bound` (the contour crossings' skip) never exceeds `apt_size` at any point of
+    its disc on the plane (sampled densely, boundary included), and with a zero radius it is
+    `apt_size` at the centre itself wherever that is positive and finite (not a vacuous bound)."""
+    from checker import kernels
+
+    c = parse_cutter(name)
+    prm = c.kernel_params()
+    rng = np.random.default_rng(31)
+    checked = tight = 0
+    for trial in range(400):
+        if trial % 5 == 0:  # vertical normals: e from the caller, or none (worst case)
+            n = np.array([0.0, 0.0, 1.0])
+            ang = rng.uniform(0, 2 * math.pi)
+            e = np.array([math.cos(ang), math.sin(ang)]) if trial % 10 else np.zeros(2)
+        else:
+            n = rng.normal(size=3)
+            n[2] = abs(n[2]) + 0.05
+            n /= np.linalg.norm(n)
+            e = np.zeros(2)
+        qz = rng.uniform(-1.0, 3.0)
+        pd = kernels.plane_disc(qz, *n, *e, prm)
+        qx, qy = rng.uniform(-15.0, 15.0, 2)
+        rho = rng.uniform(0.0, 2.0)
+        bound = kernels.plane_disc_bound(pd, qx, qy, rho)
+        ang = rng.uniform(0, 2 * math.pi, 64)
+        rad = rho * np.sqrt(np.r_[rng.uniform(0, 1, 48), np.ones(16)])
+        sizes = [kernels.apt_size(qx + a * math.cos(t), qy + a * math.sin(t), qz, *n, *e,
+                                  True, prm) for a, t in zip(rad, ang, strict=True)]
+        assert bound <= min(sizes) + 1e-9 * (1.0 + abs(min(sizes))), (trial, bound, min(sizes))
+        checked += 1
+        at_q = kernels.apt_size(qx, qy, qz, *n, *e, True, prm)
+        if 0.0 < at_q < math.inf:
+            exact = kernels.plane_disc_bound(pd, qx, qy, 0.0)
+            assert exact == pytest.approx(at_q, rel=1e-9, abs=1e-12)
+            tight += 1
+    assert checked == 400 and tight > 100
+
+
+def test_plane_disc_bound_is_none_where_every_size_can_be_zero():
+    """A normal too flat for the family (n_z <= 0) or a cutter with a cone bottom (psi > 0):
+    no bound (-inf), as `apt_size` can be 0 there."""
+    from checker import kernels
+
+    flat = parse_cutter("CUTTER/10").kernel_params()
+    assert kernels.plane_disc_bound(kernels.plane_disc(0.5, 1.0, 0.0, 0.0, 0.0, 0.0, flat),
+                                    50.0, 0.0, 0.1) == -math.inf
+    cone = parse_cutter("CUTTER/10,1,4,2.10707,15,0,40").kernel_params()
+    assert kernels.plane_disc_bound(kernels.plane_disc(0.5, 0.0, 0.0, 1.0, 1.0, 0.0, cone),
+                                    50.0, 0.0, 0.1) == -math.inf
