@@ -152,9 +152,16 @@ def _fillet_size(dx, dy, dz, ux, uy, worst, prm):
 
 
 @njit(cache=True, inline="always")
+def _untouchable(nz, prm):
+    """Whether no cutter of the family touches Pcc tangentially (n_z <= 0 or n_z < sin(theta)):
+    every size is 0 there (`sizes.untouchable` for many rows)."""
+    return nz <= 0.0 or nz < prm[_SIN_T] - EPS_N
+
+
+@njit(cache=True, inline="always")
 def apt_size(qx, qy, qz, nx, ny, nz, ex, ey, has_e, prm):
     """R of the imaginary APT-family cutter through P = Pcc + q, touching Pcc with normal n."""
-    if nz <= 0.0 or nz < prm[_SIN_T] - EPS_N:
+    if _untouchable(nz, prm):
         return 0.0
     if qx * nx + qy * ny + qz * nz <= prm[_TOL]:
         return INF  # below the tangent plane: the convex cutter never reaches P
@@ -184,7 +191,7 @@ class PlaneDisc(NamedTuple):
 def plane_disc(qz, nx, ny, nz, ex, ey, prm):
     """The `PlaneDisc` of a flat-bottomed APT-family cutter (psi = 0) touching Pcc with normal
     n, for points at height qz above Pcc (`apt_size` with has_e True)."""
-    usable = prm[_FLAT] > 0.5 and nz > 0.0 and nz >= prm[_SIN_T] - EPS_N
+    usable = prm[_FLAT] > 0.5 and not _untouchable(nz, prm)
     r = prm[_R]
     ux, uy, worst = _axis_dir(nx, ny, ex, ey, True)
     return PlaneDisc(usable, r * nx, r * ny, ux, uy, worst, _k_band(qz - r * nz, prm))
@@ -215,7 +222,7 @@ def ball_size(qx, qy, qz, nx, ny, nz, prm):
     sphere centre Pcc + r n, taper angle theta above the sphere (theta = 0: cylinder)."""
     sin_t = prm[_SIN_T]
     tol = prm[_TOL]
-    if nz <= 0.0 or nz < sin_t - EPS_N:
+    if _untouchable(nz, prm):
         return 0.0
     nq = qx * nx + qy * ny + qz * nz
     if nq <= tol:

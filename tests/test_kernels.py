@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
+from checker import kernels
 from checker.cutter import Cutter, parse_cutter
 
 BIG = 1e4
@@ -340,8 +341,6 @@ def test_zero_denominators():
 
 def test_parallel_kernels_equal_serial():
     """Above PARALLEL_MIN pairs the threaded kernels run; they give the serial answers."""
-    from checker import kernels
-
     c = _cutter("apt")
     rng = np.random.default_rng(13)
     k = kernels.PARALLEL_MIN + 5000
@@ -380,8 +379,6 @@ def test_plane_disc_bound_is_below_every_size_in_its_disc(name):
     """`plane_disc_bound` (the contour crossings' skip) never exceeds `apt_size` at any point of
     its disc on the plane (sampled densely, boundary included), and with a zero radius it is
     `apt_size` at the centre itself wherever that is positive and finite (not a vacuous bound)."""
-    from checker import kernels
-
     c = parse_cutter(name)
     prm = c.kernel_params()
     rng = np.random.default_rng(31)
@@ -418,8 +415,6 @@ def test_plane_disc_bound_is_below_every_size_in_its_disc(name):
 def test_plane_disc_bound_is_none_where_every_size_can_be_zero():
     """A normal too flat for the family (n_z <= 0) or a cutter with a cone bottom (psi > 0):
     no bound (-inf), as `apt_size` can be 0 there."""
-    from checker import kernels
-
     flat = parse_cutter("CUTTER/10").kernel_params()
     assert kernels.plane_disc_bound(kernels.plane_disc(0.5, 1.0, 0.0, 0.0, 0.0, 0.0, flat),
                                     50.0, 0.0, 0.1) == -math.inf
