@@ -3,8 +3,8 @@ job's own inside tolerance (APT `INTOL/t`, or `TOLER/t`), plus the stock it is t
 below the part (a negative part-surface thickness `THICK/-s`: the CAM meant to go s into the
 part), else `check.depth_tolerance` from the config; plus what the geometry adds: the deviation
 of the part's triangles from the surface they stand for (a mesh's chordal deviation, near the
-deepest point: `checker.written` adds it per pose) and the chord error of arcs sampled into
-straight moves. mm."""
+deepest point: `checker.written` adds it per pose) and, in an operation that has arcs, the chord
+error of the arcs sampled into straight moves. mm."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ _WORDS = frozenset({"INTOL", "TOLER", "THICK"})
 @dataclass(frozen=True)
 class Tolerances:
     """Per operation (K,): the tolerance in effect (mm) and where it comes from ("INTOL",
-    "config"), the arc chord error included in it; the part's typical deviation (mm), which
+    "config"), the arc chord error included in those that have arcs; the part's typical deviation (mm), which
     is not included (the deviation near each pose's deepest point is)."""
 
     value: np.ndarray
@@ -38,11 +38,13 @@ def _number(rec) -> float | None:
 def operation_tolerances(toolpath: ToolPath, default: float, part_deviation: float,
                          arc_chord: float) -> Tolerances:
     """The tolerance of every operation of `toolpath` (see the module docstring): the words
-    written before an operation's first motion apply to all of it."""
+    written before an operation's first motion apply to all of it; `arc_chord` is added to the
+    operations with an arc."""
     scale = mm_per_unit(toolpath.units)
     words = [(rec.line, rec.word, _number(rec)) for rec in toolpath.records
              if rec.word in _WORDS and _number(rec) is not None]
     lines = toolpath.motions.line
+    arcs = toolpath.motions.arc
     values, sources = [], []
     for op in toolpath.operations:
         first = lines[op.first_motion] if op.first_motion < len(lines) else np.inf
@@ -54,6 +56,8 @@ def operation_tolerances(toolpath: ToolPath, default: float, part_deviation: flo
                 thick = value * scale
             else:
                 intol = abs(value) * scale
-        values.append((default if intol is None else intol) + max(-thick, 0.0) + arc_chord)
+        has_arc = bool((arcs[op.first_motion:op.end_motion] >= 0).any())
+        values.append((default if intol is None else intol) + max(-thick, 0.0)
+                      + (arc_chord if has_arc else 0.0))
         sources.append("config" if intol is None else "INTOL")
     return Tolerances(np.asarray(values, dtype=float), sources, part_deviation, arc_chord)

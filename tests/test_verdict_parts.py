@@ -75,12 +75,26 @@ def test_tolerance_per_operation():
     ops = [o for o in tp.operations if o.end_motion > o.first_motion]
     assert len(ops) == 2
     # INTOL stays in effect; the second operation also cuts 0.1 into the part on purpose; the
-    # part's deviation is not in it (it is added near each pose)
+    # part's deviation is not in it (it is added near each pose), nor the arcs' chord error in
+    # operations without arcs
     np.testing.assert_allclose(tol.value[[tp.operations.index(o) for o in ops]],
-                               [0.005 + 0.01, 0.005 + 0.1 + 0.01])
+                               [0.005, 0.005 + 0.1])
     tp2 = read_cl_text("CUTTER/10\nFEDRAT/100\nGOTO/0,0,0\nGOTO/1,0,0\nFINI\n", path="x.apt")
     t2 = operation_tolerances(tp2, default=0.02, part_deviation=0.0, arc_chord=0.0)
     assert t2.value.max() == pytest.approx(0.02) and "config" in t2.source
+
+
+def test_arc_chord_allowance_only_where_there_are_arcs():
+    """The chord error of arcs sampled into straight moves widens the tolerance of the
+    operations that have an arc, and of no other."""
+    text = ("CUTTER/10\nINTOL/0.01\nFEDRAT/100\nGOTO/10,0,0\n"
+            "CIRCLE/0,0,0,0,0,1\nGOTO/0,10,0\nCUTTER/6\nLOAD/TOOL,2\nFEDRAT/100\nGOTO/0,0,0\nGOTO/2,0,0\nFINI\n")
+    tp = read_cl_text(text, path="arcs.apt")
+    assert len(tp.arcs) == 1
+    tol = operation_tolerances(tp, default=0.02, part_deviation=0.0, arc_chord=0.01)
+    ops = [o for o in tp.operations if o.end_motion > o.first_motion]
+    np.testing.assert_allclose(tol.value[[tp.operations.index(o) for o in ops]],
+                               [0.01 + 0.01, 0.01])
 
 
 def test_decide_is_the_one_rule():

@@ -1,9 +1,11 @@
 """The part as triangles, for the exact real-tool checks (`checker.mesh`): a mesh part as it
 is, and every surface of a NURBS part as the triangles of a (u, v) grid fine enough for a
-chord tolerance (`sampling.surface_grid`), trimmed-away cells left out. Each triangle keeps its
-surface id and each vertex its (u, v), so that a point found on the triangles can be refined
-on the exact surface. The deviation of the triangles from the surface they stand for is
-measured (NURBS: at the edge midpoints and centroids of all triangles) or estimated (a mesh:
+chord tolerance (`sampling.surface_grid`) cut to the face's trim (`trim_cells.trimmed_grid`:
+cells along the trim loops clipped, so the triangles cover the trimmed face whole). Each
+triangle keeps its surface id and each vertex its (u, v), so that a point found on the
+triangles can be refined on the exact surface. The deviation of the triangles from the surface
+is measured (NURBS: at the edge midpoints and centroids of all triangles, which with the
+tiling bounds the distance both ways, MATH.md §8.2) or estimated (a mesh:
 `checker.mesh.chord.chordal_deviation`) and becomes part of the tolerance. Part frame, mm."""
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import numpy as np
 from checker.config import GeometryConfig
 from checker.geometry.evaluate import evaluate
 from checker.geometry.sampling import surface_grid
+from checker.geometry.trim_cells import kept_region, trimmed_grid
 from checker.part import Part, Surface
 
 _CACHE: dict[tuple, PartTriangles] = {}
@@ -78,36 +81,54 @@ def part_triangles(part: Part, deviation: float, cfg: GeometryConfig) -> PartTri
 
 
 def _within(s: Surface, deviation: float, cfg: GeometryConfig):
-    """`_surface_triangles` of s refined until its measured deviation is below `deviation`.
-    The grid's chord tolerance starts at a quarter of it (the triangles' interiors and the
-    twist of the surface add to the grid lines' chord error)."""
+    """`_surface_triangles` of s refined until its measured deviation is below `deviation`
+    or the sample budget stops the grid. The grid's chord tolerance starts at a quarter of it
+    (the triangles' interiors and the twist of the surface add to the grid lines' chord
+    error)."""
     chord = 0.25 * deviation
+    cfg = _kept_budget(s, cfg)
     out = _surface_triangles(s, chord, cfg)
     for _ in range(_REFINES):
         if out[3] <= deviation:
             break
         chord *= 0.8 * deviation / out[3]
-        out = _surface_triangles(s, chord, cfg)
+        finer = _surface_triangles(s, chord, cfg)
+        if len(finer[1]) < 1.05 * len(out[1]):  # the budget stops the grid: no finer one
+            return min(out, finer, key=lambda o: o[3])
+        out = finer
     return out
 
 
+_MOST_CUT = 16.0  # a trim keeping less than 1/16 of the domain: the budget grows 16 times
+
+
+def _kept_budget(s: Surface, cfg: GeometryConfig) -> GeometryConfig:
+    """`cfg` with `max_samples_per_surface` counted over the kept region: a grid over a domain
+    its trim keeps a fraction f of may have 1/f times as many corners (at most 16 times), of
+    which about the budget are kept."""
+    if s.trim is None:
+        return cfg
+    (u0, u1), (v0, v1) = s.domain
+    kept = kept_region(s).area / max((u1 - u0) * (v1 - v0), 1e-300)
+    grow = min(_MOST_CUT, 1.0 / max(kept, 1e-300))
+    if grow <= 1.0:
+        return cfg
+    return cfg.model_copy(update={"max_samples_per_surface": int(cfg.max_samples_per_surface
+                                                                 * grow)})
+
+
 def _surface_triangles(s: Surface, chord: float, cfg: GeometryConfig):
-    """(vertices, triangles, uv, measured deviation) of one surface's grid, the cells whose
-    four corners are all kept by the trim."""
+    """(vertices, triangles, uv, measured deviation) of one surface's grid cut to its trim
+    (`trim_cells.trimmed_grid`: whole cells inside, clipped cells along the trim loops)."""
     gu, gv = surface_grid(s, chord, cfg)
-    nu, nv = len(gu), len(gv)
-    U, V = np.meshgrid(gu, gv, indexing="ij")
-    uv = np.column_stack([U.ravel(), V.ravel()])
-    pts = evaluate(s, uv[:, 0], uv[:, 1]).points
-    idx = np.arange(nu * nv).reshape(nu, nv)
-    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
-    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
-    if s.trim is not None:
-        kept = s.trim.contains(uv[:, 0], uv[:, 1])
-        cell = kept[a] & kept[b] & kept[c] & kept[d]
-        a, b, c, d = a[cell], b[cell], c[cell], d[cell]
-    # (a, b, c) and (a, c, d): counter-clockwise in (u, v), so du x dv is their normal
-    tri = np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
+    uv, tri = trimmed_grid(s, gu, gv)
+    used = np.zeros(len(uv), dtype=bool)
+    used[tri] = True
+    if not used.all():  # vertices of dropped cells are not evaluated
+        renumber = np.cumsum(used) - 1
+        uv, tri = uv[used], renumber[tri]
+    pts = evaluate(s, uv[:, 0], uv[:, 1]).points if len(uv) else np.zeros((0, 3))
+    # counter-clockwise in (u, v), so du x dv is their normal
     if s.flip:
         tri = tri[:, ::-1]
     return pts, tri, uv, _deviation(s, pts, uv, tri)
