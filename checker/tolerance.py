@@ -21,8 +21,8 @@ _WORDS = frozenset({"INTOL", "TOLER", "THICK"})
 @dataclass(frozen=True)
 class Tolerances:
     """Per operation (K,): the tolerance in effect (mm) and where it comes from ("INTOL",
-    "config"), the arc chord error included in those that have arcs; the part's typical deviation (mm), which
-    is not included (the deviation near each pose's deepest point is)."""
+    "config"), the arc chord error included in those that have arcs; the part's typical
+    deviation (mm), which is not included (the deviation near each pose's deepest point is)."""
 
     value: np.ndarray
     source: list[str]
