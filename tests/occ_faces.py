@@ -66,6 +66,16 @@ def faces(shape) -> list:
     return out
 
 
+def box(shape) -> tuple[np.ndarray, np.ndarray]:
+    """The shape's tight bounding box (lo (3,), hi (3,)), mm (`BRepBndLib.AddOptimal`)."""
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+
+    b = Bnd_Box()
+    BRepBndLib.AddOptimal_s(shape, b, False, False)
+    return np.array(b.CornerMin().Coord()), np.array(b.CornerMax().Coord())
+
+
 @dataclass(frozen=True)
 class FaceSamples:
     """Points (N, 3) on one face inside its trim, their (u, v) (N, 2), and which came from
@@ -186,8 +196,10 @@ def mesh_shape(shape, deflection: float, angle: float = 0.2) -> OccMesh:
     """OpenCASCADE's own triangles of the shape (`BRepMesh_IncrementalMesh`, linear deflection
     `deflection` mm, angular `angle` rad), face by face in `faces` order. The face deflection
     is forced: by default BRepMesh loosens it to the edges' tolerance (up to 0.6 mm on the
-    PRO20359 IGES blades)."""
+    PRO20359 IGES blades). Triangles of an earlier call are dropped first."""
     from OCP.IMeshTools import IMeshTools_Parameters
+
+    BRepTools.Clean_s(shape)
 
     params = IMeshTools_Parameters()
     params.Deflection = params.DeflectionInterior = deflection
@@ -215,5 +227,5 @@ def mesh_shape(shape, deflection: float, angle: float = 0.2) -> OccMesh:
                    np.concatenate(owner))
 
 
-__all__ = ["CAD_SUFFIXES", "FaceSamples", "OccMesh", "cad_files", "face_distances", "faces",
+__all__ = ["CAD_SUFFIXES", "FaceSamples", "OccMesh", "box", "cad_files", "face_distances", "faces",
            "mesh_shape", "read_shape", "sample_face"]

@@ -29,7 +29,14 @@ from checker.mesh import MeshIndex
 
 require_extra("OCP", "cad")
 from conftest import REALDATA  # noqa: E402
-from occ_faces import cad_files, face_distances, faces, read_shape, sample_face  # noqa: E402
+from occ_faces import (  # noqa: E402
+    box,
+    cad_files,
+    face_distances,
+    faces,
+    read_shape,
+    sample_face,
+)
 
 PARTS = cad_files(REALDATA) if REALDATA.is_dir() else []
 INSET = 0.02       # mm: edge samples this far inside the face
@@ -150,21 +157,23 @@ def nearest_distances(index: MeshIndex, points: np.ndarray, cap: float = CAP):
 
 @pytest.fixture(scope="module", params=PARTS, ids=lambda p: p.name)
 def cad(request, realdata):
-    """(path, the check's triangles, OCC's faces, part_deviation, the part's box diagonal)."""
+    """(path, the check's triangles, OCC's faces, their samples, part_deviation)."""
     path = request.param
     cfg = Config()
     part = load_part(path, geometry=cfg.geometry)
     tris = part_triangles(part, cfg.check.part_deviation, cfg.geometry)
-    occ = faces(read_shape(path))
+    shape = read_shape(path)
+    occ = faces(shape)
     assert len(occ) == len(part.surfaces), "OCC's faces and pathcheck's surfaces do not match"
-    diag = float(np.linalg.norm(tris.vertices.max(axis=0) - tris.vertices.min(axis=0)))
-    return path, tris, occ, cfg.check.part_deviation, diag
+    lo, hi = box(shape)
+    diag = float(np.linalg.norm(hi - lo))
+    samples = [sample_face(f, diag / GRID, INSET) for f in occ]
+    return path, tris, occ, samples, cfg.check.part_deviation
 
 
 def test_every_face_is_covered_by_the_triangles(cad):
-    path, tris, occ, deviation, diag = cad
+    path, tris, occ, samples, deviation = cad
     index = MeshIndex.build(tris.vertices, tris.triangles)
-    samples = [sample_face(f, diag / GRID, INSET) for f in occ]
     pts = np.concatenate([s.points for s in samples])
     face = np.concatenate([np.full(len(s.points), k) for k, s in enumerate(samples)])
     edge = np.concatenate([s.edge for s in samples])
@@ -187,9 +196,10 @@ def _triangle_points(tris, rng) -> tuple[np.ndarray, np.ndarray]:
     # a border triangle has an edge no other triangle of its surface shares
     e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
     owner = np.tile(np.arange(len(T)), 3)
-    key = np.column_stack([s[owner], e])
-    _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    border = np.unique(owner[cnt[inv.ravel()] == 1])
+    n = np.int64(len(tris.vertices))
+    key = (s[owner].astype(np.int64) * n + e[:, 0]) * n + e[:, 1]
+    _, inv, cnt = np.unique(key, return_inverse=True, return_counts=True)
+    border = np.unique(owner[cnt[inv] == 1])
     v = tris.vertices[T]
     longest = np.max(np.linalg.norm(v - np.roll(v, 1, axis=1), axis=2), axis=1)
     pick = np.unique(np.concatenate([
@@ -202,23 +212,38 @@ def _triangle_points(tris, rng) -> tuple[np.ndarray, np.ndarray]:
     return pts, np.repeat(pick, len(w))
 
 
-def surface_distances(face, points: np.ndarray) -> np.ndarray:
+def surface_distances(face, samples, points: np.ndarray, deviation: float) -> np.ndarray:
     """(N,) exact distance (mm) from points to the trimmed face: the projection onto its
-    surface where the foot is inside the trim, else `face_distances` (BRepExtrema)."""
+    surface (`ShapeAnalysis_Surface`, started from the (u, v) of the nearest of the face's
+    `samples`, and from scratch where that finds more than `deviation`) where the foot is in
+    the trim or on it (the classifier's tolerance: 1e-3 mm on the surface), else the distance
+    to the face (`face_distances`, BRepExtrema)."""
     from OCP.BRep import BRep_Tool
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
     from OCP.BRepClass import BRepClass_FaceClassifier
-    from OCP.gp import gp_Pnt
+    from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec
     from OCP.ShapeAnalysis import ShapeAnalysis_Surface
     from OCP.TopAbs import TopAbs_IN, TopAbs_ON
+    from scipy.spatial import cKDTree
 
     sas = ShapeAnalysis_Surface(BRep_Tool.Surface_s(face))
+    guess = (samples.uv[cKDTree(samples.points).query(points)[1]] if len(samples.points)
+             else None)
     cls = BRepClass_FaceClassifier()
+    adaptor = BRepAdaptor_Surface(face, True)
     out = np.empty(len(points))
     off = np.zeros(len(points), dtype=bool)
     for i, p in enumerate(points):
-        uv = sas.ValueOfUV(gp_Pnt(*map(float, p)), 1e-9)
+        q = gp_Pnt(*map(float, p))
+        if guess is not None:
+            uv = sas.NextValueOfUV(gp_Pnt2d(*map(float, guess[i])), q, 1e-9, -1.0)
+        if guess is None or sas.Gap() > deviation:
+            uv = sas.ValueOfUV(q, 1e-9)
         out[i] = sas.Gap()
-        cls.Perform(face, uv, 1e-9)
+        du, dv = gp_Vec(), gp_Vec()
+        adaptor.D1(uv.X(), uv.Y(), gp_Pnt(), du, dv)
+        tol = 1e-3 / max(du.Magnitude(), dv.Magnitude(), 1e-12)
+        cls.Perform(face, uv, tol)
         off[i] = cls.State() not in (TopAbs_IN, TopAbs_ON)
     if off.any():
         out[off] = face_distances(face, points[off])
@@ -226,13 +251,13 @@ def surface_distances(face, points: np.ndarray) -> np.ndarray:
 
 
 def test_every_triangle_lies_on_its_face(cad):
-    path, tris, occ, deviation, _ = cad
+    path, tris, occ, samples, deviation = cad
     pts, tri = _triangle_points(tris, np.random.default_rng(len(tris.triangles)))
     owner = tris.surface[tri]
     dist = np.empty(len(pts))
     for k in np.unique(owner):
         rows = np.flatnonzero(owner == k)
-        dist[rows] = surface_distances(occ[k], pts[rows])
+        dist[rows] = surface_distances(occ[k], samples[k], pts[rows], deviation)
     worst = int(np.argmax(dist))
     far = dist > deviation
     assert not far.any(), (

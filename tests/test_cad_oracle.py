@@ -30,7 +30,7 @@ require_extra("OCP", "cad")
 require_extra("opencamlib", "test")
 from cad_paths import finishing_job, stl_surface  # noqa: E402
 from conftest import REALDATA  # noqa: E402
-from occ_faces import cad_files, mesh_shape, read_shape  # noqa: E402
+from occ_faces import box, cad_files, mesh_shape, read_shape  # noqa: E402
 from ocl_oracle import drop_heights, eroded_cutter, ocl_depth  # noqa: E402
 
 PARTS = cad_files(REALDATA) if REALDATA.is_dir() else []
@@ -40,19 +40,46 @@ LINES, PER_LINE = 6, 24              # the raster: lines across y, drop points a
 PATH_DEFLECTION = 0.02               # mm: the mesh the paths are made on
 ORACLE_DEFLECTION = 0.004            # mm: the mesh the oracle measures on
 DEEP, SHALLOW = 0.05, 0.02
+LARGE, WINDOW = 2000.0, 40.0         # mm: a part this large is judged in a window this wide / 2
+
+
+def _window(shape, half: float):
+    """The part of `shape` inside a vertical prism of half-width `half` mm about the centre of
+    its x-y box (`BRepAlgoAPI_Common`), and the prism's x-y bounds (x0, y0, x1, y1)."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Common
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt
+
+    (x0, y0, z0), (x1, y1, z1) = box(shape)
+    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    prism = BRepPrimAPI_MakeBox(gp_Pnt(cx - half, cy - half, z0 - 1.0),
+                                gp_Pnt(cx + half, cy + half, z1 + 1.0)).Shape()
+    common = BRepAlgoAPI_Common(shape, prism)
+    assert common.IsDone()
+    return common.Shape(), (cx - half, cy - half, cx + half, cy + half)
 
 
 @pytest.fixture(scope="module", params=PARTS, ids=lambda p: p.name)
 def job(request, realdata, tmp_path_factory):
-    """(part path, the D6 job's CL file, the oracle's mesh and its OCL surface)."""
+    """(part path, the D6 job's CL file, the oracle's mesh and its OCL surface, the x-y box
+    (x0, y0, x1, y1) of the poses compared). A part larger than LARGE mm (its box diagonal):
+    paths and oracle mesh over a window of it (`_window`, 2 WINDOW mm wide), the poses compared
+    those whose larger cutter stays inside the window."""
     path = request.param
-    coarse = mesh_shape(read_shape(path), PATH_DEFLECTION)
+    shape = read_shape(path)
+    lo, hi = box(shape)
+    compared = (-np.inf, -np.inf, np.inf, np.inf)
+    if np.linalg.norm(hi - lo) > LARGE:
+        shape, (x0, y0, x1, y1) = _window(shape, WINDOW)
+        reach = 0.5 * max(parse_cutter(c).d for c in CHECKED_WITH) + 1.0
+        compared = (x0 + reach, y0 + reach, x1 - reach, y1 - reach)
+    coarse = mesh_shape(shape, PATH_DEFLECTION)
     apt, n = finishing_job(coarse.vertices, coarse.triangles,
                            tmp_path_factory.mktemp("cad_oracle") / f"{path.stem}.apt",
                            diameter=MADE_WITH, lines=LINES, per_line=PER_LINE)
     assert n >= LINES * PER_LINE // 4, f"{path.name}: the raster touches the part at {n} points"
-    fine = mesh_shape(read_shape(path), ORACLE_DEFLECTION)
-    return path, apt, fine, stl_surface(fine.vertices, fine.triangles)
+    fine = mesh_shape(shape, ORACLE_DEFLECTION)
+    return path, apt, fine, stl_surface(fine.vertices, fine.triangles), compared
 
 
 def deeper_than(surf, z_below: float, cutter, tips: np.ndarray, d: float) -> np.ndarray:
@@ -66,9 +93,10 @@ def deeper_than(surf, z_below: float, cutter, tips: np.ndarray, d: float) -> np.
 @pytest.mark.slow
 @pytest.mark.parametrize("cutter_text", CHECKED_WITH)
 def test_larger_cutter_verdicts_agree_with_the_oracle(job, cutter_text):
-    path, apt, fine, surf = job
+    path, apt, fine, surf, (x0, y0, x1, y1) = job
     doc = check_job(apt, part_path=path, cutter=cutter_text)
-    poses = [p for p in doc.points if p.depth is not None]
+    poses = [p for p in doc.points if p.depth is not None
+             and x0 <= p.tip[0] <= x1 and y0 <= p.tip[1] <= y1]
     tips = np.array([p.tip for p in poses])
     assert np.allclose([p.axis for p in poses], [0.0, 0.0, 1.0])
     cutter = parse_cutter(cutter_text)
