@@ -11,3 +11,5 @@ MAX_COORDINATE_MM = 1e5
 MAX_ROTARY_DEG = 1e6
 #: positions a G-code program's arcs and rotary turns may expand into, in total
 MAX_PROGRAM_POINTS = 5_000_000
+#: records of a CL file other than plain GOTOs (each is an object of a few hundred bytes)
+MAX_CL_STATEMENTS = 2_000_000
