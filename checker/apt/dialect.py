@@ -13,6 +13,7 @@ _APT = re.compile(
     r"RAPID|CIRCLE|SPINDL|COOLNT|PPRINT|INSERT|CYCLE|CUTCOM|FINI)\b",
     re.M | re.I,
 )
+_FIRST = re.compile(r"^[^\S\n]*\S[^\n]*", re.M)  # the first non-blank line
 _MOTION = re.compile(r"^[ \t]*GOTO[ \t]*/[ \t]*[-+.\d]", re.M | re.I)
 
 Dialect = Literal["apt", "clsf"]
@@ -27,13 +28,16 @@ class DialectScan:
         self.apt = False
         self.first = ""
 
-    def feed(self, text: str) -> None:
+    def feed(self, text: str, end: int | None = None) -> None:
+        """Scan ``text[:end]``, whole lines."""
+        end = len(text) if end is None else end
         if not self.first:
-            self.first = next((s.strip() for s in text.split("\n", 1000) if s.strip()), "")
+            m = _FIRST.search(text, 0, end)
+            self.first = m.group().strip() if m else ""
         if not self.clsf:
-            self.clsf = _CLSF.search(text) is not None
+            self.clsf = _CLSF.search(text, 0, end) is not None
         if not (self.clsf or self.apt):
-            self.apt = _APT.search(text) is not None
+            self.apt = _APT.search(text, 0, end) is not None
 
     def result(self, path: str) -> Dialect:
         """The dialect of the text fed, or the PathcheckError of `detect_dialect`."""

@@ -13,7 +13,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from checker.errors import PathcheckError
-from checker.input_limits import MAX_CL_STATEMENTS
+from checker.input_limits import MAX_CL_STATEMENTS, refuse_beyond
 from checker.toolpath import Record, RecordList, Value
 
 # statements whose text after "/" is literal (commas, slashes and "$" included)
@@ -78,13 +78,16 @@ def parse_args(raw: str, word: str, *, path: str, line: int) -> tuple[Value, ...
     return tuple(out)
 
 
-_NONBLANK = re.compile(r"^[^\S\n]*\S", re.M)
-_EIGHTY = re.compile(r"^(?=[^\n]*\S)[^\n]{79}[^\r\n]\r*$", re.M)
+# zero-width matches: `findall` lists the one empty string, 8 bytes a line
+_NONBLANK = re.compile(r"^(?=[^\S\n]*\S)", re.M)
+_EIGHTY = re.compile(r"^(?=(?=[^\n]*\S)[^\n]{79}[^\r\n]\r*$)", re.M)
 
 
-def card_counts(text: str) -> tuple[int, int]:
-    """(non-blank lines, those exactly 80 characters wide without their CRs) of whole lines."""
-    return len(_NONBLANK.findall(text)), len(_EIGHTY.findall(text))
+def card_counts(text: str, end: int | None = None) -> tuple[int, int]:
+    """(non-blank lines, those exactly 80 characters wide without their CRs) of the whole
+    lines of ``text[:end]``."""
+    end = len(text) if end is None else end
+    return len(_NONBLANK.findall(text, 0, end)), len(_EIGHTY.findall(text, 0, end))
 
 
 def is_card_image(nonblank: int, eighty: int) -> bool:
@@ -129,10 +132,9 @@ def lex(
 
     def append(rec: Record) -> None:
         if len(records) >= MAX_CL_STATEMENTS:
-            raise PathcheckError(
-                f"more than {MAX_CL_STATEMENTS:,} statements other than plain GOTOs: expected "
-                "at most that many (checker.input_limits.MAX_CL_STATEMENTS)",
-                path=path, line=rec.line, code="parse")
+            refuse_beyond(len(records) + 1, MAX_CL_STATEMENTS,
+                          "or more statements other than plain GOTOs", "MAX_CL_STATEMENTS",
+                          path=path, line=rec.line)
         at.append(len(records) + len(glines))
         records.append(rec)
 

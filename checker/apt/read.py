@@ -20,8 +20,9 @@ from checker.toolpath import ToolPath
 
 # control characters that never occur in text (tab, LF, FF and CR do)
 _BINARY = re.compile(r"[\x00-\x08\x0b\x0e-\x1f\x7f]")
+_NONBLANK = re.compile(r"\S")
 SNIFF_BYTES = 64 * 1024  # how much of a file `is_cl_file` reads
-BLOCK_BYTES = 8 << 20  # how much of a file the first pass reads at a time
+BLOCK_BYTES = 1 << 20  # how much of a file the first pass reads at a time
 BOM = codecs.BOM_UTF8
 EOF_MARK = "\x1a"  # a DOS end-of-file mark, allowed at the end of a file
 
@@ -57,13 +58,16 @@ class _Scan:
         self.has_lf = self.has_cr = False
         self.empty = True
 
-    def feed(self, text: str) -> None:
-        lf = "\n" in text
+    def feed(self, text: str, end: int | None = None) -> None:
+        """Scan ``text[:end]``, whole lines."""
+        end = len(text) if end is None else end
+        lf = text.find("\n", 0, end) >= 0
+        cr = text.find("\r", 0, end) >= 0
         self.has_lf |= lf
-        self.has_cr |= "\r" in text
-        if not lf and "\r" in text:  # CR line ends: read as LF for the line-anchored scans
-            text = text.replace("\r", "\n")
-        m = _BINARY.search(text)
+        self.has_cr |= cr
+        if cr and not lf:  # CR line ends: read as LF for the line-anchored scans
+            text = text[:end].replace("\r", "\n")
+        m = _BINARY.search(text, 0, end)
         if m is not None:
             raise PathcheckError(
                 f"expected a text CL file, found binary data (byte 0x{ord(m.group()):02x})",
@@ -71,12 +75,12 @@ class _Scan:
                 line=self.lines_before + text.count("\n", 0, m.start()) + 1,
                 code="parse",
             )
-        self.empty = self.empty and not text.strip()
-        self.dialect.feed(text)
-        nonblank, eighty = card_counts(text)
+        self.empty = self.empty and _NONBLANK.search(text, 0, end) is None
+        self.dialect.feed(text, end)
+        nonblank, eighty = card_counts(text, end)
         self.nonblank += nonblank
         self.eighty += eighty
-        self.lines_before += text.count("\n")
+        self.lines_before += text.count("\n", 0, end)
 
     def layout(self, column72: bool | None) -> _Layout:
         if self.empty:
@@ -125,15 +129,18 @@ def _first_pass(path: Path, encoding: str, column72: bool | None, skip: int = 0)
         fh.seek(skip)
         while True:
             block = fh.read(BLOCK_BYTES)
-            text = carry + decoder.decode(block, final=not block)
-            if not block:
+            final = not block
+            text = carry + decoder.decode(block, final=final)
+            del block
+            if final:
                 scan.feed(text.rstrip(EOF_MARK))
                 break
             cut = max(text.rfind("\n"), text.rfind("\r")) + 1
             if text.endswith("\r"):  # "\r\n" split by the block: keep them together
                 cut -= 1
             carry = text[cut:]
-            scan.feed(text[:cut])
+            scan.feed(text, cut)
+            del text
     return scan.layout(column72)
 
 
