@@ -69,15 +69,15 @@ _WALL = re.compile(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (?:(\d+):)
 
 
 def measure(args: list[str]) -> tuple[float, float, int, str]:
-    """(peak RSS MB, wall s, exit code, last stderr line) of `pathcheck ARGS` under
+    """(peak RSS MB, wall s, exit code, its last error line) of `pathcheck ARGS` under
     /usr/bin/time -v."""
     cmd = ["/usr/bin/time", "-v", sys.executable, "-m", "checker.cli", *args]
     run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=os.environ.copy())
     rss = int(_RSS.search(run.stderr).group(1)) / 1024
     h, m, s = _WALL.search(run.stderr).groups()
     wall = int(h or 0) * 3600 + int(m) * 60 + float(s)
-    tail = [s for s in run.stderr.splitlines() if s and not s.startswith("\t")]
-    return rss, wall, run.returncode, (tail[-1] if tail else "")
+    said = [s for s in run.stderr.splitlines() if s.startswith("pathcheck:")]
+    return rss, wall, run.returncode, (said[-1] if said else "")
 
 
 def _counts(text: str) -> list[int]:

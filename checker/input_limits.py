@@ -22,8 +22,8 @@ MAX_PROGRAM_POINTS = 5_000_000
 MAX_CL_STATEMENTS = 2_000_000
 #: poses one check takes (motions, arcs in chords): the check keeps a few kB for each
 MAX_CHECK_POSES = 1_000_000
-#: CC points one `allowable` search takes: its document keeps a few kB for each
-MAX_CC_POINTS = 200_000
+#: CC points one `allowable` search takes: its document keeps about 1 kB for each
+MAX_CC_POINTS = 1_000_000
 
 
 def refuse_beyond(count: int, limit: int, what: str, name: str, *, path: str | Path | None,

@@ -124,3 +124,29 @@ def test_cc_points_beyond_the_bound_are_refused_naming_the_row(monkeypatch, tmp_
     with pytest.raises(PathcheckError, match=r"cc\.csv:6: 4 CC points: expected at most 3 "
                        r"\(checker\.input_limits\.MAX_CC_POINTS\)"):
         read_cc_csv(cc)
+
+
+def test_an_allowable_search_in_chunks_is_the_search_whole(monkeypatch):
+    from checker.config import load_config
+    from checker.cutter import cutter_from_apt
+    from checker.geometry import load_part
+    from checker.operations import allowable as op
+
+    mould = REPO / "samples" / "mould"
+    config = load_config(None)
+    cc, normals = read_cc_csv(mould / "cc.csv")
+    part = op.sampled_part(lambda: load_part(mould / "mould.json", geometry=config.geometry),
+                           config)
+    cutter = cutter_from_apt([10.0, 2.0])
+    axis = np.array([0.0, 0.0, 1.0])
+    monkeypatch.setattr(op, "CHUNK_ROWS", len(cc) + 1)
+    whole = op.allowable_at_points(part, cutter, cc, normals, axis, config)
+    monkeypatch.setattr(op, "CHUNK_ROWS", 7)
+    chunked = op.allowable_at_points(part, cutter, cc, normals, axis, config)
+    assert len(chunked["points"]) == len(cc) > 7
+    for a, b in zip(whole["points"], chunked["points"], strict=True):
+        assert (a["verdict"], a["limiting_surface"]) == (b["verdict"], b["limiting_surface"])
+        assert (a["allowable"] is None) == (b["allowable"] is None)
+        if a["allowable"] is not None:
+            assert abs(a["allowable"] - b["allowable"]) <= 1e-9 * max(1.0, a["allowable"])
+    assert sum(p["allowable"] is not None for p in whole["points"]) > 7  # sizes compared
