@@ -20,8 +20,8 @@ MAX_ROTARY_DEG = 1e6
 MAX_PROGRAM_POINTS = 5_000_000
 #: records of a CL file other than plain GOTOs (each is an object of a few hundred bytes)
 MAX_CL_STATEMENTS = 2_000_000
-#: poses one check takes (motions, arcs in chords): the check keeps a few kB for each
-MAX_CHECK_POSES = 1_000_000
+#: poses one check takes (motions, arcs in chords): the check keeps about 3 kB for each
+MAX_CHECK_POSES = 2_000_000
 #: CC points one `allowable` search takes: its document keeps about 1 kB for each
 MAX_CC_POINTS = 1_000_000
 
