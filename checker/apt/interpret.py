@@ -51,6 +51,7 @@ MIN_AXIS_NORM = 1e-6  # a CIRCLE axis shorter than this has no usable direction
 MAX_TURNS = 1000  # full turns of one helical CIRCLE (NX TIMES,n)
 ARC_RADIUS_ABS = 2e-3  # mm, plus this (4-decimal inch files round to 0.0025 mm)
 CHUNK = 1 << 20  # rows per vectorised step on the motion arrays (bounds the temporaries)
+SHORT_RUN = 4  # GOTO runs up to this long go one by one (a bulk copy costs more for them)
 # indices of angles (not lengths) in the cutter statements, by number of values
 _CUTTER_ANGLES = (4, 5)  # CUTTER/d,r,e,f,alpha,beta,h
 _TLDATA_ANGLES = (3, 4)
@@ -274,9 +275,10 @@ class _Reader:
         """The plain GOTOs of rows [g0, g1) of the record list, with no statement between
         them, copied in bulk (their modal axis filled forward); `goto`'s rules hold."""
         rl = self.records
-        if g0 < g1 and self.pending_arc is not None:
-            self.goto(rl.goto_record(g0))
-            g0 += 1
+        if g1 - g0 <= SHORT_RUN or self.pending_arc is not None:  # one by one: cheaper
+            for g in range(g0, min(g1, g0 + SHORT_RUN)):
+                self.goto(rl.goto_record(g))
+            g0 = min(g1, g0 + SHORT_RUN)
         if g0 >= g1:
             return
         rapid = self.rapid_next
