@@ -87,7 +87,7 @@ def _counts(text: str) -> list[int]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--moves", default="1e6,5e6,10e6", help="program sizes for info")
-    ap.add_argument("--check", default="1e6", help="program sizes to check against the mould")
+    ap.add_argument("--check", default="1e6,10e6", help="program sizes to check against the mould")
     ap.add_argument("--cc", default="1e6", help="CC-point counts for allowable --cc")
     ap.add_argument("--dir", type=Path, default=Path("/tmp/pathcheck-large"))
     a = ap.parse_args()
