@@ -102,7 +102,7 @@ def main() -> None:
         if n in _counts(a.moves):
             runs.append(("info", ["info", str(cl)]))
         if n in _counts(a.check):
-            runs.append(("check", [str(cl), "--part", str(a.dir / "mould.json")]))
+            runs.append(("check", [str(cl), "--part", str(a.dir / "mould.json"), "--no-store"]))
         for label, args in runs:
             rss, wall, rc, tail = measure(args)
             print(f"| {n:,} moves ({size:.0f} MB) | {label} | {rss:,.0f} | {wall:.1f} | {rc} "
