@@ -3,11 +3,14 @@
 
 from __future__ import annotations
 
+import math
 import re
+from array import array
 from pathlib import Path
 
 import numpy as np
 
+from checker import input_limits
 from checker.errors import PathcheckError
 
 CC_COLUMNS = ("x", "y", "z", "nx", "ny", "nz")
@@ -18,18 +21,25 @@ _NUMBER = re.compile(r"\s*[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?\
 def read_cc_csv(path: Path, *, lines_out: list[int] | None = None
                 ) -> tuple[np.ndarray, np.ndarray]:
     """CC points (N, 3) and unit normals (N, 3) from a CSV with the header x,y,z,nx,ny,nz;
-    `lines_out` receives each row's 1-based file line."""
+    `lines_out` receives each row's 1-based file line. More than `MAX_CC_POINTS` rows is an
+    error naming the first row beyond."""
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except (OSError, UnicodeDecodeError) as err:
         raise PathcheckError(f"cannot read CC file: {err}", path=path, code="input") from err
     if not lines:
         raise PathcheckError("empty CC file, expected a header x,y,z,nx,ny,nz", path=path, line=1)
-    head = [h.strip().lower() for h in lines[0].split(",")]
+    head = [h.strip().lower() for h in lines[0].removeprefix("\ufeff").split(",")]
     if head != list(CC_COLUMNS):
         raise PathcheckError(f"expected the header x,y,z,nx,ny,nz, found {lines[0][:60]!r}",
                              path=path, line=1)
-    rows = []
+    count = sum(1 for text in lines[1:] if text.strip())
+    if count > input_limits.MAX_CC_POINTS:
+        beyond = [no for no, text in enumerate(lines[1:], 2) if text.strip()]
+        input_limits.refuse_beyond(count, input_limits.MAX_CC_POINTS, "CC points",
+                                   "MAX_CC_POINTS", path=path,
+                                   line=beyond[input_limits.MAX_CC_POINTS])
+    rows = array("d")  # 6 values a row, 48 bytes (a list of floats per row takes 260)
     for no, text in enumerate(lines[1:], 2):
         if not text.strip():
             continue
@@ -41,18 +51,18 @@ def read_cc_csv(path: Path, *, lines_out: list[int] | None = None
             raise PathcheckError(f"expected 6 decimal numbers, found {bad[0][:30]!r} in "
                                  f"{text.strip()[:60]!r}", path=path, line=no)
         vals = [float(c) for c in cells]
-        if not np.isfinite(vals).all():
+        if not all(map(math.isfinite, vals)):
             raise PathcheckError(f"expected finite numbers, found {text.strip()[:60]!r}",
                                  path=path, line=no)
-        if np.linalg.norm(vals[3:]) < 1e-9:
+        if math.hypot(*vals[3:]) < 1e-9:
             raise PathcheckError("expected a non-zero normal (nx, ny, nz), found 0,0,0",
                                  path=path, line=no)
-        rows.append(vals)
+        rows.extend(vals)
         if lines_out is not None:
             lines_out.append(no)
     if not rows:
         raise PathcheckError("expected at least one CC point after the header", path=path, line=2)
-    a = np.array(rows)
+    a = np.frombuffer(rows, dtype=float).reshape(-1, 6)
     return a[:, :3], a[:, 3:] / np.linalg.norm(a[:, 3:], axis=1)[:, None]
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from checker import written
+from checker import input_limits, written
 from checker.apt import read_cl
 from checker.b_axis import check_four_axis
 from checker.config import Config
@@ -153,6 +153,8 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
     cfg = job_config(config)
     apt_path = Path(toolpath.path)
     m = toolpath.motion_arrays(arc_chord_tol=cfg.check.arc_chord_tolerance)
+    input_limits.refuse_beyond(len(m), input_limits.MAX_CHECK_POSES, "poses to check",
+                               "MAX_CHECK_POSES", path=apt_path)
     if not (~np.asarray(m.rapid, bool)).any():
         raise PathcheckError("no cutting moves: expected GOTO records after FEDRAT, found only "
                              "rapid moves or none", path=apt_path, code="parse")

@@ -7,8 +7,9 @@ part frame (after `CSYS/`/`MSYS/`); `Record.args` keep the numbers exactly as wr
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, overload
 
 import numpy as np
 
@@ -54,6 +55,95 @@ class Record:
             elif abs(a - b) > rel * max(abs(a), abs(b), 1e-300):
                 return False
         return True
+
+
+class RecordList(Sequence[Record]):
+    """The records of a file in order, without an object per plain GOTO: the other statements
+    are `Record`s (``statements``, at positions ``at`` of the whole sequence), the plain GOTOs
+    (3 or 6 numbers, no comment) rows of arrays: ``xyz`` (G, 3) and ``lines`` (G,) as written
+    (file units and frame), the axis of the 6-value ones ``axis_values`` (K, 3) at GOTO rows
+    ``axis_rows`` (K,). Indexing and iteration give `Record`s, a plain GOTO's made on demand."""
+
+    __slots__ = ("at", "axis_rows", "axis_values", "lines", "statements", "xyz")
+
+    def __init__(self, statements: list[Record], at: np.ndarray, xyz: np.ndarray,
+                 lines: np.ndarray, axis_rows: np.ndarray, axis_values: np.ndarray) -> None:
+        self.statements = statements
+        self.at = np.asarray(at, dtype=np.int64)
+        self.xyz = np.asarray(xyz, dtype=float).reshape(-1, 3)
+        self.lines = np.asarray(lines)
+        self.axis_rows = np.asarray(axis_rows, dtype=np.int64)
+        self.axis_values = np.asarray(axis_values, dtype=float).reshape(-1, 3)
+
+    @classmethod
+    def of(cls, records: Sequence[Record]) -> RecordList:
+        """Every record as a statement object."""
+        if isinstance(records, RecordList):
+            return records
+        empty = np.zeros(0, dtype=np.int64)
+        return cls(list(records), np.arange(len(records)), np.zeros((0, 3)), empty, empty,
+                   np.zeros((0, 3)))
+
+    def __len__(self) -> int:
+        return len(self.statements) + len(self.lines)
+
+    @overload
+    def __getitem__(self, i: int) -> Record: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> list[Record]: ...
+
+    def __getitem__(self, i: int | slice) -> Record | list[Record]:
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        n = len(self)
+        if i < 0:
+            i += n
+        if not 0 <= i < n:
+            raise IndexError("record index out of range")
+        k = int(np.searchsorted(self.at, i))
+        if k < len(self.at) and self.at[k] == i:
+            return self.statements[k]
+        return self.goto_record(i - k)
+
+    def goto_record(self, g: int) -> Record:
+        """The plain GOTO of row ``g`` as a record."""
+        args = tuple(self.xyz[g].tolist())
+        j = int(np.searchsorted(self.axis_rows, g))
+        if j < len(self.axis_rows) and self.axis_rows[j] == g:
+            args += tuple(self.axis_values[j].tolist())
+        return Record("GOTO", args, int(self.lines[g]))
+
+    def _gotos(self, g0: int, g1: int) -> Iterator[Record]:
+        """The plain GOTOs of rows [g0, g1) as records, converted in bulk."""
+        j = int(np.searchsorted(self.axis_rows, g0))
+        rows = self.axis_rows
+        for g, xyz, line in zip(range(g0, g1), self.xyz[g0:g1].tolist(),
+                                self.lines[g0:g1].tolist(), strict=True):
+            if j < len(rows) and rows[j] == g:
+                yield Record("GOTO", (*xyz, *self.axis_values[j].tolist()), line)
+                j += 1
+            else:
+                yield Record("GOTO", tuple(xyz), line)
+
+    def __iter__(self) -> Iterator[Record]:
+        g = 0
+        for k, rec in enumerate(self.statements):
+            end = int(self.at[k]) - k
+            if end > g:
+                yield from self._gotos(g, end)
+                g = end
+            yield rec
+        yield from self._gotos(g, len(self.lines))
+
+    def goto_counts(self, start: int, stop: int) -> tuple[int, int]:
+        """(GOTO records, those with 6 values) among records [start, stop)."""
+        k0, k1 = np.searchsorted(self.at, [start, stop])
+        objs = [r for r in self.statements[k0:k1] if r.word == "GOTO"]
+        g0, g1 = start - k0, stop - k1
+        a0, a1 = np.searchsorted(self.axis_rows, [g0, g1])
+        return (int(g1 - g0) + len(objs),
+                int(a1 - a0) + sum(len(r.args) == 6 for r in objs))
 
 
 @dataclass(frozen=True, slots=True)
@@ -243,7 +333,7 @@ class ToolPath:
     path: str
     dialect: Literal["apt", "clsf", "gcode"]
     units: Literal["mm", "inch"]
-    records: list[Record]
+    records: Sequence[Record]
     operations: list[Operation]
     motions: MotionArrays
     arcs: list[Arc] = field(default_factory=list)
@@ -254,7 +344,8 @@ class ToolPath:
 
     def machine_name(self) -> str | None:
         """The machine the CL file names (its first `PPRINT/MACHINE NAME`), or None."""
-        for record in self.records:
+        records = self.records
+        for record in records.statements if isinstance(records, RecordList) else records:
             words = (record.text or "").split() if record.word == "PPRINT" else []
             if len(words) == 2 and words[0].upper() == "MACHINE":
                 return words[1]

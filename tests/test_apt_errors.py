@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from checker.apt import read_cl, read_cl_text
@@ -88,3 +89,38 @@ def test_long_digit_strings_are_refused_by_magnitude():
         read_cl_text("CUTTER/6\nGOTO/" + "9" * 400 + ",0,0\n")
     with pytest.raises(PathcheckError, match=r":2: expected a unit tool axis"):
         read_cl_text("CUTTER/6\nGOTO/0,0,0,0,0," + "9" * 400 + "\n")
+
+
+JOB = ("PARTNO/BOM AND CR\nUNITS/MM\nCUTTER/10,5\nFEDRAT/500,MMPM\nGOTO/0,0,5\nGOTO/10,0,5\n"
+       "GOTO/10,5,5,0,0.6,0.8\nGOTO/0,5,5\nFINI\n")
+
+
+def _same_path(a, b) -> None:
+    np.testing.assert_allclose(a.motions.tip, b.motions.tip, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.motions.axis, b.motions.axis, rtol=0, atol=1e-12)
+    assert a.motions.line.tolist() == b.motions.line.tolist()
+    assert [r.word for r in a.records] == [r.word for r in b.records]
+
+
+def test_a_utf8_byte_order_mark_is_skipped(tmp_path):
+    plain, bom = tmp_path / "plain.apt", tmp_path / "bom.apt"
+    plain.write_text(JOB)
+    bom.write_bytes(b"\xef\xbb\xbf" + JOB.encode())
+    want = read_cl(plain)
+    assert want.motions.line.tolist() == [5, 6, 7, 8]
+    _same_path(read_cl(bom), want)
+    _same_path(read_cl_text("\ufeff" + JOB), want)
+    assert read_cl(bom).records[0].text == "BOM AND CR"  # the mark is not part of the name
+
+
+def test_cr_only_line_ends_are_read_as_line_ends(tmp_path):
+    plain, cr = tmp_path / "plain.apt", tmp_path / "cr.apt"
+    plain.write_text(JOB)
+    cr.write_bytes(JOB.replace("\n", "\r").encode())
+    want = read_cl(plain)
+    _same_path(read_cl(cr), want)  # same motions on the same line numbers
+    _same_path(read_cl_text(JOB.replace("\n", "\r")), want)
+    with pytest.raises(PathcheckError, match=r"cr2\.apt:3: CUTTER: expected 1, 2 or 7 values"):
+        bad = tmp_path / "cr2.apt"
+        bad.write_bytes(JOB.replace("CUTTER/10,5", "CUTTER/10,5,1").replace("\n", "\r").encode())
+        read_cl(bad)

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from checker.toolpath import ToolPath
+from checker.toolpath import RecordList, ToolPath
 from checker.units import mm_per_unit
 
 Z = np.array([0.0, 0.0, 1.0])
@@ -16,7 +16,7 @@ Z = np.array([0.0, 0.0, 1.0])
 def axis_class(axis: np.ndarray, tol: float) -> str:
     """``"3-axis"`` when every unit axis (N, 3) is (0,0,1) within ``tol``; ``"4-axis-Y"`` when
     every axis has |j| <= tol (rotary table about Y, docs/MATH.md §1); else ``"multi-axis"``."""
-    if len(axis) == 0 or np.abs(axis - Z).max() <= tol:
+    if len(axis) == 0 or max(float(np.abs(axis[:, c] - Z[c]).max()) for c in range(3)) <= tol:
         return "3-axis"
     if np.abs(axis[:, 1]).max() <= tol:
         return "4-axis-Y"
@@ -27,10 +27,17 @@ AXIS_DECIMALS = 3  # axes equal to 1e-3 (about 0.06 degrees) count as one orient
 
 
 def distinct_axes(axis: np.ndarray) -> int:
-    """Number of different unit axis vectors (N, 3), compared to ``AXIS_DECIMALS`` decimals."""
+    """Number of different unit axis vectors (N, 3), compared to ``AXIS_DECIMALS`` decimals
+    (each rounded component a whole number of thousandths, packed into one integer key)."""
     if len(axis) == 0:
         return 0
-    return len(np.unique(np.round(axis, AXIS_DECIMALS) + 0.0, axis=0))  # + 0.0: no -0.0
+    q = 10**AXIS_DECIMALS
+    base = 2 * q + 1  # a unit component rounds to one of -q .. q
+    key = np.zeros(len(axis), dtype=np.int64)
+    for c in range(3):
+        key *= base
+        key += np.rint(axis[:, c] * q).astype(np.int64) + q
+    return len(np.unique(key))
 
 
 def _bbox(tip: np.ndarray, scale: float) -> dict | None:
@@ -64,15 +71,13 @@ def describe_toolpath(tp: ToolPath, axis_tol: float | None = None) -> dict:
         axis_tol = default_config().four_axis.axis_j_tolerance
     m = tp.motions
     scale = mm_per_unit(tp.units)
-    words = np.array([r.word for r in tp.records], dtype=object)
-    is_goto = words == "GOTO"
-    with_axis = is_goto & np.array([len(r.args) == 6 for r in tp.records])
+    records = RecordList.of(tp.records)
     arc_op = m.op[[a.motion for a in tp.arcs]] if tp.arcs else np.zeros(0, dtype=np.int64)
     ops = []
     for k, op in enumerate(tp.operations):
-        rec = slice(op.first_record, op.end_record)
         mot = slice(op.first_motion, op.end_motion)
         ax = m.axis[mot]
+        goto, goto_axis = records.goto_counts(op.first_record, op.end_record)
         ops.append(
             {
                 "name": op.name,
@@ -80,17 +85,18 @@ def describe_toolpath(tp: ToolPath, axis_tol: float | None = None) -> dict:
                 "tool_number": op.tool_number,
                 "cutter": _cutter(op.cutter),
                 "records": op.end_record - op.first_record,
-                "goto": int(is_goto[rec].sum()),
-                "goto_with_axis": int(with_axis[rec].sum()),
+                "goto": goto,
+                "goto_with_axis": goto_axis,
                 "rapid": int(m.rapid[mot].sum()),
                 "arcs": int((arc_op == k).sum()),
                 "distinct_axes": distinct_axes(ax),
                 "axis_class": axis_class(ax, axis_tol),
-                "first_line": tp.records[op.first_record].line if op.end_record > op.first_record
+                "first_line": records[op.first_record].line if op.end_record > op.first_record
                 else None,
                 "bbox": _bbox(m.tip[mot], scale),
             }
         )
+    goto_total, axis_total = records.goto_counts(0, len(records))
     return {
         "file": tp.path,
         "dialect": tp.dialect,
@@ -98,9 +104,9 @@ def describe_toolpath(tp: ToolPath, axis_tol: float | None = None) -> dict:
         "operations": ops,
         "totals": {
             "operations": len(ops),
-            "records": len(tp.records),
-            "goto": int(is_goto.sum()),
-            "goto_with_axis": int(with_axis.sum()),
+            "records": len(records),
+            "goto": goto_total,
+            "goto_with_axis": axis_total,
             "rapid": int(m.rapid.sum()),
             "arcs": len(tp.arcs),
             "motions": len(m),

@@ -1,5 +1,6 @@
-"""`Record`s -> `ToolPath`: a per-record state machine (units, frames, tool, feed, modal axis)
-that collects motions in lists and converts them to mm / part frame in bulk at the end."""
+"""`RecordList` -> `ToolPath`: a state machine over the statements (units, frames, tool, feed,
+modal axis); the runs of plain GOTOs between statements are copied in bulk into motion arrays
+allocated once, converted to mm / part frame in bulk at the end."""
 
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ from checker.toolpath import (
     MotionArrays,
     Operation,
     Record,
+    RecordList,
     ToolChange,
     ToolPath,
 )
@@ -48,6 +50,8 @@ ARC_RADIUS_TOL = 1e-2  # relative mismatch allowed between CIRCLE radius and its
 MIN_AXIS_NORM = 1e-6  # a CIRCLE axis shorter than this has no usable direction
 MAX_TURNS = 1000  # full turns of one helical CIRCLE (NX TIMES,n)
 ARC_RADIUS_ABS = 2e-3  # mm, plus this (4-decimal inch files round to 0.0025 mm)
+CHUNK = 1 << 20  # rows per vectorised step on the motion arrays (bounds the temporaries)
+SHORT_RUN = 4  # GOTO runs up to this long go one by one (a bulk copy costs more for them)
 # indices of angles (not lengths) in the cutter statements, by number of values
 _CUTTER_ANGLES = (4, 5)  # CUTTER/d,r,e,f,alpha,beta,h
 _TLDATA_ANGLES = (3, 4)
@@ -157,7 +161,7 @@ def circle_values(rec: Record, *, path: str) -> tuple[tuple[float, ...], int]:
 class _Reader:
     """State machine over the records; see `interpret`."""
 
-    def __init__(self, records: list[Record], *, path: str, dialect: str, units: str,
+    def __init__(self, records: RecordList, *, path: str, dialect: str, units: str,
                  require_cutter: bool) -> None:
         self.records = records
         self.path = path
@@ -165,13 +169,17 @@ class _Reader:
         self.units = units
         self.scale = mm_per_unit(units)
         self.require_cutter = require_cutter
-        # motion columns (file units, file frame); feed, spindle, frame, operation and cycle
-        # change seldom: each motion points to a row of `states`, pushed when one changes
-        self.pos: list[tuple[float, float, float]] = []
-        self.ax: list[tuple[float, float, float]] = []
-        self.rapid: list[bool] = []
-        self.line: list[int] = []
-        self.sid: list[int] = []
+        # motion columns (file units, file frame), rows [0, n) filled; feed, spindle, frame,
+        # operation and cycle change seldom: each motion points to a row of `states`, pushed
+        # when one changes
+        total = len(records.lines) + sum(
+            r.word in ("GOTO", "FROM", "GODLTA") for r in records.statements)
+        self.n = 0
+        self.pos = np.empty((total, 3))
+        self.ax = np.empty((total, 3))
+        self.rapid = np.zeros(total, dtype=bool)
+        self.line = np.empty(total, dtype=np.int64)
+        self.sid = np.empty(total, dtype=np.int32)
         self.states: list[tuple[float, ...]] = []
         self.dirty = True
         # state
@@ -206,8 +214,8 @@ class _Reader:
     def boundary(self, index: int) -> None:
         """A statement that starts a new operation once the current one has motions."""
         op = self.ops[-1]
-        if len(self.line) > op.first_motion:
-            op.end_record, op.end_motion = index, len(self.line)
+        if self.n > op.first_motion:
+            op.end_record, op.end_motion = index, self.n
             self.ops.append(
                 Operation(
                     name="",
@@ -215,7 +223,7 @@ class _Reader:
                     tool_number=self.tool_number,
                     cutter=self.cutter,
                     first_record=index,
-                    first_motion=len(self.line),
+                    first_motion=self.n,
                 )
             )
             self.named.append(False)
@@ -241,7 +249,8 @@ class _Reader:
         self.dirty = False
 
     def state_of(self, row: int) -> tuple[float, ...]:
-        return self.states[self.sid[row]]
+        """The state of motion ``row`` (negative: from the last filled one)."""
+        return self.states[self.sid[row if row >= 0 else self.n + row]]
 
     def add_motion(self, rec: Record, xyz: tuple[float, float, float], rapid: bool) -> None:
         if not rapid and not self.tool_defined and self.require_cutter:
@@ -254,11 +263,50 @@ class _Reader:
             )
         if self.dirty:
             self.push_state()
-        self.pos.append(xyz)
-        self.ax.append(self.axis)
-        self.rapid.append(rapid)
-        self.line.append(rec.line)
-        self.sid.append(len(self.states) - 1)
+        row = self.n
+        self.pos[row] = xyz
+        self.ax[row] = self.axis
+        self.rapid[row] = rapid
+        self.line[row] = rec.line
+        self.sid[row] = len(self.states) - 1
+        self.n = row + 1
+
+    def plain_gotos(self, g0: int, g1: int) -> None:
+        """The plain GOTOs of rows [g0, g1) of the record list, with no statement between
+        them, copied in bulk (their modal axis filled forward); `goto`'s rules hold."""
+        rl = self.records
+        if g1 - g0 <= SHORT_RUN or self.pending_arc is not None:  # one by one: cheaper
+            for g in range(g0, min(g1, g0 + SHORT_RUN)):
+                self.goto(rl.goto_record(g))
+            g0 = min(g1, g0 + SHORT_RUN)
+        if g0 >= g1:
+            return
+        rapid = self.rapid_next
+        if (g1 - g0 > 1 or not rapid) and not self.tool_defined and self.require_cutter:
+            first = Record("GOTO", (), int(rl.lines[g0 + rapid]))
+            raise _err(first, "feed move before any CUTTER/ or TLDATA/ statement: expected the "
+                       "cutter to be defined first, found none", path=self.path, code="cutter")
+        if self.dirty:
+            self.push_state()
+        self.rapid[self.n] = rapid
+        self.rapid_next = False
+        for c0 in range(g0, g1, CHUNK):
+            c1 = min(c0 + CHUNK, g1)
+            r0, r1 = self.n, self.n + c1 - c0
+            self.pos[r0:r1] = rl.xyz[c0:c1]
+            self.line[r0:r1] = rl.lines[c0:c1]
+            self.sid[r0:r1] = len(self.states) - 1
+            a0, a1 = (int(k) for k in rl.axis_rows.searchsorted([c0, c1]))
+            ax = self.ax[r0:r1]
+            ax[:] = self.axis
+            if a1 > a0:
+                idx = np.full(c1 - c0, -1, dtype=np.int64)
+                idx[rl.axis_rows[a0:a1] - c0] = np.arange(a0, a1)
+                np.maximum.accumulate(idx, out=idx)
+                has = idx >= 0
+                ax[has] = rl.axis_values[idx[has]]
+                self.axis = tuple(rl.axis_values[a1 - 1].tolist())
+            self.n = r1
 
     def goto(self, rec: Record) -> None:
         a = rec.args
@@ -272,18 +320,18 @@ class _Reader:
         self.add_motion(rec, a[:3], rapid)  # type: ignore[arg-type]
         if self.pending_arc is not None:
             circle = self.pending_arc[0]
-            if len(self.line) < 2 or self.state_of(-2)[4] != self.state_of(-1)[4]:
+            if self.n < 2 or self.state_of(-2)[4] != self.state_of(-1)[4]:
                 raise _err(circle, "expected a tool position before the arc, found none",
                            path=self.path)
-            self.arc_specs.append((*self.pending_arc, len(self.line) - 1))
+            self.arc_specs.append((*self.pending_arc, self.n - 1))
             self.pending_arc = None
 
     def last_position(self, rec: Record) -> np.ndarray:
         """The last tip in the current file frame, file units."""
-        if not self.pos:
+        if self.n == 0:
             raise _err(rec, "expected a tool position before this move, found none",
                        path=self.path)
-        p = np.asarray(self.pos[-1], dtype=float)
+        p = self.pos[self.n - 1].copy()
         last = self.state_of(-1)[3]
         if last != self.frame_now:
             s = self.scale
@@ -487,59 +535,63 @@ class _Reader:
 
     # ---- finish --------------------------------------------------------------------------
     def arrays(self) -> MotionArrays:
-        n = len(self.line)
-        tip = np.asarray(self.pos, dtype=float).reshape(n, 3) * self.scale
-        axis = np.asarray(self.ax, dtype=float).reshape(n, 3)
-        huge = np.flatnonzero(~(np.abs(tip) <= MAX_ABS * self.scale).all(axis=1))
-        if len(huge):
-            k = huge[0]
+        n = self.n
+        tip, axis, lines = self.pos[:n], self.ax[:n], self.line[:n]
+        big = MAX_ABS * self.scale
+        tip *= self.scale
+        k = _first_row(tip, lambda t: ~(np.abs(t) <= big).all(axis=1))
+        if k is not None:
             raise PathcheckError(
                 f"expected coordinates of at most {MAX_ABS:g}, found "
-                f"{tuple(float(v) for v in self.pos[k])}",
+                f"{tuple(float(v) / self.scale for v in tip[k])}",
                 path=self.path,
-                line=self.line[k],
+                line=int(lines[k]),
                 code="parse",
             )
-        norm = np.linalg.norm(axis, axis=1)
-        bad = np.flatnonzero(~(np.abs(norm - 1.0) <= AXIS_NORM_TOL))
-        if len(bad):
-            k = bad[0]
+        k = _first_row(axis, lambda a: ~(np.abs(np.linalg.norm(a, axis=1) - 1.0)
+                                         <= AXIS_NORM_TOL))
+        if k is not None:
             raise PathcheckError(
-                f"expected a unit tool axis i,j,k, found {tuple(axis[k])} of length {norm[k]:.4g}",
+                f"expected a unit tool axis i,j,k, found {tuple(axis[k])} of length "
+                f"{np.linalg.norm(axis[k]):.4g}",
                 path=self.path,
-                line=self.line[k],
+                line=int(lines[k]),
                 code="parse",
             )
-        axis /= norm[:, None]
-        st = np.asarray(self.states, dtype=float).reshape(-1, 10)[self.sid]
-        frame = st[:, 3].astype(np.intp)
-        fr.apply_frames(tip, axis, frame, self.matrices)
-        self.within_reach(tip, self.line, "tool position")
-        self.within_reach(st[:, 7:10] * self.scale, self.line, "canned-cycle distance")
-        rapid = np.asarray(self.rapid, dtype=bool)
-        feed = np.where(np.isnan(st[:, 1]), st[:, 0], st[:, 1] * st[:, 2])
+        _normalise(axis)
+        states = np.asarray(self.states, dtype=float).reshape(-1, 10)
+        sid = self.sid[:n]
+        if any(M is not None for M in self.matrices):
+            fr.apply_frames(tip, axis, states[:, 3].astype(np.intp)[sid], self.matrices)
+            _normalise(axis)
+        self.within_reach(tip, lines, "tool position")
+        geometry = None
+        if states[:, 5].any():
+            geometry = states[:, 7:10][sid] * self.scale
+            self.within_reach(geometry, lines, "canned-cycle distance")
+        rapid = self.rapid[:n]
+        per_state = np.where(np.isnan(states[:, 1]), states[:, 0], states[:, 1] * states[:, 2])
+        feed = per_state[sid]
         feed[rapid | ~(feed >= 0)] = np.nan  # rapid moves, and per-rev feeds without rpm
-        axis /= np.linalg.norm(axis, axis=1)[:, None]
         return MotionArrays(
             tip=tip,
             axis=axis,
             rapid=rapid,
             feed=feed,
-            spindle=st[:, 2].copy(),
-            line=np.asarray(self.line, dtype=np.int64),
-            op=st[:, 4].astype(np.int64),
-            cycle=st[:, 5].astype(bool),
+            spindle=states[:, 2][sid],
+            line=lines,
+            op=states[:, 4].astype(np.int64)[sid],
+            cycle=states[:, 5].astype(bool)[sid],
             arc=np.full(n, -1, dtype=np.int64),
-            coolant=st[:, 6].astype(np.int64),
-            cycle_geometry=st[:, 7:10] * self.scale,
+            coolant=states[:, 6].astype(np.int64)[sid],
+            cycle_geometry=geometry,
         )
 
     def within_reach(self, values: np.ndarray, lines, what: str) -> None:
         """Every finite value at most MAX_COORDINATE_MM (part frame, mm), else an error naming
         the first line beyond."""
-        far = np.flatnonzero((np.abs(values) > MAX_COORDINATE_MM).any(axis=1))
-        if len(far):
-            k = far[0]
+        k = _first_row(values, lambda v: (np.abs(v) > MAX_COORDINATE_MM).any(axis=1))
+        if k is not None:
             shown = ", ".join(f"{v:.6g}" for v in values[k])
             raise PathcheckError(
                 f"{what} ({shown}) mm in the part frame is beyond any machine's reach: "
@@ -596,7 +648,7 @@ class _Reader:
             raise _err(self.pending_arc[0], "expected the arc's end GOTO, found the end of file",
                        path=self.path)
         op = self.ops[-1]
-        op.end_record, op.end_motion = len(self.records), len(self.line)
+        op.end_record, op.end_motion = len(self.records), self.n
         for k, (o, named) in enumerate(zip(self.ops, self.named, strict=True), start=1):
             if not named:
                 o.name = f"OP{k}"
@@ -636,26 +688,50 @@ _BREAKS_ARC = frozenset(
 )
 
 
+def _first_row(values: np.ndarray, bad) -> int | None:
+    """The first row of ``values`` where ``bad(rows)`` (a row mask) holds, taken CHUNK rows at
+    a time so that its temporaries stay small; None when there is none."""
+    for c0 in range(0, len(values), CHUNK):
+        hit = np.flatnonzero(bad(values[c0 : c0 + CHUNK]))
+        if len(hit):
+            return c0 + int(hit[0])
+    return None
+
+
+def _normalise(axis: np.ndarray) -> None:
+    """In place: every row of ``axis`` (N, 3) divided by its length, CHUNK rows at a time."""
+    for c0 in range(0, len(axis), CHUNK):
+        a = axis[c0 : c0 + CHUNK]
+        a /= np.linalg.norm(a, axis=1)[:, None]
+
+
 def interpret(
-    records: list[Record], *, path: str, dialect: str, require_cutter: bool = True
+    records: RecordList | list[Record], *, path: str, dialect: str, require_cutter: bool = True
 ) -> ToolPath:
     """The tool path of ``records``. ``require_cutter``: a feed move before any ``CUTTER/`` or
     ``TLDATA/`` is an error (rapid moves are allowed)."""
-    if not any(r.word != "$$" for r in records):
+    records = RecordList.of(records)
+    if not len(records.lines) and not any(r.word != "$$" for r in records.statements):
         raise PathcheckError(
             "empty file: expected CL statements (GOTO/, CUTTER/, ...), found none",
             path=path,
             line=None,
             code="parse",
         )
-    units = file_units(records, path=path)
+    units = file_units(records.statements, path=path)
     reader = _Reader(records, path=path, dialect=dialect, units=units,
                      require_cutter=require_cutter)
     step = reader.step
     goto = reader.goto
-    for index, rec in enumerate(records):
+    g = 0
+    for k, (index, rec) in enumerate(zip(records.at.tolist(), records.statements,
+                                         strict=True)):
+        if index - k > g:
+            reader.plain_gotos(g, index - k)
+            g = index - k
         if rec.word == "GOTO" and reader.pending_arc is None:
             goto(rec)
         else:
             step(index, rec)
+    reader.plain_gotos(g, len(records.lines))
     return reader.finish()

@@ -1,14 +1,20 @@
-"""CL text -> `Record`s: `$` continuation, `$$` comments, free-text statements, column-72 card
-images, numbers checked (finite, at most MAX_ABS; for plain GOTOs the interpreter checks the
-magnitude in bulk). No meaning is given to any word here."""
+"""CL lines -> a `RecordList`: `$` continuation, `$$` comments, free-text statements, column-72
+card images, numbers checked (finite, at most MAX_ABS; for plain GOTOs the interpreter checks the
+magnitude in bulk). Plain GOTOs go into growing arrays, not objects, so that a program of
+millions of moves is read in tens of bytes a move. No meaning is given to any word here."""
 
 from __future__ import annotations
 
 import math
 import re
+from array import array
+from collections.abc import Iterable
+
+import numpy as np
 
 from checker.errors import PathcheckError
-from checker.toolpath import Record, Value
+from checker.input_limits import MAX_CL_STATEMENTS, refuse_beyond
+from checker.toolpath import Record, RecordList, Value
 
 # statements whose text after "/" is literal (commas, slashes and "$" included)
 FREE_TEXT = frozenset({"PARTNO", "PPRINT", "INSERT", "TITLE", "REMARK"})
@@ -72,11 +78,22 @@ def parse_args(raw: str, word: str, *, path: str, line: int) -> tuple[Value, ...
     return tuple(out)
 
 
-def is_card_image(lines: list[str]) -> bool:
+# zero-width matches: `findall` lists the one empty string, 8 bytes a line
+_NONBLANK = re.compile(r"^(?=[^\S\n]*\S)", re.M)
+_EIGHTY = re.compile(r"^(?=(?=[^\n]*\S)[^\n]{79}[^\r\n]\r*$)", re.M)
+
+
+def card_counts(text: str, end: int | None = None) -> tuple[int, int]:
+    """(non-blank lines, those exactly 80 characters wide without their CRs) of the whole
+    lines of ``text[:end]``."""
+    end = len(text) if end is None else end
+    return len(_NONBLANK.findall(text, 0, end)), len(_EIGHTY.findall(text, 0, end))
+
+
+def is_card_image(nonblank: int, eighty: int) -> bool:
     """True for 80-column card images (sequence numbers in columns 73-80): at least 90 % of the
-    non-blank lines are exactly 80 characters wide."""
-    widths = [len(s) for s in lines if s.strip()]
-    return bool(widths) and sum(w == 80 for w in widths) >= 0.9 * len(widths)
+    non-blank lines are exactly 80 characters wide (counts from `card_counts`)."""
+    return nonblank > 0 and eighty >= 0.9 * nonblank
 
 
 def _split_comment(body: str) -> tuple[str, str | None]:
@@ -96,18 +113,31 @@ def _statement(text: str) -> tuple[str, bool, str] | None:
 
 
 def lex(
-    lines: list[str], *, path: str, column72: bool, header_comments: bool
-) -> list[Record]:
-    """Records of the file. ``header_comments``: lines before the first statement that are not
-    statements (the NX "Information listing" header) and its "Tool Path Listing has N lines."
-    trailer become comment records."""
+    lines: Iterable[str], *, path: str, column72: bool, header_comments: bool
+) -> RecordList:
+    """Records of the file from its lines (line ends kept or not). ``header_comments``: lines
+    before the first statement that are not statements (the NX "Information listing" header)
+    and its "Tool Path Listing has N lines." trailer become comment records. More than
+    MAX_CL_STATEMENTS records other than plain GOTOs is an error."""
     records: list[Record] = []
-    append = records.append
+    at = array("q")  # positions of `records` in the whole sequence
+    xyz, glines = array("d"), array("i")  # plain GOTOs
+    axis_rows, axis_values = array("q"), array("d")
+    xyz_extend, glines_append = xyz.extend, glines.append
     pending: list[str] = []
     pending_line = 0
     comment: str | None = None
     seen_statement = False
     plain = _PLAIN.fullmatch
+
+    def append(rec: Record) -> None:
+        if len(records) >= MAX_CL_STATEMENTS:
+            refuse_beyond(len(records) + 1, MAX_CL_STATEMENTS,
+                          "or more statements other than plain GOTOs", "MAX_CL_STATEMENTS",
+                          path=path, line=rec.line)
+        at.append(len(records) + len(glines))
+        records.append(rec)
+
     for no, raw in enumerate(lines, start=1):
         s = (raw[:72] if column72 else raw).rstrip()
         if not pending and s.startswith("GOTO/") and plain(s, 5):
@@ -116,9 +146,20 @@ def lex(
                 vals = tuple(map(float, s[5:].split(",")))
             except ValueError:
                 vals = parse_args(s[5:], "GOTO", path=path, line=no)
-            append(Record("GOTO", vals, no))
             seen_statement = True
+            if len(vals) == 3:
+                xyz_extend(vals)
+                glines_append(no)
+            elif len(vals) == 6:
+                axis_rows.append(len(glines))
+                axis_values.extend(vals[3:])
+                xyz_extend(vals[:3])
+                glines_append(no)
+            else:  # the interpreter names the count
+                append(Record("GOTO", vals, no))
             continue
+        if "\x1a" in s:  # a DOS end-of-file mark (the reader refuses it elsewhere)
+            s = s.replace("\x1a", "").rstrip()
         stripped = s.strip()
         if not stripped:
             continue
@@ -162,4 +203,8 @@ def lex(
             line=pending_line,
             code="parse",
         )
-    return records
+    return RecordList(records, np.frombuffer(at, dtype=np.int64),
+                      np.frombuffer(xyz, dtype=float).reshape(-1, 3),
+                      np.frombuffer(glines, dtype=np.int32),
+                      np.frombuffer(axis_rows, dtype=np.int64),
+                      np.frombuffer(axis_values, dtype=float).reshape(-1, 3))

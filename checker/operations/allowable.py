@@ -5,19 +5,21 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
 
 from checker.b_axis import check_b_range
 from checker.config import Config
-from checker.engine import allowable
+from checker.engine import AllowableResult, allowable
 from checker.engine.document import allowable_document
 from checker.four_axis.job import best_b_points
 from checker.geometry.sampling import TestPoints, sample_part
 from checker.part import Part
 from checker.progress import step
+
+CHUNK_ROWS = 20_000  # CC rows per search: the engine's working arrays grow with a search's rows
 
 
 @dataclass
@@ -59,8 +61,7 @@ def allowable_at_points(sampled: SampledPart, cutter, cc: np.ndarray, normals: n
     check_b_request(b_range, config)
     t0 = time.perf_counter()
     with step("allowable cutter search"):
-        res = allowable(sampled.test_points, sampled.part, cutter, cc, normals, axis,
-                        method=method, seed=seed, config=config)
+        res = _in_chunks(sampled, cutter, cc, normals, axis, config, method, seed)
     timing = {"load_s": 0.0 if cached else sampled.load_s,
               "sample_s": 0.0 if cached else sampled.sample_s,
               "search_s": time.perf_counter() - t0}
@@ -71,3 +72,19 @@ def allowable_at_points(sampled: SampledPart, cutter, cc: np.ndarray, normals: n
                       config)
         doc["timing"]["b_search_s"] = round(time.perf_counter() - t1, 6)
     return doc
+
+
+def _in_chunks(sampled: SampledPart, cutter, cc: np.ndarray, normals: np.ndarray,
+               axis: np.ndarray, config: Config, method: str, seed: int | None
+               ) -> AllowableResult:
+    """`engine.allowable` over CHUNK_ROWS rows at a time (each row's search is its own), so
+    that the memory of a search of many rows is its result's, not its working arrays'. The
+    "pso" baseline draws from one random stream for all rows: it runs whole."""
+    step_rows = CHUNK_ROWS if method == "exact" else max(len(cc), 1)
+    parts = [allowable(sampled.test_points, sampled.part, cutter, cc[k:k + step_rows],
+                       normals[k:k + step_rows], axis, method=method, seed=seed, config=config)
+             for k in range(0, len(cc), step_rows) or [0]]
+    if len(parts) == 1:
+        return parts[0]
+    return AllowableResult(*(np.concatenate([getattr(p, f.name) for p in parts])
+                             for f in fields(AllowableResult)))
