@@ -90,7 +90,22 @@ def _advice(job, program, cutters: dict) -> _Advice:
             _engine_advice(job, program, o, c, rows, tips, axes, out)
         else:
             _mesh_advice(job, program, c, rows, tips, axes, out)
+        _clean_is_safe(out, rows, w.pose_verdict[at[rows]], float(c.size))
     return out
+
+
+def _clean_is_safe(out: _Advice, rows: np.ndarray, verdicts: np.ndarray, real: float) -> None:
+    """The advice never calls the real cutter (size `real` mm) unsafe at a pose where the check
+    finds it clean: at the `rows` whose pose's verdict (`verdicts`) is no finding, an allowable
+    size below the real one (and its margin) is raised to it. The check measures the real tool
+    at the pose against the part with the job's tolerance, and its verdict is the one answer;
+    the engine's size is that of a cutter tangent at the contact with no depth tolerance, which
+    a crease of a fraction of a degree (a B-spline's knot line) brings below any real size.
+    Contacts that cannot be touched (`inaccessible`) keep their mark."""
+    clean = rows[~vd.is_finding(verdicts) & np.isfinite(out.size[rows])
+                 & ~out.inaccessible[rows]]
+    out.size[clean] = np.maximum(out.size[clean], real)
+    out.margin[clean] = out.size[clean] - real
 
 
 def _engine_advice(job, program, o, c, rows, tips, axes, out: _Advice) -> None:

@@ -6,7 +6,9 @@ allowable variable, of the imaginary cutter that touches Pcc with normal n and p
 R (axis -> corner centre) for the APT family (flat, bull-nose, general APT), r for the ball family
 (ball, tapered ball). Limits by rule, never NaN: 0 when P is inside the size-0 cutter or the CC
 point cannot be touched tangentially (n_z <= 0 or n_z < sin(theta)), inf when no cutter of the
-family reaches P (below the tangent plane, beyond the R -> inf limiting surface, denominator <= 0).
+family reaches P (on or below the tangent plane, beyond the R -> inf limiting surface, denominator
+<= 0). "On" the tangent plane is within PLANE_SLOPE |q| of it: there the sign of n.q is the
+coordinates' rounding (a flat face through Pcc), which must not decide a size (docs/MATH.md §3.2).
 
 `tol` (mm, >= 0) is a depth tolerance: P counts as cut only when it lies at least `tol` inside the
 cutter (the profile offset inward by `tol`). `tol = 0` is the exact model (docs/MATH.md §3.6).
@@ -33,6 +35,8 @@ from numba import njit, prange
 EPS_H = 1e-9  # |n_xy| below this: the normal is vertical, e is not defined by the surface
 EPS_N = 1e-9  # slack on n_z >= sin(theta) (a wall parallel to the taper is still touchable)
 _ROUNDING_MM = 1e-9  # mm: bounds this near a decision leave it to the exact kernel
+PLANE_SLOPE = 1e-8  # P within this slope of the tangent plane at Pcc (|n.q| <= it |q|) lies on it
+_PLANE_SLOPE2 = PLANE_SLOPE * PLANE_SLOPE
 INF = np.inf
 
 FAMILY_APT = 0  # R variable: flat, bull-nose, general APT
@@ -159,12 +163,21 @@ def _untouchable(nz, prm):
 
 
 @njit(cache=True, inline="always")
+def _not_above(nq, qx, qy, qz, tol):
+    """Whether P = Pcc + q is not above the tangent plane at Pcc (offset by the depth tolerance
+    `tol`; `nq` = n.q): n.q <= tol, or within PLANE_SLOPE |q| of it, where the sign of n.q is
+    rounding's (a point of a flat face through Pcc). The convex cutter never reaches it."""
+    h = nq - tol
+    return h <= 0.0 or h * h <= _PLANE_SLOPE2 * (qx * qx + qy * qy + qz * qz)
+
+
+@njit(cache=True, inline="always")
 def apt_size(qx, qy, qz, nx, ny, nz, ex, ey, has_e, prm):
     """R of the imaginary APT-family cutter through P = Pcc + q, touching Pcc with normal n."""
     if _untouchable(nz, prm):
         return 0.0
-    if qx * nx + qy * ny + qz * nz <= prm[_TOL]:
-        return INF  # below the tangent plane: the convex cutter never reaches P
+    if _not_above(qx * nx + qy * ny + qz * nz, qx, qy, qz, prm[_TOL]):
+        return INF  # on or below the tangent plane: the convex cutter never reaches P
     if prm[_FLAT] < 0.5 and nz > prm[_COS_P]:
         return _apt_tip_contact(qx, qy, qz, prm)
     r = prm[_R]
@@ -225,7 +238,7 @@ def ball_size(qx, qy, qz, nx, ny, nz, prm):
     if _untouchable(nz, prm):
         return 0.0
     nq = qx * nx + qy * ny + qz * nz
-    if nq <= tol:
+    if _not_above(nq, qx, qy, qz, tol):
         return INF
     qh2 = qx * qx + qy * qy
     den = nz - sin_t

@@ -202,13 +202,19 @@ def test_depth_tolerance_matches_shrunk_cutter():
 
 
 def test_depth_tolerance_ignores_noise_on_a_floor():
-    """Floor points raised by rounding noise: tol = 0 finds a tiny cutter, tol > 0 does not."""
+    """Floor points raised by rounding noise (1e-13 mm, slope below kernels.PLANE_SLOPE) lie on
+    the tangent plane: no size, with or without a depth tolerance. Raised by 1e-6 mm (a slope
+    above it) they are cut by the flat end-mill of half their distance (worst case over e), and
+    a depth tolerance of 1e-6 mm ignores them again."""
     c = parse_cutter("CUTTER/10")
     rng = np.random.default_rng(2)
     p = np.column_stack([rng.uniform(-20, 20, (200, 2)), np.full(200, 1e-13)])
     n = np.tile([0.0, 0.0, 1.0], (200, 1))
     cc = np.zeros((200, 3))
     d = np.linalg.norm(p[:, :2], axis=1)
+    assert np.all(np.isinf(c.imaginary_size(p, cc, n)))
+    assert np.all(np.isinf(c.imaginary_size(p, cc, n, tol=1e-6)))
+    p[:, 2] = 1e-6
     np.testing.assert_allclose(c.imaginary_size(p, cc, n), d / 2, rtol=1e-9)
     assert np.all(np.isinf(c.imaginary_size(p, cc, n, tol=1e-6)))
 

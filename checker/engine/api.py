@@ -379,7 +379,7 @@ def _exact(tp: TestPoints, part: Part, cutter, frame: RowFrame, Q: np.ndarray, a
         closed = curvature_limit(cutter, part, frame, Q, contacts.rows, contacts.surface,
                                  contacts.uv)
         toward = rotate_rows(Q.transpose(0, 2, 1), closed.direction, contacts.rows)  # part frame
-        ring, at_cc = ring_starts(part, cutter, frame, Q, contacts, radii, toward)
+        ring, at_cc = ring_starts(part, cutter, frame, Q, contacts, radii, toward, closed.settled)
         starts.append(ring)
         np.add.at(best.evaluations, contacts.rows, ring_evaluations(radii))
     starts.append(seam_starts(tp, part, knn, own, spacing))

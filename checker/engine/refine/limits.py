@@ -23,7 +23,8 @@ this is R_lim = h / k_n(t_c): the bottom plane's contour through Pcc (docs/MATH.
 Tip contact (psi > 0, n_z > cos(psi)) and rows without a direction e have no limit here. The
 limit is kept only where the surface's own normal is the row's (not the other side of a crease:
 there the size tends to 0 or inf, not to a curvature limit) and its direction, +t or -t, leads
-into the surface's parameter box.
+into the surface's parameter box. Where the closed form holds and is inf (no direction bends
+towards the tool more than the cutter can), that is the limit: nothing is extrapolated there.
 (docs/MATH.md §3.7)"""
 
 from __future__ import annotations
@@ -43,12 +44,15 @@ _COS_SAME = np.cos(1e-4)  # the surface's normal within 1e-4 rad of the row's: t
 
 
 class CurvatureLimit(NamedTuple):
-    """Per (row, surface, uv) pair: the limit `size` (K,) mm (inf where none applies) and the
+    """Per (row, surface, uv) pair: the limit `size` (K,) mm (inf where none applies), the
     tangent `direction` (K, 3) (tool frame; its sign free) along which the size tends to it
-    (NaN where none applies)."""
+    (NaN where none applies), and `settled` (K,): the closed form holds there, so its size is
+    the limit even where that is inf (the surface bends away from the tool, or is flat, in every
+    direction) and no extrapolation may replace it (rings.py)."""
 
     size: np.ndarray
     direction: np.ndarray
+    settled: np.ndarray
 
 
 def curvature_limit(cutter, part: Part, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
@@ -62,6 +66,7 @@ def curvature_limit(cutter, part: Part, frame: RowFrame, Q: np.ndarray, rows: np
     n = frame.n[rows]
     to_uv = uv_of_tangents(su, sv)
     if cutter.ball_family:
+        form = np.ones(len(rows), dtype=bool)
         t1, t2 = tangent_basis(su, n)
         a, b, c = _forms(n, second, to_uv, t1, t2)
         half = np.sqrt((0.5 * (a - c)) ** 2 + b * b)
@@ -71,19 +76,22 @@ def curvature_limit(cutter, part: Part, frame: RowFrame, Q: np.ndarray, rows: np
         angle = 0.5 * np.arctan2(2.0 * b, a - c)  # the direction of k_max from t1
         t = np.cos(angle)[:, None] * t1 + np.sin(angle)[:, None] * t2
     else:
-        lim, t = _corner_limit(float(cutter.r), n, frame.e[rows], second, to_uv)
+        lim, t, defined = _corner_limit(float(cutter.r), n, frame.e[rows], second, to_uv)
         fillet = (n[:, 2] <= np.cos(float(cutter.psi)) + 1e-12) & \
             (n[:, 2] >= np.sin(float(cutter.theta)) - 1e-12)
-        lim = np.where(fillet, lim, np.inf)
+        form = fillet & defined
+        lim = np.where(form, lim, np.inf)
     tangent = np.einsum("ij,ij->i", rotate_rows(Q, ev.normals, rows), n) >= _COS_SAME
     ok = np.isfinite(lim) & tangent & _leads_inside(part, sid, uv, to_uv(t))
     return CurvatureLimit(np.where(ok, np.maximum(lim, 0.0), np.inf),
-                          np.where(ok[:, None], t, np.nan))
+                          np.where(ok[:, None], t, np.nan),
+                          ok | (form & tangent & np.isinf(lim)))
 
 
 def _corner_limit(r: float, n: np.ndarray, e: np.ndarray, second: list, to_uv):
-    """(R_lim (K,), its direction (K, 3)) for the R family's corner of radius r (module
-    docstring); inf where the normal is along the axis or e is undefined."""
+    """(R_lim (K,), its direction (K, 3), where it is defined (K,)) for the R family's corner of
+    radius r (module docstring); inf and undefined where the normal is along the axis or e is
+    undefined."""
     h = np.hypot(n[:, 0], n[:, 1])
     tc = np.column_stack([-e[:, 1], e[:, 0], np.zeros(len(e))])  # z x e
     tm = np.cross(tc, n)
@@ -95,7 +103,7 @@ def _corner_limit(r: float, n: np.ndarray, e: np.ndarray, second: list, to_uv):
     defined = (h > _EPS_H) & (np.linalg.norm(e, axis=1) > 0.5)
     direction = (b * r)[:, None] * tm + np.where(den > 0.0, den, 0.0)[:, None] * tc
     direction = np.where((den > 0.0)[:, None], direction, tm)
-    return np.where(defined, lim, np.inf), direction
+    return np.where(defined, lim, np.inf), direction, defined
 
 
 def _forms(n: np.ndarray, second: list, to_uv, t1: np.ndarray, t2: np.ndarray):

@@ -177,13 +177,14 @@ def _limit_at_cc(G, Q, sz, dom, r, sd, u, v, tg, angle, rho, w):
 
 
 @nb.njit(cache=True, _nrt=False)
-def _contacts(G, Q, sz, dom, rows, sid, uv, toward, radii, k0, k1, start, half, limit, w, tan,
-              angles):
+def _contacts(G, Q, sz, dom, rows, sid, uv, toward, settled, radii, k0, k1, start, half, limit,
+              w, tan, angles):
     """Rings of `radii` (mm) around contacts k0..k1: ring j's best point into start[k, j] (nan
     where no size is finite) with its stencil half-widths half[k, j] (parameter units: the
     first ring's radius, then half the ring's); the limit at the CC point into limit[k] where
-    the closed form's direction `toward[k]` (part frame) is nan. `w`, `tan`, `angles`: scratch
-    (`_scratch`)."""
+    the closed form is not `settled[k]` (nan elsewhere); the wider rings along the closed
+    form's direction `toward[k]` (part frame), else the first ring's best. `w`, `tan`,
+    `angles`: scratch (`_scratch`)."""
     for k in range(k0, k1):
         r, sd, u, v = rows[k], sid[k], uv[k, 0], uv[k, 1]
         tg = _tangents(G, sd, u, v, w, tan)
@@ -208,9 +209,10 @@ def _contacts(G, Q, sz, dom, rows, sid, uv, toward, radii, k0, k1, start, half, 
                                   + toward[k, 2] * tg.t2[2],
                                   toward[k, 0] * tg.t1[0] + toward[k, 1] * tg.t1[1]
                                   + toward[k, 2] * tg.t1[2])
-                limit[k] = np.nan
             else:
                 best = _best_angle(w.size, m)
+            limit[k] = np.nan
+            if not settled[k]:
                 limit[k] = _limit_at_cc(G, Q, sz, dom, r, sd, u, v, tg, best, rho, w)
             m = _WIDER_RING
             angles[0], angles[1] = best, best + np.pi
@@ -227,21 +229,22 @@ def _scratch():
 
 
 @nb.njit(cache=True, parallel=True)
-def _all_contacts(G, Q, sz, dom, rows, sid, uv, toward, radii, start, half, limit):
+def _all_contacts(G, Q, sz, dom, rows, sid, uv, toward, settled, radii, start, half, limit):
     """`_contacts` in parallel chunks of _CHUNK contacts."""
     n = rows.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
         w, tan, angles = _scratch()
-        _contacts(G, Q, sz, dom, rows, sid, uv, toward, radii, c * _CHUNK,
+        _contacts(G, Q, sz, dom, rows, sid, uv, toward, settled, radii, c * _CHUNK,
                   min(n, (c + 1) * _CHUNK), start, half, limit, w, tan, angles)
 
 
 def ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, contacts: Contacts,
-                radii: list[float], toward: np.ndarray) -> tuple[Starts, CCLimits]:
+                radii: list[float], toward: np.ndarray,
+                settled: np.ndarray) -> tuple[Starts, CCLimits]:
     """Around each CC point, on each surface it lies on (`contacts`), the best points of the
     rings of `radii` (mm) as refinement starts (ring by ring), and the limits at the CC points
-    whose closed form (`toward (K, 3)`, part frame, nan where none: limits.py) has no direction
-    (module docstring)."""
+    where the closed form (limits.py) is not `settled (K,)`; the wider rings follow its
+    direction `toward (K, 3)` (part frame, nan where none) (module docstring)."""
     rows = np.ascontiguousarray(contacts.rows, dtype=np.int64)
     sid = np.ascontiguousarray(contacts.surface, dtype=np.int64)
     uv = np.ascontiguousarray(contacts.uv, dtype=np.float64)
@@ -251,6 +254,7 @@ def ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, contacts: Co
         obj = Objective(part, cutter, frame, Q)
         _all_contacts(obj.G, obj.Q, obj.sz, obj.dom, rows, sid, uv,
                       np.ascontiguousarray(toward, dtype=np.float64),
+                      np.ascontiguousarray(settled, dtype=np.bool_),
                       np.asarray(radii, dtype=np.float64), start, half, limit)
     ok = np.isfinite(start[..., 0])
     starts = Starts.join([Starts(rows[ok[:, i]], sid[ok[:, i]], start[ok[:, i], i],
