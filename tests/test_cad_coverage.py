@@ -171,6 +171,7 @@ def cad(request, realdata):
     return path, tris, occ, samples, cfg.check.part_deviation
 
 
+@pytest.mark.slow
 def test_every_face_is_covered_by_the_triangles(cad):
     path, tris, occ, samples, deviation = cad
     index = MeshIndex.build(tris.vertices, tris.triangles)
@@ -250,6 +251,7 @@ def surface_distances(face, samples, points: np.ndarray, deviation: float) -> np
     return out
 
 
+@pytest.mark.slow
 def test_every_triangle_lies_on_its_face(cad):
     path, tris, occ, samples, deviation = cad
     pts, tri = _triangle_points(tris, np.random.default_rng(len(tris.triangles)))
