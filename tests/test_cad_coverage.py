@@ -171,6 +171,7 @@ def cad(request, realdata):
     return path, tris, occ, samples, cfg.check.part_deviation
 
 
+@pytest.mark.slow
 def test_every_face_is_covered_by_the_triangles(cad):
     path, tris, occ, samples, deviation = cad
     index = MeshIndex.build(tris.vertices, tris.triangles)
@@ -250,6 +251,7 @@ def surface_distances(face, samples, points: np.ndarray, deviation: float) -> np
     return out
 
 
+@pytest.mark.slow
 def test_every_triangle_lies_on_its_face(cad):
     path, tris, occ, samples, deviation = cad
     pts, tri = _triangle_points(tris, np.random.default_rng(len(tris.triangles)))
@@ -264,3 +266,37 @@ def test_every_triangle_lies_on_its_face(cad):
         f"{path.name}: {far.sum()} of {len(pts)} triangle points lie beyond {deviation} mm of "
         f"their face, up to {dist[worst]:.4f} mm (face {owner[worst]} at "
         f"{np.round(pts[worst], 3).tolist()})")
+
+
+def _brute_distances(points: np.ndarray, tv: np.ndarray) -> np.ndarray:
+    """(N,) distance from each point to the nearest triangle of tv (T, 3, 3), every pair: the
+    plane where the foot is inside the triangle (barycentric), else the nearest of its edges."""
+    a, b, c = tv[:, 0], tv[:, 1], tv[:, 2]
+    n = np.cross(b - a, c - a)
+    n = n / np.linalg.norm(n, axis=1)[:, None]
+    p = points[:, None, :]
+    h = np.einsum("ntc,tc->nt", p - a, n)
+    foot = p - h[..., None] * n
+    inside = np.ones(h.shape, dtype=bool)
+    for u, v in ((a, b), (b, c), (c, a)):
+        inside &= np.einsum("ntc,tc->nt", np.cross(v - u, foot - u), n) >= 0.0
+    best = np.where(inside, np.abs(h), np.inf)
+    for u, v in ((a, b), (b, c), (c, a)):
+        e = v - u
+        s = np.clip(np.einsum("ntc,tc->nt", p - u, e) / np.einsum("tc,tc->t", e, e), 0.0, 1.0)
+        best = np.minimum(best, np.linalg.norm(p - (u + s[..., None] * e), axis=2))
+    return best.min(axis=1)
+
+
+def test_nearest_distance_is_exact():
+    rng = np.random.default_rng(39)
+    centres = rng.uniform(-20.0, 20.0, (300, 1, 3))
+    tv = centres + rng.normal(0.0, 2.0, (300, 3, 3))
+    vertices, triangles = tv.reshape(-1, 3), np.arange(900).reshape(-1, 3)
+    points = rng.uniform(-25.0, 25.0, (2000, 3))
+    dist, tri = nearest_distances(MeshIndex.build(vertices, triangles), points)
+    want = _brute_distances(points, tv)
+    np.testing.assert_allclose(dist, np.minimum(want, CAP), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(
+        [_brute_distances(points[i:i + 1], tv[t:t + 1])[0] for i, t in enumerate(tri[:50])],
+        dist[:50], rtol=0, atol=1e-9)
