@@ -234,3 +234,24 @@ def test_nx_contact_points_lie_on_the_ball(realdata):
     assert np.allclose(r, 0.12 * 25.4)
     dist = np.linalg.norm(m.tip[has] + r[:, None] * m.axis[has] - cc[has], axis=1)
     assert np.abs(dist - r).max() < 0.005
+
+
+
+def test_depth_gradient_where_a_parameter_degenerates():
+    """The deepest-point descent inside the core at a point whose surface tangents are
+    degenerate (du = 0 at a pole or a collapsed edge, so J^T J is singular: the bladex root and
+    tip sections reach it with a flat D8): the depth and a finite unit gradient (the nearer
+    side's normal), never a singular-matrix error."""
+    from checker.geometry.contact import _depth_model
+
+    cutter = cutter_from_apt([8.0])
+    points = np.array([[0.3, 0.2, -0.4]])
+    tips, axes = np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]])
+    dv = np.array([[[0.0, 1.0], [0.0, 0.0], [0.0, 0.2]]])  # du = 0, dv along +x (and z)
+    regular = dv.copy()
+    regular[0, :, 0] = [0.0, 1.0, 0.0]  # a du along +y beside it
+    f, grad, _ = _depth_model(cutter.core, points, tips, axes, J=dv)
+    f_reg, grad_reg, _ = _depth_model(cutter.core, points, tips, axes, J=regular)
+    assert np.isfinite(grad).all() and f == pytest.approx(f_reg)
+    np.testing.assert_allclose(np.linalg.norm(grad), 1.0, atol=1e-9)
+

@@ -172,7 +172,9 @@ def _depth_model(core: Core, points, tips, axes, J=None):
     s1 = dr * np.sin(core.psi) - dh * np.cos(core.psi)
     s3 = dr * np.cos(core.theta) - dh * np.sin(core.theta)
     G = np.einsum("kia,kib->kab", J, J)
-    tangential = J @ np.linalg.solve(G, np.swapaxes(J, 1, 2))                # (K,3,3)
+    # the projector onto the tangent plane; pinv where a parameter direction degenerates
+    # (a pole, a collapsed edge: du or dv = 0 makes G singular)
+    tangential = J @ np.linalg.pinv(G) @ np.swapaxes(J, 1, 2)              # (K,3,3)
     p1 = np.einsum("kij,kj->ki", tangential, n1)
     p3 = np.einsum("kij,kj->ki", tangential, n3)
     diff = p3 - p1
