@@ -6,6 +6,7 @@ answer follows the callee's edit only because the folder changed."""
 
 from __future__ import annotations
 
+import ast
 import os
 import subprocess
 import sys
@@ -113,3 +114,77 @@ def test_a_kernel_compiled_in_one_install_serves_another_install_of_the_same_sou
     assert second == "[[-2.0, 1.0, 3.0]] []\n", "the second install compiled again"
     cached = tmp_path / "cache" / "numba" / source_key() / "checker" / "engine" / "grid"
     assert any(cached.glob("frames._rotate_indexed-*.nbi"))
+
+
+def _install(tmp_path, name: str):
+    """A copy of the package at tmp_path/name (as a wheel installs it), without kernels."""
+    import shutil
+
+    import checker
+
+    root = tmp_path / name
+    shutil.copytree(os.path.dirname(checker.__file__), root / "checker",
+                    ignore=shutil.ignore_patterns("__pycache__", "kernels"))
+    return root
+
+
+def _rotate(root, tmp_path, **env_vars) -> list[str]:
+    """Run _ROTATE with the package at `root`, pathcheck's environment cleared: the kernels it
+    compiled (its answer checked)."""
+    drop = ("NUMBA_CACHE_DIR", "NUMBA_CACHE_LOCATOR_CLASSES", "NUMBA_CPU_NAME",
+            "NUMBA_CPU_FEATURES", "PATHCHECK_CACHE_DIR", "PATHCHECK_KERNELS")
+    env = {k: v for k, v in os.environ.items() if k not in drop}
+    env.update(PYTHONPATH=str(root), **env_vars)
+    done = subprocess.run([sys.executable, "-c", _ROTATE], capture_output=True, text=True,
+                          env=env, timeout=300, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    where, answer = done.stdout.split(" ", 1)
+    assert where.startswith(str(root))
+    points, compiled = answer.rsplit("] ", 1)
+    assert points == "[[-2.0, 1.0, 3.0]"
+    return ast.literal_eval(compiled.strip())
+
+
+def test_portable_kernels_shipped_in_the_package_serve_a_new_cache_until_warm(tmp_path):
+    """`make wheel` compiles the kernels for numba's generic CPU into resources/kernels with a
+    stamp of the sources they serve; an install's first process seeds its new cache folder
+    with them and loads them (compiling nothing) until `pathcheck warm` has marked the folder
+    (cache.HOST_MARK): then it compiles for this CPU, which the portable kernels do not serve."""
+    from checker.cache import HOST_MARK, PORTABLE_STAMP, portable_stamp
+
+    build = _install(tmp_path, "build")
+    shipped = tmp_path / "shipped"
+    assert _rotate(build, tmp_path, NUMBA_CACHE_DIR=str(shipped),
+                   PATHCHECK_KERNELS="portable") == ["_rotate_indexed"]
+    (shipped / PORTABLE_STAMP).write_text(portable_stamp() + "\n")
+    user = _install(tmp_path, "user")
+    (shipped).rename(user / "checker" / "resources" / "kernels")
+    cache = tmp_path / "cache"
+    assert _rotate(user, tmp_path, PATHCHECK_CACHE_DIR=str(cache)) == [], "compiled again"
+    folder = cache / "numba" / source_key()
+    assert (folder / PORTABLE_STAMP).is_file()
+    (folder / HOST_MARK).touch()
+    assert _rotate(user, tmp_path, PATHCHECK_CACHE_DIR=str(cache)) == ["_rotate_indexed"]
+    assert _rotate(user, tmp_path, PATHCHECK_CACHE_DIR=str(cache)) == []
+
+
+def test_portable_kernels_of_other_sources_are_not_used(tmp_path, monkeypatch):
+    """Shipped kernels stamped for other sources (or another numba or Python) neither seed a
+    new folder nor make the process compile for the generic CPU."""
+    from checker import cache
+
+    shipped = tmp_path / "kernels"
+    (shipped / "checker").mkdir(parents=True)
+    (shipped / "checker" / "k.nbi").write_text("x")
+    monkeypatch.setattr(cache, "resource", lambda *parts: tmp_path.joinpath(*parts))
+    for var in ("PATHCHECK_KERNELS", "NUMBA_CPU_NAME"):
+        monkeypatch.delenv(var, raising=False)
+    for stamp, portable in (("0123456789ab numba-0.68.1 py311", False),
+                            (cache.portable_stamp(), True)):
+        (shipped / cache.PORTABLE_STAMP).write_text(stamp + "\n")
+        folder = tmp_path / f"cache-{portable}"
+        cache._seed(folder)
+        assert (folder / "checker" / "k.nbi").is_file() == portable
+        cache._choose_kernels(folder)
+        assert os.environ.pop("PATHCHECK_KERNELS") == ("portable" if portable else "host")
+        assert os.environ.pop("NUMBA_CPU_NAME", None) == ("generic" if portable else None)
