@@ -7,13 +7,14 @@ the other file changed (an upgrade, a checkout), until this key. Inside it each 
 its file's place in the package (kernel_locator.py), so every install of the same sources
 shares the folder. A numba cache folder set by the user (`NUMBA_CACHE_DIR`) wins, as it is.
 
-Portable kernels: a wheel built by `make wheel` ships kernels compiled for numba's generic x86-64
-CPU (`resources/kernels/`, built for its own sources, numba and Python). A new cache folder is
-seeded with them, and until `pathcheck warm` has compiled kernels tuned to this CPU into it
-(its mark, `HOST_MARK`), every process compiles and loads for the generic CPU
-(`NUMBA_CPU_NAME=generic`, part of numba's cache key), so the first check after an install
-loads instead of compiling. `PATHCHECK_KERNELS` (`host` or `portable`) says which, for a process
-and the processes it starts."""
+Portable kernels: a wheel built by `make wheel` ships kernels compiled for LLVM's x86-64-v3 CPU
+(`PORTABLE_CPU`: AVX2 and FMA, every x86-64 CPU since about 2013-2015; `resources/kernels/`,
+built for its own sources, numba and Python). A new cache folder is seeded with them, and on a
+CPU that has those instructions, until `pathcheck warm` has compiled kernels tuned to this CPU
+into it (its mark, `HOST_MARK`), every process compiles and loads for that CPU
+(`NUMBA_CPU_NAME`, part of numba's cache key, with no extra features), so the first check after
+an install loads instead of compiling. `PATHCHECK_KERNELS` (`host` or `portable`) says which,
+for a process and the processes it starts."""
 
 from __future__ import annotations
 
@@ -38,6 +39,10 @@ KEEP_VERSIONS = 4  # kernel folders of the most recent versions of the sources k
 KERNELS_ENV = "PATHCHECK_KERNELS"  # "host" (tuned to this CPU) or "portable" (generic x86-64)
 HOST_MARK = "host-kernels"  # in a cache folder: `pathcheck warm` compiled this CPU's kernels
 PORTABLE_STAMP = "STAMP"  # in the shipped kernels: the sources, numba and Python they are for
+PORTABLE_CPU = "x86-64-v3"  # LLVM's name; numba's "generic" x86-64 (SSE2) ran the engine 0.6x
+# what a CPU must have to run x86-64-v3 code (the flags of Linux's /proc/cpuinfo; "abm": lzcnt)
+_V3_FLAGS = frozenset(("avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "abm", "movbe", "xsave",
+                       "cx16", "lahf_lm", "popcnt", "sse4_1", "sse4_2", "ssse3"))
 
 
 def cache_dir() -> Path:
@@ -78,7 +83,18 @@ def portable_stamp() -> str:
         numba_version = version("numba")
     except PackageNotFoundError:
         numba_version = "?"
-    return f"{source_key()} numba-{numba_version} py{sys.version_info[0]}{sys.version_info[1]}"
+    return (f"{source_key()} numba-{numba_version} py{sys.version_info[0]}{sys.version_info[1]} "
+            f"{PORTABLE_CPU}")
+
+
+def runs_portable(cpuinfo: Path = Path("/proc/cpuinfo")) -> bool:
+    """Whether this CPU runs `PORTABLE_CPU` code (False where it cannot be told)."""
+    try:
+        with cpuinfo.open() as f:
+            flags = next((line for line in f if line.startswith("flags")), "")
+    except OSError:
+        return False
+    return set(flags.partition(":")[2].split()) >= _V3_FLAGS
 
 
 def portable_kernels() -> Path | None:
@@ -107,20 +123,22 @@ def _seed(folder: Path) -> None:
 
 
 def _choose_kernels(folder: Path) -> None:
-    """Compile and load this CPU's kernels, or the generic CPU's while `folder` holds the
-    portable ones (their stamp) and not yet this CPU's (`HOST_MARK`). `KERNELS_ENV` set by a
-    parent process (or by `pathcheck warm`) decides instead; a CPU chosen by the user
-    (`NUMBA_CPU_NAME`) stays."""
+    """Compile and load this CPU's kernels, or `PORTABLE_CPU`'s while `folder` holds the
+    portable ones (their stamp) and not yet this CPU's (`HOST_MARK`), on a CPU that runs them.
+    `KERNELS_ENV` set by a parent process (or by `pathcheck warm`) decides instead; a CPU chosen
+    by the user (`NUMBA_CPU_NAME`) stays."""
     chosen = os.environ.get(KERNELS_ENV)
     if chosen is None:
         if os.environ.get("NUMBA_CPU_NAME"):
             return
-        portable = (folder / PORTABLE_STAMP).exists() and not (folder / HOST_MARK).exists()
+        portable = ((folder / PORTABLE_STAMP).exists() and not (folder / HOST_MARK).exists()
+                    and runs_portable())
         chosen = os.environ[KERNELS_ENV] = "portable" if portable else "host"
     if chosen == "portable":
-        os.environ["NUMBA_CPU_NAME"] = "generic"
-    elif os.environ.get("NUMBA_CPU_NAME") == "generic":
+        os.environ.update(NUMBA_CPU_NAME=PORTABLE_CPU, NUMBA_CPU_FEATURES="")
+    elif os.environ.get("NUMBA_CPU_NAME") == PORTABLE_CPU:
         del os.environ["NUMBA_CPU_NAME"]
+        os.environ.pop("NUMBA_CPU_FEATURES", None)
 
 
 def kernel_cache_dir() -> Path:

@@ -14,8 +14,8 @@ first run.
 
 `pathcheck warm` compiles for this CPU and marks the cache folder so (`cache.HOST_MARK`: later
 processes take these kernels instead of the portable ones a wheel ships); `make wheel` builds the
-portable ones the same way for numba's generic x86-64 CPU (`build_portable`, run as
-`python -m checker.warm --portable FOLDER`)."""
+portable ones the same way for `cache.PORTABLE_CPU` (`build_portable`, run as
+`python -m checker.warm --portable FOLDER` on a CPU that runs that code)."""
 
 from __future__ import annotations
 
@@ -28,7 +28,15 @@ import tempfile
 import time
 from pathlib import Path
 
-from checker.cache import HOST_MARK, KERNELS_ENV, PORTABLE_STAMP, kernel_cache_dir, portable_stamp
+from checker.cache import (
+    HOST_MARK,
+    KERNELS_ENV,
+    PORTABLE_CPU,
+    PORTABLE_STAMP,
+    kernel_cache_dir,
+    portable_stamp,
+    runs_portable,
+)
 from checker.resources import resource
 
 WARMUP_JOB = resource("warmup", "warmup.apt")
@@ -135,7 +143,8 @@ def _check_warm_up_job() -> None:
 
 def _compile_all(folder: Path, kernels: str) -> None:
     """Compile the families (two processes at once), then the warm-up job (a third), into the
-    numba cache `folder`, for this CPU (`kernels` "host") or the generic one ("portable")."""
+    numba cache `folder`, for this CPU (`kernels` "host") or `cache.PORTABLE_CPU`
+    ("portable")."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(folder), **{KERNELS_ENV: kernels})
 
     def run(call: str) -> subprocess.Popen:
@@ -159,8 +168,12 @@ def warm_kernels() -> tuple[Path, float]:
 
 
 def build_portable(out: Path) -> float:
-    """The portable kernels (numba's generic x86-64 CPU) of these sources in the new folder
-    `out`, stamped with what they serve (`cache.portable_stamp`): seconds taken."""
+    """The portable kernels (`cache.PORTABLE_CPU`) of these sources in the new folder `out`,
+    stamped with what they serve (`cache.portable_stamp`): seconds taken. The warm-up runs
+    them, so this CPU must run them."""
+    if not runs_portable():
+        raise SystemExit(f"building the portable kernels needs a CPU that runs {PORTABLE_CPU} "
+                         "code (AVX2, FMA)")
     t0 = time.perf_counter()
     shutil.rmtree(out, ignore_errors=True)
     out.mkdir(parents=True)
