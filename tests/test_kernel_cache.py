@@ -12,7 +12,9 @@ import subprocess
 import sys
 import textwrap
 
-from checker.cache import source_key
+import pytest
+
+from checker.cache import runs_portable, source_key
 
 _CALLEE = "import numba\n\n@numba.njit(cache=True)\ndef f(x):\n    return x + {}\n"
 _CALLER = textwrap.dedent("""
@@ -99,7 +101,7 @@ def test_a_kernel_compiled_in_one_install_serves_another_install_of_the_same_sou
     runs = []
     for name in ("first", "second"):
         shutil.copytree(package, tmp_path / name / "checker",
-                        ignore=shutil.ignore_patterns("__pycache__"))
+                        ignore=shutil.ignore_patterns("__pycache__", "kernels"))
         env = {k: v for k, v in os.environ.items()
                if k not in ("NUMBA_CACHE_DIR", "NUMBA_CACHE_LOCATOR_CLASSES")}
         env.update(PYTHONPATH=str(tmp_path / name), PATHCHECK_CACHE_DIR=str(tmp_path / "cache"))
@@ -145,6 +147,7 @@ def _rotate(root, tmp_path, **env_vars) -> list[str]:
     return ast.literal_eval(compiled.strip())
 
 
+@pytest.mark.skipif(not runs_portable(), reason="this CPU does not run the portable kernels")
 def test_portable_kernels_shipped_in_the_package_serve_a_new_cache_until_warm(tmp_path):
     """`make wheel` compiles the kernels for numba's generic CPU into resources/kernels with a
     stamp of the sources they serve; an install's first process seeds its new cache folder
@@ -168,23 +171,34 @@ def test_portable_kernels_shipped_in_the_package_serve_a_new_cache_until_warm(tm
     assert _rotate(user, tmp_path, PATHCHECK_CACHE_DIR=str(cache)) == []
 
 
-def test_portable_kernels_of_other_sources_are_not_used(tmp_path, monkeypatch):
-    """Shipped kernels stamped for other sources (or another numba or Python) neither seed a
-    new folder nor make the process compile for the generic CPU."""
+def test_portable_kernels_of_other_sources_or_for_other_cpus_are_not_used(tmp_path, monkeypatch):
+    """Shipped kernels stamped for other sources (or another numba, Python or CPU) neither seed
+    a new folder nor make the process compile for the portable CPU; nor do kernels for the
+    right sources on a CPU without AVX2 (its /proc/cpuinfo flags)."""
     from checker import cache
 
     shipped = tmp_path / "kernels"
     (shipped / "checker").mkdir(parents=True)
     (shipped / "checker" / "k.nbi").write_text("x")
     monkeypatch.setattr(cache, "resource", lambda *parts: tmp_path.joinpath(*parts))
-    for var in ("PATHCHECK_KERNELS", "NUMBA_CPU_NAME"):
+    for var in ("PATHCHECK_KERNELS", "NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES"):
         monkeypatch.delenv(var, raising=False)
-    for stamp, portable in (("0123456789ab numba-0.68.1 py311", False),
-                            (cache.portable_stamp(), True)):
-        (shipped / cache.PORTABLE_STAMP).write_text(stamp + "\n")
-        folder = tmp_path / f"cache-{portable}"
+    flags = "flags\t\t: " + " ".join(sorted(cache._V3_FLAGS)) + " sse2\n"
+    cpuinfo = tmp_path / "cpuinfo"
+    runs = cache.runs_portable
+    stamp = cache.portable_stamp()
+    for name, shipped_stamp, cpu_flags, portable in (
+            ("other-sources", "0123456789ab" + stamp[12:], flags, False),
+            ("other-cpu", stamp.replace(cache.PORTABLE_CPU, "generic"), flags, False),
+            ("no-avx2", stamp, flags.replace(" avx2", ""), False),
+            ("these", stamp, flags, True)):
+        (shipped / cache.PORTABLE_STAMP).write_text(shipped_stamp + "\n")
+        cpuinfo.write_text("processor\t: 0\n" + cpu_flags)
+        monkeypatch.setattr(cache, "runs_portable", lambda: runs(cpuinfo))
+        folder = tmp_path / name
         cache._seed(folder)
-        assert (folder / "checker" / "k.nbi").is_file() == portable
+        assert (folder / "checker" / "k.nbi").is_file() == (shipped_stamp == stamp)
         cache._choose_kernels(folder)
         assert os.environ.pop("PATHCHECK_KERNELS") == ("portable" if portable else "host")
-        assert os.environ.pop("NUMBA_CPU_NAME", None) == ("generic" if portable else None)
+        assert os.environ.pop("NUMBA_CPU_NAME", None) == (cache.PORTABLE_CPU if portable else None)
+        assert os.environ.pop("NUMBA_CPU_FEATURES", None) == ("" if portable else None)
