@@ -48,9 +48,13 @@ lint: setup
 bench: setup
 	$(BIN)/python -m benchmarks.run_all
 
-# the wheel and the source distribution, in dist/
+# the source distribution, then the wheel with the portable kernels of its sources (compiled
+# for numba's generic x86-64 CPU into checker/resources/kernels, not kept in git), in dist/
 wheel: setup
-	$(BIN)/python -m build --outdir dist .
+	rm -rf dist build checker/resources/kernels
+	$(BIN)/python -m build --sdist --outdir dist .
+	$(BIN)/python -m checker.warm --portable checker/resources/kernels
+	$(BIN)/python -m build --wheel --outdir dist .
 
 clean:
-	rm -rf $(VENV) out dist build .pytest_cache
+	rm -rf $(VENV) out dist build .pytest_cache checker/resources/kernels

@@ -5,7 +5,16 @@ directory when that one cannot be written. numba keeps its files under `numba/<k
 own file only, so a kernel that calls a kernel of another file kept that one's old code after
 the other file changed (an upgrade, a checkout), until this key. Inside it each kernel lies at
 its file's place in the package (kernel_locator.py), so every install of the same sources
-shares the folder. A numba cache folder set by the user (`NUMBA_CACHE_DIR`) wins, as it is."""
+shares the folder. A numba cache folder set by the user (`NUMBA_CACHE_DIR`) wins, as it is.
+
+Portable kernels: a wheel built by `make wheel` ships kernels compiled for LLVM's x86-64-v3 CPU
+(`PORTABLE_CPU`: AVX2 and FMA, every x86-64 CPU since about 2013-2015; `resources/kernels/`,
+built for its own sources, numba and Python). A new cache folder is seeded with them, and on a
+CPU that has those instructions, until `pathcheck warm` has compiled kernels tuned to this CPU
+into it (its mark, `HOST_MARK`), every process compiles and loads for that CPU
+(`NUMBA_CPU_NAME`, part of numba's cache key, with no extra features), so the first check after
+an install loads instead of compiling. `PATHCHECK_KERNELS` (`host` or `portable`) says which,
+for a process and the processes it starts."""
 
 from __future__ import annotations
 
@@ -18,6 +27,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from checker.resources import resource
+
 CACHE_ENV = "PATHCHECK_CACHE_DIR"
 LOCATORS_ENV = "NUMBA_CACHE_LOCATOR_CLASSES"
 # pathcheck's own kernels by their place in the package (kernel_locator.py), anything else as
@@ -25,6 +36,13 @@ LOCATORS_ENV = "NUMBA_CACHE_LOCATOR_CLASSES"
 _LOCATORS = ("checker.kernel_locator.PackageLocator,UserProvidedCacheLocator,InTreeCacheLocator,"
              "UserWideCacheLocator,IPythonCacheLocator,ZipCacheLocator")
 KEEP_VERSIONS = 4  # kernel folders of the most recent versions of the sources kept
+KERNELS_ENV = "PATHCHECK_KERNELS"  # "host" (tuned to this CPU) or "portable" (generic x86-64)
+HOST_MARK = "host-kernels"  # in a cache folder: `pathcheck warm` compiled this CPU's kernels
+PORTABLE_STAMP = "STAMP"  # in the shipped kernels: the sources, numba and Python they are for
+PORTABLE_CPU = "x86-64-v3"  # LLVM's name; numba's "generic" x86-64 (SSE2) ran the engine 0.6x
+# what a CPU must have to run x86-64-v3 code (the flags of Linux's /proc/cpuinfo; "abm": lzcnt)
+_V3_FLAGS = frozenset(("avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "abm", "movbe", "xsave",
+                       "cx16", "lahf_lm", "popcnt", "sse4_1", "sse4_2", "ssse3"))
 
 
 def cache_dir() -> Path:
@@ -56,6 +74,73 @@ def source_key(root: Path = PACKAGE) -> str:
     return h.hexdigest()[:12]
 
 
+def portable_stamp() -> str:
+    """What portable kernels must have been built for to be loaded here: these sources, this
+    numba (its cache index holds its version) and this Python (its files name it)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        numba_version = version("numba")
+    except PackageNotFoundError:
+        numba_version = "?"
+    return (f"{source_key()} numba-{numba_version} py{sys.version_info[0]}{sys.version_info[1]} "
+            f"{PORTABLE_CPU}")
+
+
+def runs_portable(cpuinfo: Path = Path("/proc/cpuinfo")) -> bool:
+    """Whether this CPU runs `PORTABLE_CPU` code (False where it cannot be told)."""
+    try:
+        with cpuinfo.open() as f:
+            flags = next((line for line in f if line.startswith("flags")), "")
+    except OSError:
+        return False
+    return set(flags.partition(":")[2].split()) >= _V3_FLAGS
+
+
+def portable_kernels() -> Path | None:
+    """The folder of the portable kernels shipped with the package, when they were built for
+    `portable_stamp()` (None otherwise: a source checkout, another numba or Python)."""
+    shipped = resource("kernels")
+    try:
+        stamp = (shipped / PORTABLE_STAMP).read_text().strip()
+    except OSError:
+        return None
+    return shipped if stamp == portable_stamp() else None
+
+
+def _seed(folder: Path) -> None:
+    """Fill the new cache `folder` with the shipped portable kernels and their stamp, whole or
+    not at all (a copy renamed into place; another process may do the same at once)."""
+    shipped = portable_kernels()
+    if shipped is None:
+        return
+    partial = folder.with_name(f".{folder.name}.{os.getpid()}")
+    try:
+        shutil.copytree(shipped, partial)
+        os.rename(partial, folder)
+    except OSError:
+        shutil.rmtree(partial, ignore_errors=True)
+
+
+def _choose_kernels(folder: Path) -> None:
+    """Compile and load this CPU's kernels, or `PORTABLE_CPU`'s while `folder` holds the
+    portable ones (their stamp) and not yet this CPU's (`HOST_MARK`), on a CPU that runs them.
+    `KERNELS_ENV` set by a parent process (or by `pathcheck warm`) decides instead; a CPU chosen
+    by the user (`NUMBA_CPU_NAME`) stays."""
+    chosen = os.environ.get(KERNELS_ENV)
+    if chosen is None:
+        if os.environ.get("NUMBA_CPU_NAME"):
+            return
+        portable = ((folder / PORTABLE_STAMP).exists() and not (folder / HOST_MARK).exists()
+                    and runs_portable())
+        chosen = os.environ[KERNELS_ENV] = "portable" if portable else "host"
+    if chosen == "portable":
+        os.environ.update(NUMBA_CPU_NAME=PORTABLE_CPU, NUMBA_CPU_FEATURES="")
+    elif os.environ.get("NUMBA_CPU_NAME") == PORTABLE_CPU:
+        del os.environ["NUMBA_CPU_NAME"]
+        os.environ.pop("NUMBA_CPU_FEATURES", None)
+
+
 def kernel_cache_dir() -> Path:
     """The folder numba caches pathcheck's compiled kernels in (one per version of the
     sources)."""
@@ -81,15 +166,20 @@ def use_kernel_cache() -> Path:
     child processes), falling back to the temporary directory when it cannot be written, with
     pathcheck's kernels kept by their place in the package (`kernel_locator`, unless the user
     chose numba's locators). A folder made for a new version of the sources prunes the oldest
-    versions'."""
+    versions' and is seeded with the shipped portable kernels; which CPU's kernels the process
+    uses: `_choose_kernels`."""
     folder = kernel_cache_dir()
+    own = not os.environ.get("NUMBA_CACHE_DIR")
     new = not folder.exists()
-    if not _writable(folder):
+    if not _writable(folder.parent) or not (new or _writable(folder)):
         folder = Path(tempfile.gettempdir()) / f"pathcheck-{os.getuid()}" / "numba" / source_key()
+        folder.parent.mkdir(parents=True, exist_ok=True)
         new = not folder.exists()
-        folder.mkdir(parents=True, exist_ok=True)
-    if new and not os.environ.get("NUMBA_CACHE_DIR"):
+    if new and own:
+        _seed(folder)
         prune_versions(folder.parent)
+    folder.mkdir(parents=True, exist_ok=True)
+    _choose_kernels(folder)
     os.environ["NUMBA_CACHE_DIR"] = str(folder)
     os.environ.setdefault(LOCATORS_ENV, _LOCATORS)
     if "numba" in sys.modules:  # imported before pathcheck: make it read the folder again

@@ -10,17 +10,33 @@ left. The engine also runs on many CC points with one axis, for the kernels' thr
 which a large job takes: without them the compressor sample's first run after `warm` compiled
 six kernels (21.8 s instead of 14, peak 566 MB instead of 490). Afterwards neither job compiles
 anything; a job that needs more (a flat end-mill's contour search) compiles those few on its
-first run."""
+first run.
+
+`pathcheck warm` compiles for this CPU and marks the cache folder so (`cache.HOST_MARK`: later
+processes take these kernels instead of the portable ones a wheel ships); `make wheel` builds the
+portable ones the same way for `cache.PORTABLE_CPU` (`build_portable`, run as
+`python -m checker.warm --portable FOLDER` on a CPU that runs that code)."""
 
 from __future__ import annotations
 
+import argparse
+import os
+import shutil
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-from checker.cache import kernel_cache_dir
+from checker.cache import (
+    HOST_MARK,
+    KERNELS_ENV,
+    PORTABLE_CPU,
+    PORTABLE_STAMP,
+    kernel_cache_dir,
+    portable_stamp,
+    runs_portable,
+)
 from checker.resources import resource
 
 WARMUP_JOB = resource("warmup", "warmup.apt")
@@ -117,15 +133,62 @@ def _allowable_at_the_warm_up_part() -> None:
                   cc_uv=np.column_stack([u, v]), hint=np.zeros(u.size) if one_axis else None)
 
 
-def warm_kernels() -> tuple[Path, float]:
-    """(the kernel cache folder, seconds taken)."""
-    t0 = time.perf_counter()
-    procs = [subprocess.Popen([sys.executable, "-c", f"from checker.warm import compile_{name}; "
-                               f"compile_{name}()"]) for name in _FAMILIES]
-    for proc in procs:
-        proc.wait()
+def _check_warm_up_job() -> None:
+    """The warm-up job checked and posted as the demo runs it (`make demo`)."""
     from checker.job import check_job
 
     with tempfile.TemporaryDirectory(prefix="pathcheck-warm-") as tmp:
-        check_job(WARMUP_JOB, output=Path(tmp) / "warmup.nc", on_findings="stop")  # as the demo
-    return kernel_cache_dir(), time.perf_counter() - t0
+        check_job(WARMUP_JOB, output=Path(tmp) / "warmup.nc", on_findings="stop")
+
+
+def _compile_all(folder: Path, kernels: str) -> None:
+    """Compile the families (two processes at once), then the warm-up job (a third), into the
+    numba cache `folder`, for this CPU (`kernels` "host") or `cache.PORTABLE_CPU`
+    ("portable")."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(folder), **{KERNELS_ENV: kernels})
+
+    def run(call: str) -> subprocess.Popen:
+        return subprocess.Popen([sys.executable, "-c", f"from checker.warm import {call}; "
+                                 f"{call}()"], env=env)
+
+    procs = [run(f"compile_{name}") for name in _FAMILIES]
+    failed = [proc.wait() for proc in procs] + [run("_check_warm_up_job").wait()]
+    if any(failed):
+        raise RuntimeError(f"compiling the kernels failed (exit {max(failed)})")
+
+
+def warm_kernels() -> tuple[Path, float]:
+    """Compile this CPU's kernels into the cache folder and mark it so: (the folder, seconds
+    taken)."""
+    t0 = time.perf_counter()
+    folder = kernel_cache_dir()
+    _compile_all(folder, "host")
+    (folder / HOST_MARK).touch()
+    return folder, time.perf_counter() - t0
+
+
+def build_portable(out: Path) -> float:
+    """The portable kernels (`cache.PORTABLE_CPU`) of these sources in the new folder `out`,
+    stamped with what they serve (`cache.portable_stamp`): seconds taken. The warm-up runs
+    them, so this CPU must run them."""
+    if not runs_portable():
+        raise SystemExit(f"building the portable kernels needs a CPU that runs {PORTABLE_CPU} "
+                         "code (AVX2, FMA)")
+    t0 = time.perf_counter()
+    shutil.rmtree(out, ignore_errors=True)
+    out.mkdir(parents=True)
+    _compile_all(out, "portable")
+    (out / PORTABLE_STAMP).write_text(portable_stamp() + "\n")
+    return time.perf_counter() - t0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description="Build the portable kernels a wheel ships.")
+    ap.add_argument("--portable", type=Path, required=True, metavar="FOLDER",
+                    help="the new folder (checker/resources/kernels for `make wheel`)")
+    seconds = build_portable(ap.parse_args().portable)
+    print(f"portable kernels built in {seconds:.1f} s")
+
+
+if __name__ == "__main__":
+    main()

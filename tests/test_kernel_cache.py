@@ -6,12 +6,15 @@ answer follows the callee's edit only because the folder changed."""
 
 from __future__ import annotations
 
+import ast
 import os
 import subprocess
 import sys
 import textwrap
 
-from checker.cache import source_key
+import pytest
+
+from checker.cache import runs_portable, source_key
 
 _CALLEE = "import numba\n\n@numba.njit(cache=True)\ndef f(x):\n    return x + {}\n"
 _CALLER = textwrap.dedent("""
@@ -98,7 +101,7 @@ def test_a_kernel_compiled_in_one_install_serves_another_install_of_the_same_sou
     runs = []
     for name in ("first", "second"):
         shutil.copytree(package, tmp_path / name / "checker",
-                        ignore=shutil.ignore_patterns("__pycache__"))
+                        ignore=shutil.ignore_patterns("__pycache__", "kernels"))
         env = {k: v for k, v in os.environ.items()
                if k not in ("NUMBA_CACHE_DIR", "NUMBA_CACHE_LOCATOR_CLASSES")}
         env.update(PYTHONPATH=str(tmp_path / name), PATHCHECK_CACHE_DIR=str(tmp_path / "cache"))
@@ -113,3 +116,89 @@ def test_a_kernel_compiled_in_one_install_serves_another_install_of_the_same_sou
     assert second == "[[-2.0, 1.0, 3.0]] []\n", "the second install compiled again"
     cached = tmp_path / "cache" / "numba" / source_key() / "checker" / "engine" / "grid"
     assert any(cached.glob("frames._rotate_indexed-*.nbi"))
+
+
+def _install(tmp_path, name: str):
+    """A copy of the package at tmp_path/name (as a wheel installs it), without kernels."""
+    import shutil
+
+    import checker
+
+    root = tmp_path / name
+    shutil.copytree(os.path.dirname(checker.__file__), root / "checker",
+                    ignore=shutil.ignore_patterns("__pycache__", "kernels"))
+    return root
+
+
+def _rotate(root, tmp_path, **env_vars) -> list[str]:
+    """Run _ROTATE with the package at `root`, pathcheck's environment cleared: the kernels it
+    compiled (its answer checked)."""
+    drop = ("NUMBA_CACHE_DIR", "NUMBA_CACHE_LOCATOR_CLASSES", "NUMBA_CPU_NAME",
+            "NUMBA_CPU_FEATURES", "PATHCHECK_CACHE_DIR", "PATHCHECK_KERNELS")
+    env = {k: v for k, v in os.environ.items() if k not in drop}
+    env.update(PYTHONPATH=str(root), **env_vars)
+    done = subprocess.run([sys.executable, "-c", _ROTATE], capture_output=True, text=True,
+                          env=env, timeout=300, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    where, answer = done.stdout.split(" ", 1)
+    assert where.startswith(str(root))
+    points, compiled = answer.rsplit("] ", 1)
+    assert points == "[[-2.0, 1.0, 3.0]"
+    return ast.literal_eval(compiled.strip())
+
+
+@pytest.mark.skipif(not runs_portable(), reason="this CPU does not run the portable kernels")
+def test_portable_kernels_shipped_in_the_package_serve_a_new_cache_until_warm(tmp_path):
+    """`make wheel` compiles the kernels for numba's generic CPU into resources/kernels with a
+    stamp of the sources they serve; an install's first process seeds its new cache folder
+    with them and loads them (compiling nothing) until `pathcheck warm` has marked the folder
+    (cache.HOST_MARK): then it compiles for this CPU, which the portable kernels do not serve."""
+    from checker.cache import HOST_MARK, PORTABLE_STAMP, portable_stamp
+
+    build = _install(tmp_path, "build")
+    shipped = tmp_path / "shipped"
+    assert _rotate(build, tmp_path, NUMBA_CACHE_DIR=str(shipped),
+                   PATHCHECK_KERNELS="portable") == ["_rotate_indexed"]
+    (shipped / PORTABLE_STAMP).write_text(portable_stamp() + "\n")
+    user = _install(tmp_path, "user")
+    (shipped).rename(user / "checker" / "resources" / "kernels")
+    cache = tmp_path / "cache"
+    assert _rotate(user, tmp_path, PATHCHECK_CACHE_DIR=str(cache)) == [], "compiled again"
+    folder = cache / "numba" / source_key()
+    assert (folder / PORTABLE_STAMP).is_file()
+    (folder / HOST_MARK).touch()
+    assert _rotate(user, tmp_path, PATHCHECK_CACHE_DIR=str(cache)) == ["_rotate_indexed"]
+    assert _rotate(user, tmp_path, PATHCHECK_CACHE_DIR=str(cache)) == []
+
+
+def test_portable_kernels_of_other_sources_or_for_other_cpus_are_not_used(tmp_path, monkeypatch):
+    """Shipped kernels stamped for other sources (or another numba, Python or CPU) neither seed
+    a new folder nor make the process compile for the portable CPU; nor do kernels for the
+    right sources on a CPU without AVX2 (its /proc/cpuinfo flags)."""
+    from checker import cache
+
+    shipped = tmp_path / "kernels"
+    (shipped / "checker").mkdir(parents=True)
+    (shipped / "checker" / "k.nbi").write_text("x")
+    monkeypatch.setattr(cache, "resource", lambda *parts: tmp_path.joinpath(*parts))
+    for var in ("PATHCHECK_KERNELS", "NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES"):
+        monkeypatch.delenv(var, raising=False)
+    flags = "flags\t\t: " + " ".join(sorted(cache._V3_FLAGS)) + " sse2\n"
+    cpuinfo = tmp_path / "cpuinfo"
+    runs = cache.runs_portable
+    stamp = cache.portable_stamp()
+    for name, shipped_stamp, cpu_flags, portable in (
+            ("other-sources", "0123456789ab" + stamp[12:], flags, False),
+            ("other-cpu", stamp.replace(cache.PORTABLE_CPU, "generic"), flags, False),
+            ("no-avx2", stamp, flags.replace(" avx2", ""), False),
+            ("these", stamp, flags, True)):
+        (shipped / cache.PORTABLE_STAMP).write_text(shipped_stamp + "\n")
+        cpuinfo.write_text("processor\t: 0\n" + cpu_flags)
+        monkeypatch.setattr(cache, "runs_portable", lambda: runs(cpuinfo))
+        folder = tmp_path / name
+        cache._seed(folder)
+        assert (folder / "checker" / "k.nbi").is_file() == (shipped_stamp == stamp)
+        cache._choose_kernels(folder)
+        assert os.environ.pop("PATHCHECK_KERNELS") == ("portable" if portable else "host")
+        assert os.environ.pop("NUMBA_CPU_NAME", None) == (cache.PORTABLE_CPU if portable else None)
+        assert os.environ.pop("NUMBA_CPU_FEATURES", None) == ("" if portable else None)

@@ -13,3 +13,26 @@ def test_the_warm_up_job_is_the_demo_job(repo):
         shipped = resource("warmup", "warmup" + suffix).read_bytes()
         sample = repo / "samples/compressor" / f"compressor_small_d12{suffix}"
         assert shipped == sample.read_bytes()
+
+
+def test_warm_compiles_for_this_cpu_and_marks_the_folder(tmp_path, monkeypatch):
+    """`pathcheck warm` compiles for this CPU ("host") into the kernel cache folder, then marks
+    it (cache.HOST_MARK) so that later processes take these kernels instead of the portable
+    ones; the portable build compiles for the generic CPU and stamps what it serves."""
+    from checker import warm
+    from checker.cache import HOST_MARK, PORTABLE_STAMP, portable_stamp
+
+    calls = []
+    monkeypatch.setattr(warm, "_compile_all", lambda folder, kernels: calls.append(
+        (folder, kernels, (folder / HOST_MARK).exists())))
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "user"))
+    (tmp_path / "user").mkdir()
+    folder, _ = warm.warm_kernels()
+    assert calls == [(tmp_path / "user", "host", False)]
+    assert (folder / HOST_MARK).is_file()
+    out = tmp_path / "kernels"
+    (out / "stale").mkdir(parents=True)
+    warm.build_portable(out)
+    assert calls[1] == (out, "portable", False)
+    assert not (out / "stale").exists()
+    assert (out / PORTABLE_STAMP).read_text().split() == portable_stamp().split()

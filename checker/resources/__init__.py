@@ -1,7 +1,8 @@
 """Data shipped inside the package (read with importlib.resources, so that an installed wheel
 has them): `defaults.toml` (configuration), `tools.toml` (tool library), `machines/*.toml`,
-`schemas/*.json` (published JSON Schemas) and `warmup/` (the small job that compiles the
-kernels once per install)."""
+`schemas/*.json` (published JSON Schemas), `warmup/` (the small job that compiles the
+kernels once per install) and, in a wheel, `kernels/` (its portable compiled kernels, built by
+`make wheel`, not kept in git: `checker.cache`)."""
 
 from __future__ import annotations
 
