@@ -50,9 +50,14 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     """
     from checker.cc_csv import cc_rows
     from checker.client import Client, raise_for_error
+    from checker.commands.outputs import prepare_outputs
     from checker.config import load_config
     from checker.progress import step
 
+    prepare_outputs([("-o", output, "reply JSON"), ("--gcode-out", gcode_out, "G-code")],
+                    [("--cc", cc_csv), ("--config", config_path),
+                     ("--request", None if request_file is None else
+                      Path(getattr(request_file, "name", "-")))])
     message: dict[str, Any] = {}
     if request_file is not None:
         message = _json_object(request_file.read(), request_file.name)
