@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from checker.cc_points import Rows, unit_normals
 from checker.errors import PathcheckError
 
 CC_COLUMNS = ("x", "y", "z", "nx", "ny", "nz")
@@ -29,7 +30,7 @@ def read_cc_csv(path: Path, *, lines_out: list[int] | None = None
     if head != list(CC_COLUMNS):
         raise PathcheckError(f"expected the header x,y,z,nx,ny,nz, found {lines[0][:60]!r}",
                              path=path, line=1)
-    rows = []
+    rows, numbers = [], []
     for no, text in enumerate(lines[1:], 2):
         if not text.strip():
             continue
@@ -44,16 +45,14 @@ def read_cc_csv(path: Path, *, lines_out: list[int] | None = None
         if not np.isfinite(vals).all():
             raise PathcheckError(f"expected finite numbers, found {text.strip()[:60]!r}",
                                  path=path, line=no)
-        if np.linalg.norm(vals[3:]) < 1e-9:
-            raise PathcheckError("expected a non-zero normal (nx, ny, nz), found 0,0,0",
-                                 path=path, line=no)
         rows.append(vals)
-        if lines_out is not None:
-            lines_out.append(no)
+        numbers.append(no)
     if not rows:
         raise PathcheckError("expected at least one CC point after the header", path=path, line=2)
+    if lines_out is not None:
+        lines_out.extend(numbers)
     a = np.array(rows)
-    return a[:, :3], a[:, 3:] / np.linalg.norm(a[:, 3:], axis=1)[:, None]
+    return a[:, :3], unit_normals(a[:, 3:], Rows(path, numbers))
 
 
 def cc_rows(path: Path) -> list[list[float]]:
@@ -61,17 +60,3 @@ def cc_rows(path: Path) -> list[list[float]]:
     cc, normals = read_cc_csv(path)
     return np.hstack([cc, normals]).tolist()
 
-
-def check_reach(cc: np.ndarray, lines: list[int], bbox: np.ndarray, path: Path) -> None:
-    """CC points lie on the part: one farther from the part's box than the box's diagonal is
-    an error naming its line (the search near it would mean nothing)."""
-    lo, hi = np.asarray(bbox[0], float), np.asarray(bbox[1], float)
-    reach = max(float(np.linalg.norm(hi - lo)), 1.0)
-    outside = (np.maximum(lo - cc, 0.0) + np.maximum(cc - hi, 0.0)).max(axis=1)
-    far = np.flatnonzero(~(outside <= reach))
-    if len(far):
-        k = far[0]
-        raise PathcheckError(
-            f"CC point ({', '.join(f'{v:.6g}' for v in cc[k])}) lies {outside[k]:.6g} mm "
-            f"outside the part's box: expected points on the part (within {reach:.6g} mm)",
-            path=path, line=lines[k], code="input")

@@ -11,3 +11,5 @@ MAX_COORDINATE_MM = 1e5
 MAX_ROTARY_DEG = 1e6
 #: positions a G-code program's arcs and rotary turns may expand into, in total
 MAX_PROGRAM_POINTS = 5_000_000
+#: full turns of one G-code arc (LinuxCNC's G2/G3 P word): a thread mill's helix makes tens
+MAX_ARC_TURNS = 10_000

@@ -52,7 +52,8 @@ def allowable(part_path, cc_path, cutter_text, units, tool_name, tool_library, a
     pathcheck allowable --part mould.json --cc cc.csv --cutter "CUTTER/10,5"
     pathcheck allowable --part mould.json --cc cc.csv --cutter "CUTTER/10,2" --json out.json
     """
-    from checker.cc_csv import check_reach, read_cc_csv
+    from checker.cc_csv import read_cc_csv
+    from checker.cc_points import Rows, check_reach
     from checker.commands.check import parse_b_range
     from checker.commands.outputs import prepare_outputs
     from checker.commands.terminal import text_console
@@ -74,7 +75,7 @@ def allowable(part_path, cc_path, cutter_text, units, tool_name, tool_library, a
 
     def load():  # the CC points must lie on the part: say so before sampling it
         part = load_part(part_path, geometry=config.geometry)
-        check_reach(cc, lines, part.bbox, cc_path)
+        check_reach(cc, part.bbox, Rows(cc_path, lines))
         return part
 
     part = sampled_part(load, config)
