@@ -21,10 +21,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from checker.cli import EXIT_INPUT, EXIT_INTERRUPTED
+from checker.cli import EXIT_INPUT
 from tests.hostile import REPO, run_pathcheck
 
 MOULD = REPO / "samples" / "mould"
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as `pathcheck --help` states
 SMALL_JOB = "\n".join(MOULD.joinpath("mould.apt").read_text().splitlines()[:40]) + "\n"
 # a CC point on the mould's first surface (the hostile programs' own)
 ON_MOULD = "-59.5,-32,-0.02,0,0,1"
