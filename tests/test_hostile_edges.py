@@ -92,8 +92,9 @@ def test_an_output_folder_that_takes_no_file_fails_before_the_check(job, tmp_pat
         Path("/sys/pathcheck-probe").unlink()
         pytest.skip("/sys takes files here")
     run = run_pathcheck([job.name, "-o", "/sys/x.nc"], cwd=tmp_path)
-    _one_line(run, r"pathcheck: /sys/x\.nc: cannot write G-code: .* in the folder /sys")
-    assert run.stdout == "" and not (tmp_path / "results.sqlite").exists()
+    assert run.stdout == "", run.why()  # no summary: the check did not run
+    assert not (tmp_path / "results.sqlite").exists()
+    _one_line(run, r"pathcheck: /sys/x\.nc: cannot write G-code: .*")
 
 
 # ---------------------------------------------------------------- the results store
@@ -286,3 +287,16 @@ def test_help_states_the_exit_code_of_an_interrupt():
     run = subprocess.run([sys.executable, "-m", "checker.cli", "--help"], capture_output=True,
                          text=True, env=dict(os.environ, PYTHONPATH=str(REPO)))
     assert f"{EXIT_INTERRUPTED} interrupted" in " ".join(run.stdout.split())
+
+
+def test_an_output_beside_the_job_that_is_not_read_is_written_again(job, tmp_path):
+    """Only the files a run reads are inputs: check-gcode reads no part beside the program, so
+    its JSON `prog.json` is written on every run; a check with --part reads no `small.json`."""
+    (tmp_path / "prog.nc").write_text("G21 G90 G17\nG0 X-50 Y-30 Z30\nG1 Z20 F100\n")
+    shutil.copy(MOULD / "mould.json", tmp_path / "mould.json")
+    for _ in range(2):
+        run = run_pathcheck(["check-gcode", "prog.nc", "--json", "prog.json"], cwd=tmp_path)
+        assert run.code == 0 and json.loads((tmp_path / "prog.json").read_text()), run.why()
+    run = run_pathcheck([job.name, "--part", "mould.json", "--json", "small.json", "--no-store"],
+                        cwd=tmp_path)
+    assert run.code in (0, 1) and json.loads((tmp_path / "small.json").read_text())["job"]

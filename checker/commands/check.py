@@ -173,9 +173,11 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     if not job.is_file():
         raise PathcheckError("job file not found: expected an existing CL file", path=job)
     store = None if no_store else opt.store_of(store_path, config_path)
+    from checker.geometry import find_part_beside
+
     prepare_outputs([("-o", output, "G-code"), ("--json", json_out, "results JSON")],
-                    job_inputs(job, part_path, config_path, tool_library, machine, store,
-                               no_check or no_store))
+                    job_inputs(job, part_path or find_part_beside(job), config_path,
+                               tool_library, machine, store, no_check or no_store))
     cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
     if no_check:
         post_without_check(job, output, cutter, machine, config_path, part_path, json_out, units)
@@ -209,13 +211,11 @@ def job_inputs(job: Path, part_path: Path | None, config_path: Path | None,
                tool_library: Path | None, machine: str | None, store: Path | None,
                no_store: bool) -> list[tuple[str, Path | None]]:
     """The files a check reads (and the store it records in), as `prepare_outputs` names them:
-    the job, its part (given or the one beside the job), the config, the tool library, a
-    machine file and the results store."""
+    the job, its part, the config, the tool library, a machine file and the results store."""
     from checker.config import default_config
-    from checker.geometry import find_part_beside
 
     files: list[tuple[str, Path | None]] = [
-        ("the job file", job), ("the part", part_path or find_part_beside(job)),
+        ("the job file", job), ("the part", part_path),
         ("--config", config_path), ("--tool-library", tool_library)]
     if machine is not None and Path(machine).is_file():
         files.append(("--machine", Path(machine)))
