@@ -12,7 +12,7 @@ import click
 
 from checker.atomic import write_file
 from checker.commands import options as opt
-from checker.errors import PathcheckError
+from checker.errors import PathcheckError, printable
 
 
 @click.command()
@@ -84,8 +84,8 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     else:
         click.echo(text)
     if refused:  # as `pathcheck check -o` does: nothing written, exit 1 (findings)
-        click.echo(f"pathcheck: {gcode_out}: not written: {refused}; send on_findings=stop or "
-                   "comment to write it", err=True)
+        click.echo(f"pathcheck: {printable(str(gcode_out))}: not written: {refused}; send "
+                   "on_findings=stop or comment to write it", err=True)
         sys.exit(1)
 
 

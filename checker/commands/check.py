@@ -182,6 +182,7 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     if no_check:
         post_without_check(job, output, cutter, machine, config_path, part_path, json_out, units)
         return
+    from checker.errors import printable
     from checker.posting import PostRefusedError
 
     if not no_store:
@@ -196,8 +197,9 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
         try:
             finish(refused.document, json_out, store=not no_store, store_path=store)
         finally:
-            click.echo(f"pathcheck: {output}: not written: {refused}; give --on-findings "
-                       "stop (an optional stop M01 before each) or comment to write it", err=True)
+            click.echo(f"pathcheck: {printable(str(output))}: not written: {refused}; give "
+                       "--on-findings stop (an optional stop M01 before each) or comment to "
+                       "write it", err=True)
         sys.exit(1)
     except PathcheckError as err:
         checked = getattr(err, "document", None)  # the check ran, its program was not written

@@ -21,7 +21,7 @@ def assumed_units(moves, given: str | None, machine) -> None:
     states, with a note on stderr naming the file and the unit; neither: a PathcheckError."""
     if moves.units_stated:
         return
-    from checker.errors import PathcheckError
+    from checker.errors import PathcheckError, printable
     from postproc.dialects import get_dialect
 
     codes = "/".join(f"G{c}" for c in get_dialect(moves.dialect).units_codes)
@@ -30,8 +30,8 @@ def assumed_units(moves, given: str | None, machine) -> None:
             f"the program states no units (no {codes}) and machine {machine.name} gives none: "
             "expected --units mm|inch", path=moves.path, code="usage")
     source = "--units" if given else f"the units of machine {machine.name}"
-    click.echo(f"pathcheck: note: {moves.path} states no units (no {codes}): read in "
-               f"{moves.units}, {source}", err=True)
+    click.echo(f"pathcheck: note: {printable(str(moves.path))} states no units (no {codes}): "
+               f"read in {moves.units}, {source}", err=True)
 
 
 @click.command()
