@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from checker import input_limits
+from checker.cc_points import Rows, unit_normals
 from checker.errors import PathcheckError
 
 CC_COLUMNS = ("x", "y", "z", "nx", "ny", "nz")
@@ -40,6 +41,7 @@ def read_cc_csv(path: Path, *, lines_out: list[int] | None = None
                                    "MAX_CC_POINTS", path=path,
                                    line=beyond[input_limits.MAX_CC_POINTS])
     rows = array("d")  # 6 values a row, 48 bytes (a list of floats per row takes 260)
+    numbers = array("q")  # each row's line
     for no, text in enumerate(lines[1:], 2):
         if not text.strip():
             continue
@@ -54,16 +56,14 @@ def read_cc_csv(path: Path, *, lines_out: list[int] | None = None
         if not all(map(math.isfinite, vals)):
             raise PathcheckError(f"expected finite numbers, found {text.strip()[:60]!r}",
                                  path=path, line=no)
-        if math.hypot(*vals[3:]) < 1e-9:
-            raise PathcheckError("expected a non-zero normal (nx, ny, nz), found 0,0,0",
-                                 path=path, line=no)
         rows.extend(vals)
-        if lines_out is not None:
-            lines_out.append(no)
+        numbers.append(no)
     if not rows:
         raise PathcheckError("expected at least one CC point after the header", path=path, line=2)
+    if lines_out is not None:
+        lines_out.extend(numbers)
     a = np.frombuffer(rows, dtype=float).reshape(-1, 6)
-    return a[:, :3], a[:, 3:] / np.linalg.norm(a[:, 3:], axis=1)[:, None]
+    return a[:, :3], unit_normals(a[:, 3:], Rows(path, numbers))
 
 
 def cc_rows(path: Path) -> list[list[float]]:
@@ -71,17 +71,3 @@ def cc_rows(path: Path) -> list[list[float]]:
     cc, normals = read_cc_csv(path)
     return np.hstack([cc, normals]).tolist()
 
-
-def check_reach(cc: np.ndarray, lines: list[int], bbox: np.ndarray, path: Path) -> None:
-    """CC points lie on the part: one farther from the part's box than the box's diagonal is
-    an error naming its line (the search near it would mean nothing)."""
-    lo, hi = np.asarray(bbox[0], float), np.asarray(bbox[1], float)
-    reach = max(float(np.linalg.norm(hi - lo)), 1.0)
-    outside = (np.maximum(lo - cc, 0.0) + np.maximum(cc - hi, 0.0)).max(axis=1)
-    far = np.flatnonzero(~(outside <= reach))
-    if len(far):
-        k = far[0]
-        raise PathcheckError(
-            f"CC point ({', '.join(f'{v:.6g}' for v in cc[k])}) lies {outside[k]:.6g} mm "
-            f"outside the part's box: expected points on the part (within {reach:.6g} mm)",
-            path=path, line=lines[k], code="input")

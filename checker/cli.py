@@ -11,7 +11,7 @@ import sys
 import click
 
 from checker.commands.options import EXIT_CODES
-from checker.errors import PathcheckError
+from checker.errors import PathcheckError, printable
 
 # subcommand name -> "module:attribute" of its click command
 SUBCOMMANDS: dict[str, str] = {
@@ -111,7 +111,26 @@ def _terminated(signum: int, frame: object) -> None:
     raise SystemExit(128 + signum)
 
 
+class Interrupted(BaseException):
+    """Ctrl-C (SIGINT): raised where the program is, so that files being written are removed
+    (`checker.atomic`); not a KeyboardInterrupt, which click turns into its "Aborted!"."""
+
+
+def _interrupted(signum: int, frame: object) -> None:
+    """The first SIGINT ends the run (exit EXIT_INTERRUPTED); further ones are ignored while it
+    cleans up, so that the process never dies by the signal half-way."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    raise Interrupted
+
+
 EXIT_OK, EXIT_INPUT, EXIT_INTERNAL = 0, 2, 3  # 1 (findings): the commands' own exit
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report an interrupted command
+
+
+def _say(text: str) -> None:
+    """One line on stderr, `pathcheck: ` first; control characters and line breaks (in a file
+    name) escaped so that it stays one line."""
+    click.echo(f"pathcheck: {printable(text)}", err=True)
 
 
 def _os_error(err: OSError) -> str:
@@ -127,8 +146,7 @@ def _internal(err: Exception, argv: list[str]) -> None:
     log = write_crash_log(err, argv)
     where = f"the traceback is in {log}" if log else "no log could be written"
     text = " ".join(f"{type(err).__name__}: {err}".split())[:300]
-    click.echo(f"pathcheck: internal error (a bug in pathcheck, please report it with the log): "
-               f"{text}; {where}", err=True)
+    _say(f"internal error (a bug in pathcheck, please report it with the log): {text}; {where}")
     sys.exit(EXIT_INTERNAL)
 
 
@@ -136,29 +154,42 @@ def main(argv: list[str] | None = None) -> None:
     """Console entry point: bad input is one line on stderr and exit code 2, never a traceback;
     a bug is one line and exit code 3 with its traceback in a log file (`checker.crash_log`)."""
     signal.signal(signal.SIGTERM, _terminated)
-    args = list(sys.argv[1:] if argv is None else argv)
+    before = signal.getsignal(signal.SIGINT)
+    if before is signal.default_int_handler:  # not when ignored (nohup, a background job)
+        signal.signal(signal.SIGINT, _interrupted)
+    try:
+        _run(list(sys.argv[1:] if argv is None else argv))
+    finally:  # called in-process (tests) and not interrupted: Ctrl-C is the caller's again
+        if signal.getsignal(signal.SIGINT) is _interrupted:
+            signal.signal(signal.SIGINT, before)
+
+
+def _run(args: list[str]) -> None:
+    """`main` inside its signal handlers: every ending is one of the exit codes."""
     try:
         cli.main(args=args, prog_name="pathcheck", standalone_mode=False)
     except PathcheckError as err:
-        click.echo(f"pathcheck: {err}", err=True)
+        _say(str(err))
         sys.exit(EXIT_INPUT)
     except MemoryError as err:
-        click.echo(f"pathcheck: out of memory: {' '.join(str(err).split()) or 'no detail'}; "
-                   "expected input this machine can hold", err=True)
+        _say(f"out of memory: {' '.join(str(err).split()) or 'no detail'}; expected input "
+             "this machine can hold")
         sys.exit(EXIT_INPUT)
     except OSError as err:
-        click.echo(f"pathcheck: {_os_error(err)}", err=True)
+        _say(_os_error(err))
         sys.exit(EXIT_INPUT)
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
+    except click.UsageError as exc:  # click's own three lines (usage, hint, error) as one
+        where = f"; see '{exc.ctx.command_path} --help'" if exc.ctx is not None else ""
+        _say(" ".join(exc.format_message().split()).rstrip(".") + where)
+        sys.exit(EXIT_INPUT)
     except click.ClickException as exc:
-        exc.show()
-        sys.exit(2)
-    except click.exceptions.Abort:
-        click.echo("pathcheck: aborted", err=True)
-        sys.exit(2)
-    except KeyboardInterrupt:
-        sys.exit(130)
+        _say(" ".join(exc.format_message().split()))
+        sys.exit(EXIT_INPUT)
+    except (Interrupted, KeyboardInterrupt, click.exceptions.Abort):
+        _say("interrupted")
+        sys.exit(EXIT_INTERRUPTED)
     except Exception as err:
         _internal(err, args)
     sys.exit(EXIT_OK)

@@ -7,6 +7,17 @@ from pathlib import Path
 
 import numpy as np
 
+# control characters and the line breaks of Unicode, as escapes: a file name holding a newline
+# stays on its error's one line
+_ESCAPES = {**{c: f"\\x{c:02x}" for c in (*range(32), 127, 0x85)},
+            ord("\n"): "\\n", ord("\r"): "\\r", ord("\t"): "\\t",
+            0x2028: "\\u2028", 0x2029: "\\u2029"}
+
+
+def printable(text: str) -> str:
+    """`text` with control characters and line breaks escaped (`a\\nb`), for one line."""
+    return text.translate(_ESCAPES)
+
 
 class PathcheckError(Exception):
     """Bad input or usage. The CLI prints ``str(err)`` on one line and exits with code 2; the
@@ -32,7 +43,8 @@ class PathcheckError(Exception):
     def __str__(self) -> str:
         where = ""
         if self.path is not None:
-            where = f"{self.path}:{self.line}: " if self.line is not None else f"{self.path}: "
+            path = printable(self.path)
+            where = f"{path}:{self.line}: " if self.line is not None else f"{path}: "
         elif self.line is not None:
             where = f"line {self.line}: "
         return f"{where}{self.message}"

@@ -34,3 +34,5 @@ def refuse_beyond(count: int, limit: int, what: str, name: str, *, path: str | P
         raise PathcheckError(
             f"{count:,} {what}: expected at most {limit:,} (checker.input_limits.{name}); "
             "split the job", path=path, line=line, code="limit")
+#: full turns of one G-code arc (LinuxCNC's G2/G3 P word): a thread mill's helix makes tens
+MAX_ARC_TURNS = 10_000

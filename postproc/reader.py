@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from checker.errors import PathcheckError, read_input
-from checker.input_limits import MAX_COORDINATE_MM, MAX_ROTARY_DEG
+from checker.input_limits import MAX_ARC_TURNS, MAX_COORDINATE_MM, MAX_ROTARY_DEG
 from checker.units import mm_per_unit
 from postproc.dialects import CANNED_CYCLES, Dialect, get_dialect
 from postproc.gcode_lex import Block, lex_block
@@ -79,6 +79,9 @@ class GcodeMoves:
     other: dict[str, int] = field(default_factory=dict)
     blocks: int = 0  # blocks read (program lines with code or a comment)
     units_stated: bool = False  # the program states its units (G20/G21 or the dialect's own)
+    #: (N,) full turns of each arc row (LinuxCNC's G2/G3 P word, 1 without; 1 for other rows);
+    #: None: every arc makes one
+    arc_turns: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.line)
@@ -120,6 +123,7 @@ class _Program:
         self.st = _State(
             scale=scale, units=units, pos=[math.nan] * 6, motion=dialect.initial_motion
         )
+        self.arc_turns: dict[int, int] = {}  # row -> turns of an arc with P > 1
         self.rows: dict[str, list] = {
             k: []
             for k in (
@@ -455,7 +459,25 @@ class _Program:
             self.emit(target, st.motion, line, MACHINE_FRAME)
             return
         center = self._arc_center(target, words, line) if st.motion in (2, 3) else None
+        turns = self._arc_turns(words, line) if st.motion in (2, 3) else 1
+        if turns > 1:
+            self.arc_turns[len(self.rows["line"])] = turns
         self.emit(target, st.motion, line, PROGRAMMED, center)
+
+    def _arc_turns(self, words: dict[str, float], line: int) -> int:
+        """LinuxCNC's turn count of G2/G3, `P` (1 without): the arc ends after P - 1 extra full
+        turns. As LinuxCNC, a P that is not a whole number (within 0.001) is an error; so is
+        one below 1 or above MAX_ARC_TURNS. Other dialects give P no meaning on an arc."""
+        if self.dialect.name != "linuxcnc" or "P" not in words:
+            return 1
+        p = words["P"]
+        if not math.isfinite(p) or abs(p - round(p)) > 0.001:
+            raise self.error(f"arc turn count P{p:g} is not a whole number: expected P1, P2, "
+                             "... (full turns of G2/G3)", line)
+        if not 1 <= round(p) <= MAX_ARC_TURNS:
+            raise self.error(f"arc turn count P{p:g}: expected 1 to {MAX_ARC_TURNS:,} turns",
+                             line)
+        return int(round(p))
 
     def _arc_center(self, target: list[float], words: dict[str, float], line: int) -> np.ndarray:
         st = self.st
@@ -556,7 +578,16 @@ class _Program:
             other=dict(self.other),
             blocks=self.blocks,
             units_stated=self.units_seen is not None,
+            arc_turns=self._turns(n),
         )
+
+    def _turns(self, n: int) -> np.ndarray | None:
+        """(n,) turns of every row from the rows' P words, None when every arc makes one."""
+        if not self.arc_turns:
+            return None
+        turns = np.ones(n, dtype=np.int64)
+        turns[list(self.arc_turns)] = list(self.arc_turns.values())
+        return turns
 
 
 def read_gcode_text(

@@ -141,6 +141,9 @@ def _chords(moves: GcodeMoves, turn: np.ndarray, tolerance: float, rotary_step: 
     ccw = moves.motion == 3
     sweep = np.where(ccw, np.mod(a1 - a0, 2 * np.pi), -np.mod(a0 - a1, 2 * np.pi))
     sweep = np.where(arc & (np.abs(sweep) < 1e-12), np.where(ccw, 2 * np.pi, -2 * np.pi), sweep)
+    if moves.arc_turns is not None:  # LinuxCNC's P: P - 1 full turns before the arc's own
+        extra = np.where(arc, moves.arc_turns - 1, 0)
+        sweep = sweep + np.where(ccw, 2 * np.pi, -2 * np.pi) * extra
     with np.errstate(invalid="ignore", divide="ignore"):
         step = 2 * np.arccos(np.clip(1 - tolerance / radius, -1.0, 1.0))
         count = np.where(arc, np.maximum(1, np.ceil(np.abs(sweep) / np.maximum(step, 1e-6))), 1)

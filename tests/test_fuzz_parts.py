@@ -8,7 +8,8 @@ message of one line naming the file, under 60 s and 2 GB.
 
 `make test` runs a small sample per family; PATHCHECK_FUZZ=nightly runs 500 per family
 (PATHCHECK_FUZZ=N: N per family). Case i of a family is the same on every run (seeded by
-family and i); a failure names the case, its mutation and the base file."""
+family and i; PATHCHECK_SEED=S: a fresh set, seeded by S too); a failure names the case, its
+mutation and the base file."""
 
 from __future__ import annotations
 
@@ -249,7 +250,7 @@ def _run_family(family: str, bases: list[Base], tmp_path: Path) -> None:
     n = _cases(family)
 
     def one(i: int) -> str | None:
-        rng = random.Random(f"{family}-{i}")
+        rng = random.Random(f"{os.environ.get('PATHCHECK_SEED', '')}{family}-{i}")
         base = bases[i % len(bases)]
         raw, what = _mutate(base, rng)
         path = tmp_path / f"{family}-{i:04d}-{base.name}{base.suffix}"

@@ -6,7 +6,8 @@ programs. Every run ends with exit 0, 1 or 2, no traceback, no signal, within 60
 and an exit 2 is one line naming the file.
 
 A small sample runs in `make test`; PATHCHECK_FUZZ=nightly runs 500 cases per family (about
-10-14 minutes on two shared cores). A failing case is reproduced by its seed, the test's id."""
+10-14 minutes on two shared cores); PATHCHECK_SEED=S draws a fresh set of cases. A failing case
+is reproduced by its seed, the test's id (and S)."""
 
 from __future__ import annotations
 
@@ -23,6 +24,12 @@ from tests.hostile import REPO, assert_sane, run_pathcheck
 NIGHTLY = os.environ.get("PATHCHECK_FUZZ") == "nightly"
 CASES = 500 if NIGHTLY else 24  # per family
 CHECK_EVERY = 10 if NIGHTLY else 6  # every n-th CL case is a full check against a small part
+# PATHCHECK_SEED=S: a fresh set of cases (case i seeded by "S:i"), else case i seeded by i
+_SEED = os.environ.get("PATHCHECK_SEED", "")
+
+
+def _rng(n: int) -> random.Random:
+    return random.Random(f"{_SEED}:{n}" if _SEED else n)
 
 CL_SOURCES = [
     *sorted((REALDATA / "amorim-solidworkscam-apt").glob("*.apt")),
@@ -108,7 +115,7 @@ def _need_realdata() -> None:
 @pytest.mark.parametrize("seed", range(CASES))
 def test_fuzz_cl(seed, tmp_path):
     _need_realdata()
-    rng = random.Random(seed)
+    rng = _rng(seed)
     if seed % CHECK_EVERY == CHECK_EVERY - 1:
         job, part, keep = rng.choice(CHECK_SOURCES)
         text = job.read_bytes()
@@ -131,7 +138,7 @@ def test_fuzz_cl(seed, tmp_path):
 @pytest.mark.parametrize("seed", range(CASES))
 def test_fuzz_gcode(seed, tmp_path):
     _need_realdata()
-    rng = random.Random(10_000 + seed)
+    rng = _rng(10_000 + seed)
     rel, machine = rng.choice(GCODE_SOURCES)
     source = REALDATA / rel
     data, how = mutate(source.read_bytes(), rng)

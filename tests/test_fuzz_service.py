@@ -10,7 +10,8 @@ request is a JSON object with a valid `id`; no `internal` error, no worker lost 
 reply retires its worker, nothing else may), every reply within 60 s, no worker over 2 GB.
 
 `make test` runs a small sample; PATHCHECK_FUZZ=nightly runs 500 (PATHCHECK_FUZZ=N: N). Case
-i is the same on every run (seeded by i); a failure names the case and its mutation."""
+i is the same on every run (seeded by i; PATHCHECK_SEED=S: a fresh set, seeded by S too); a
+failure names the case and its mutation."""
 
 from __future__ import annotations
 
@@ -158,7 +159,7 @@ def _byte_mutation(rng: random.Random, request: dict) -> tuple[bytes, str]:
 def _case(i: int) -> tuple[bytes, str, object]:
     """Case i: (request bytes, description, the id the reply must carry or `None` when the
     request does not parse to an object with a valid id)."""
-    rng = random.Random(f"service-{i}")
+    rng = random.Random(f"{os.environ.get('PATHCHECK_SEED', '')}service-{i}")
     templates = _templates()
     t = rng.randrange(len(templates))
     request = dict(templates[t], id=rng.choice([f"fz-{i}", i, f"fz-{i}-" + "é" * 3]))

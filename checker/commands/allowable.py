@@ -52,14 +52,19 @@ def allowable(part_path, cc_path, cutter_text, units, tool_name, tool_library, a
     pathcheck allowable --part mould.json --cc cc.csv --cutter "CUTTER/10,5"
     pathcheck allowable --part mould.json --cc cc.csv --cutter "CUTTER/10,2" --json out.json
     """
-    from checker.cc_csv import check_reach, read_cc_csv
+    from checker.cc_csv import read_cc_csv
+    from checker.cc_points import Rows, check_reach
     from checker.commands.check import parse_b_range
+    from checker.commands.outputs import prepare_outputs
     from checker.commands.terminal import text_console
     from checker.config import load_config
     from checker.engine.document import allowable_table
     from checker.geometry import load_part
     from checker.operations.allowable import allowable_at_points, check_b_request, sampled_part
 
+    prepare_outputs([("--json", json_out, "results JSON")],
+                    [("--part", part_path), ("--cc", cc_path), ("--config", config_path),
+                     ("--tool-library", tool_library)])
     cutter = opt.cutter_family(cutter_text, tool_name, tool_library, units)
     config = load_config(config_path)
     axis = parse_axis(axis_text)
@@ -70,7 +75,7 @@ def allowable(part_path, cc_path, cutter_text, units, tool_name, tool_library, a
 
     def load():  # the CC points must lie on the part: say so before sampling it
         part = load_part(part_path, geometry=config.geometry)
-        check_reach(cc, lines, part.bbox, cc_path)
+        check_reach(cc, part.bbox, Rows(cc_path, lines))
         return part
 
     part = sampled_part(load, config)

@@ -12,7 +12,7 @@ import click
 
 from checker.atomic import write_file
 from checker.commands import options as opt
-from checker.errors import PathcheckError
+from checker.errors import PathcheckError, printable
 
 
 @click.command()
@@ -50,9 +50,14 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     """
     from checker.cc_csv import cc_rows
     from checker.client import Client, raise_for_error
+    from checker.commands.outputs import prepare_outputs
     from checker.config import load_config
     from checker.progress import step
 
+    prepare_outputs([("-o", output, "reply JSON"), ("--gcode-out", gcode_out, "G-code")],
+                    [("--cc", cc_csv), ("--config", config_path),
+                     ("--request", None if request_file is None else
+                      Path(getattr(request_file, "name", "-")))])
     message: dict[str, Any] = {}
     if request_file is not None:
         message = _json_object(request_file.read(), request_file.name)
@@ -79,8 +84,8 @@ def call(op: str, fields: tuple[str, ...], address: str | None, timeout_s: float
     else:
         click.echo(text)
     if refused:  # as `pathcheck check -o` does: nothing written, exit 1 (findings)
-        click.echo(f"pathcheck: {gcode_out}: not written: {refused}; send on_findings=stop or "
-                   "comment to write it", err=True)
+        click.echo(f"pathcheck: {printable(str(gcode_out))}: not written: {refused}; send "
+                   "on_findings=stop or comment to write it", err=True)
         sys.exit(1)
 
 

@@ -163,7 +163,7 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     pathcheck samples/mould/mould.apt --json out/mould.json
     pathcheck samples/mould/mould.apt --json - 2>/dev/null   # the document alone on stdout
     """
-    from checker.atomic import check_writable, make_parent
+    from checker.commands.outputs import prepare_outputs
     from checker.errors import PathcheckError
     from checker.job import check_job
 
@@ -172,20 +172,21 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
                              code="usage")
     if not job.is_file():
         raise PathcheckError("job file not found: expected an existing CL file", path=job)
-    files = [(output, "G-code")]
-    if not opt.json_to_stdout(json_out):
-        files.append((json_out, "results JSON"))
-    for target, what in files:
-        if target is not None:
-            check_writable(target, what)
-            make_parent(target, what)
+    store = None if no_store else opt.store_of(store_path, config_path)
+    from checker.geometry import find_part_beside
+
+    prepare_outputs([("-o", output, "G-code"), ("--json", json_out, "results JSON")],
+                    job_inputs(job, part_path or find_part_beside(job), config_path,
+                               tool_library, machine, store, no_check or no_store))
     cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
     if no_check:
         post_without_check(job, output, cutter, machine, config_path, part_path, json_out, units)
         return
+    from checker.errors import printable
     from checker.posting import PostRefusedError
 
-    store = None if no_store else opt.store_of(store_path, config_path)
+    if not no_store:
+        opt.open_store(store)
     try:
         doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
                         output=output, machine=machine, b_range=parse_b_range(b_range),
@@ -196,8 +197,9 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
         try:
             finish(refused.document, json_out, store=not no_store, store_path=store)
         finally:
-            click.echo(f"pathcheck: {output}: not written: {refused}; give --on-findings "
-                       "stop (an optional stop M01 before each) or comment to write it", err=True)
+            click.echo(f"pathcheck: {printable(str(output))}: not written: {refused}; give "
+                       "--on-findings stop (an optional stop M01 before each) or comment to "
+                       "write it", err=True)
         sys.exit(1)
     except PathcheckError as err:
         checked = getattr(err, "document", None)  # the check ran, its program was not written
@@ -205,6 +207,24 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
             record(checked, store)
         raise
     finish(doc, json_out, store=not no_store, store_path=store)
+
+
+def job_inputs(job: Path, part_path: Path | None, config_path: Path | None,
+               tool_library: Path | None, machine: str | None, store: Path | None,
+               no_store: bool) -> list[tuple[str, Path | None]]:
+    """The files a check reads (and the store it records in), as `prepare_outputs` names them:
+    the job, its part, the config, the tool library, a machine file and the results store."""
+    from checker.config import default_config
+
+    files: list[tuple[str, Path | None]] = [
+        ("the job file", job), ("the part", part_path),
+        ("--config", config_path), ("--tool-library", tool_library)]
+    if machine is not None and Path(machine).is_file():
+        files.append(("--machine", Path(machine)))
+    if not no_store:
+        where = store if store is not None else default_config().store.resolved_path()
+        files.append(("the results store", where))
+    return files
 
 
 def post_without_check(job: Path, output: Path | None, cutter, machine: str | None,

@@ -21,7 +21,7 @@ def assumed_units(moves, given: str | None, machine) -> None:
     states, with a note on stderr naming the file and the unit; neither: a PathcheckError."""
     if moves.units_stated:
         return
-    from checker.errors import PathcheckError
+    from checker.errors import PathcheckError, printable
     from postproc.dialects import get_dialect
 
     codes = "/".join(f"G{c}" for c in get_dialect(moves.dialect).units_codes)
@@ -30,8 +30,8 @@ def assumed_units(moves, given: str | None, machine) -> None:
             f"the program states no units (no {codes}) and machine {machine.name} gives none: "
             "expected --units mm|inch", path=moves.path, code="usage")
     source = "--units" if given else f"the units of machine {machine.name}"
-    click.echo(f"pathcheck: note: {moves.path} states no units (no {codes}): read in "
-               f"{moves.units}, {source}", err=True)
+    click.echo(f"pathcheck: note: {printable(str(moves.path))} states no units (no {codes}): "
+               f"read in {moves.units}, {source}", err=True)
 
 
 @click.command()
@@ -67,6 +67,8 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
     pathcheck check-gcode prog.ngc --machine linuxcnc-hmc --json out.json
     pathcheck check-gcode boat.ngc --machine linuxcnc-xyzac-trt --part boat.stl --cutter CUTTER/10
     """
+    from checker.commands.check import job_inputs
+    from checker.commands.outputs import prepare_outputs
     from checker.cutter import parse_cutter_in
     from checker.errors import PathcheckError
     from postproc.describe import describe_program, format_program_summary
@@ -80,15 +82,22 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
         raise PathcheckError(
             "part file not found: expected an existing file", path=part_path, code="part"
         )
+    checking = part_path is not None and cutter is not None
+    store = opt.store_of(store_path, config_path) if checking and not no_store else None
+    prepare_outputs([("--json", json_out, "results JSON")],
+                    job_inputs(program, part_path, config_path, tool_library, machine, store,
+                               not checking or no_store))
+    if checking and not no_store:
+        opt.open_store(store)
     with step("read the program"):
         moves = read_gcode(program, dialect or mach.dialect, units=units or mach.units,
                            block_delete=block_delete == "on")
-    assumed_units(moves, units, mach)
-    if isinstance(cutter, str):  # read in the program's units (G20/G21, else --units)
-        cutter = parse_cutter_in(cutter, moves.units)
     if not np.isin(moves.kind, (PROGRAMMED, CYCLE)).any():
         raise PathcheckError(f"no motion: expected G0/G1/G2/G3 moves or drilling cycles, found "
                              f"none in {moves.blocks} blocks", path=program, code="gcode")
+    assumed_units(moves, units, mach)
+    if isinstance(cutter, str):  # read in the program's units (G20/G21, else --units)
+        cutter = parse_cutter_in(cutter, moves.units)
     with step("the moves in the part frame"):
         motions = part_motions(moves, mach)
         doc = describe_program(moves, motions, mach)
@@ -108,6 +117,6 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
     toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)
     result = check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=mach,
                             config=config_path)
-    finish(result, json_out, store=not no_store, store_path=opt.store_of(store_path, config_path))
+    finish(result, json_out, store=not no_store, store_path=store)
     if doc["machine_checks"]:
         sys.exit(1)

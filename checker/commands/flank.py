@@ -72,6 +72,7 @@ def flank(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     pathcheck flank samples/flank/hypar.apt --optimise -o better.apt --picture map.png
     """
     from checker.apt import read_cl
+    from checker.commands.outputs import prepare_outputs
     from checker.config import load_config
     from checker.cutter import parse_cutter_in
     from checker.flank.path import replaced_apt
@@ -80,6 +81,10 @@ def flank(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
 
     if output is not None and not optimise:
         raise PathcheckError("-o writes the improved path: give --optimise", code="usage")
+    prepare_outputs([("-o", output, "APT file"), ("--json", json_out, "flank JSON"),
+                     ("--picture", picture, "picture")],
+                    [("the job file", job), ("the part", part_path or find_part_beside(job)),
+                     ("--config", config_path), ("--tool-library", tool_library)])
     config = load_config(config_path)
     toolpath = read_cl(job, require_cutter=cutter_text is None and tool_name is None)
     chosen = opt.cutter_choice(cutter_text, tool_name, tool_library)

@@ -24,6 +24,9 @@ def info(file: Path, json_out: Path | None) -> None:
     pathcheck info job.apt --json -          # the JSON document alone on stdout
     pathcheck info job.apt --json job.json   # the text, and the document in job.json
     """
+    from checker.commands.outputs import prepare_outputs
+
+    prepare_outputs([("--json", json_out, "info JSON")], [("the file", file)])
     if file.suffix.lower() in PART_SUFFIXES:
         from checker.geometry.info import describe_part, format_part_info
         from checker.progress import step

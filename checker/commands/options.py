@@ -161,3 +161,13 @@ def store_of(store_path: Path | None, config_path: Path | None) -> Path | None:
     from checker.config import load_config
 
     return load_config(config_path).store.resolved_path()
+
+
+def open_store(store_path: Path | None) -> None:
+    """Fail before the run when the results store cannot take records: a folder, a file that
+    is corrupt, from a newer pathcheck or another program's SQLite file, or locked past the
+    timeout (PathcheckError naming it, exit 2; the file is left untouched). A store that
+    fails later, while recording (a full disk), is a note (`checker.commands.check.record`)."""
+    from checker.store import ResultsStore
+
+    ResultsStore(store_path).close()

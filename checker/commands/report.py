@@ -29,12 +29,21 @@ def report(since: str, output: Path, store_path: Path | None, config_path: Path 
     \b
     pathcheck report --since 24h -o report.html
     """
+    from checker.commands.outputs import prepare_outputs
+    from checker.config import default_config
     from checker.progress import step
     from checker.report import build_report, parse_since
     from checker.store import ResultsStore
 
     since_s = parse_since(since)
-    with ResultsStore(opt.store_of(store_path, config_path)) as store, step("write the report"):
+    store_file = opt.store_of(store_path, config_path)
+    prepare_outputs([("-o", output, "HTML report"),
+                     ("its JSON", output.with_suffix(".json"), "report JSON"),
+                     ("its CSV", output.with_suffix(".csv"), "report CSV"),
+                     ("--points-csv", points_csv, "points CSV")],
+                    [("the results store", store_file if store_file is not None else
+                      default_config().store.resolved_path()), ("--config", config_path)])
+    with ResultsStore(store_file) as store, step("write the report"):
         files = build_report(store, output, since_s=since_s, points_csv=points_csv)
     what = {0: "no jobs", 1: "1 job"}.get(files.jobs, f"{files.jobs} jobs")
     skipped = (f"; {files.skipped} unreadable row{'s' if files.skipped > 1 else ''} skipped"

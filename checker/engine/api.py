@@ -319,7 +319,9 @@ def _snap(tp: TestPoints, part: Part, cc: np.ndarray, normals: np.ndarray) -> _S
     normal replaces a given normal within `_SNAP_ANGLE` rad of it (either sign), so that
     rounding in the input does not disturb the sizes near the CC point."""
     _, near = tp.tree.query(cc)
-    own = tp.surface[near].astype(np.int64)
+    found = near < len(tp.points)  # a point too far for the tree (1e308) has no nearest one
+    near = np.where(found, near, 0)
+    own = np.where(found, tp.surface[near] if len(tp.points) else -1, -1).astype(np.int64)
     uv = np.full((len(cc), 2), np.nan)
     out, nrm = cc.copy(), normals.copy()
     for s in np.unique(own[own >= 0]):

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
+from checker.cc_points import Rows, check_reach, unit_normals
 from checker.config import Config
 from checker.errors import PathcheckError
 from checker.service import protocol as p
@@ -68,7 +69,8 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
     from checker.operations.allowable import SampledPart, allowable_at_points, check_b_request
 
     rows = np.asarray(req.cc, dtype=np.float64).reshape(-1, 6)
-    cc, normals = rows[:, :3], _unit_rows(rows[:, 3:], "cc", "normal")
+    named = Rows(field="cc")
+    cc, normals = rows[:, :3], unit_normals(rows[:, 3:], named)
     axis = np.asarray(req.axis, dtype=np.float64)
     files = _Files(state.roots)
     part_path = files.part(req.part)
@@ -78,6 +80,7 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
         entry, cached, key = cached_part(req.part, state, part_path)
     except PathcheckError as err:
         raise files.shown(err) from None
+    check_reach(cc, entry.part.bbox, named)  # as `pathcheck allowable --cc`
     sampled = SampledPart(entry.part, entry.test_points, entry.load_s, entry.sample_s)
     doc = allowable_at_points(sampled, cutter, cc, normals, axis / np.linalg.norm(axis),
                               state.config, b_range=req.b_range, cached=cached)
@@ -273,16 +276,3 @@ class _Files:
             return err
         err = redact(err, name)
         return PathcheckError(err.message, path=name, line=err.line, code=err.code)
-
-
-# --- formatting ------------------------------------------------------------------------------
-
-
-def _unit_rows(v: np.ndarray, field_name: str, what: str) -> np.ndarray:
-    """(N, 3) rows scaled to unit length; a zero row is a request error naming its index."""
-    norm = np.linalg.norm(v, axis=1)
-    bad = np.flatnonzero(norm < 1e-12)
-    if bad.size:
-        raise PathcheckError(f"field '{field_name}.{bad[0]}': expected a non-zero {what} "
-                             f"(columns 4-6), found {v[bad[0]].tolist()}", code="request")
-    return v / norm[:, None]
