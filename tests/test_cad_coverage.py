@@ -11,7 +11,8 @@ by OpenCASCADE alone (tests/occ_faces.py):
   face's border (a triangle with an edge no other triangle of its face shares), the largest
   triangles and random ones lie within `part_deviation` of the face (OCC's surface projection
   `ShapeAnalysis_Surface`; where the foot is outside the trim, the distance to the trimmed face
-  by `BRepExtrema`).
+  by `BRepExtrema`, there within the deviation plus the face's edge tolerance: OpenCASCADE's
+  model puts an edge's curve in space and its curve on the face only that close).
 
 Every STEP/IGES file under ../shared/realdata is listed by glob (a new one is included)."""
 
@@ -70,15 +71,15 @@ def _point_triangle(px, py, pz, tv, t):
         if d3 >= 0.0 and d4 <= d3:
             qx, qy, qz = bx, by, bz
         elif vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-            s = d1 / (d1 - d3)
+            s = d1 / (d1 - d3) if d1 > d3 else 0.0  # d1 - d3 = |ab|^2: 0 when a = b
             qx, qy, qz = ax + s * abx, ay + s * aby, az + s * abz
         elif d6 >= 0.0 and d5 <= d6:
             qx, qy, qz = cx, cy, cz
         elif vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-            s = d2 / (d2 - d6)
+            s = d2 / (d2 - d6) if d2 > d6 else 0.0
             qx, qy, qz = ax + s * acx, ay + s * acy, az + s * acz
         elif va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
-            s = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+            s = (d4 - d3) / max((d4 - d3) + (d5 - d6), 1e-300)
             qx, qy, qz = bx + s * (cx - bx), by + s * (cy - by), bz + s * (cz - bz)
         else:
             den = va + vb + vc
@@ -213,8 +214,10 @@ def _triangle_points(tris, rng) -> tuple[np.ndarray, np.ndarray]:
     return pts, np.repeat(pick, len(w))
 
 
-def surface_distances(face, samples, points: np.ndarray, deviation: float) -> np.ndarray:
-    """(N,) exact distance (mm) from points to the trimmed face: the projection onto its
+def surface_distances(face, samples, points: np.ndarray,
+                      deviation: float) -> tuple[np.ndarray, np.ndarray]:
+    """(N,) exact distance (mm) from points to the trimmed face, and (N,) whether the
+    point's foot lies outside the trim: the projection onto its
     surface (`ShapeAnalysis_Surface`, started from the (u, v) of the nearest of the face's
     `samples`, and from scratch where that finds more than `deviation`) where the foot is in
     the trim or on it (the classifier's tolerance: 1e-3 mm on the surface), else the distance
@@ -248,7 +251,22 @@ def surface_distances(face, samples, points: np.ndarray, deviation: float) -> np
         off[i] = cls.State() not in (TopAbs_IN, TopAbs_ON)
     if off.any():
         out[off] = face_distances(face, points[off])
-    return out
+    return out, off
+
+
+def edge_tolerance(face) -> float:
+    """The largest tolerance (mm) of the face's edges: how far OpenCASCADE's model lets an
+    edge's curve in space lie from its curve on the face (an IGES part 40 m long: 0.2 mm)."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    worst, edges = 0.0, TopExp_Explorer(face, TopAbs_EDGE)
+    while edges.More():
+        worst = max(worst, BRep_Tool.Tolerance_s(TopoDS.Edge(edges.Current())))
+        edges.Next()
+    return worst
 
 
 @pytest.mark.slow
@@ -256,15 +274,18 @@ def test_every_triangle_lies_on_its_face(cad):
     path, tris, occ, samples, deviation = cad
     pts, tri = _triangle_points(tris, np.random.default_rng(len(tris.triangles)))
     owner = tris.surface[tri]
-    dist = np.empty(len(pts))
+    dist, allowed = np.empty(len(pts)), np.full(len(pts), deviation)
     for k in np.unique(owner):
         rows = np.flatnonzero(owner == k)
-        dist[rows] = surface_distances(occ[k], samples[k], pts[rows], deviation)
-    worst = int(np.argmax(dist))
-    far = dist > deviation
+        dist[rows], off = surface_distances(occ[k], samples[k], pts[rows], deviation)
+        # beyond the trim, the face's boundary is only known to its edges' tolerance
+        allowed[rows[off]] = deviation + edge_tolerance(occ[k])
+    worst = int(np.argmax(dist - allowed))
+    far = dist > allowed
     assert not far.any(), (
         f"{path.name}: {far.sum()} of {len(pts)} triangle points lie beyond {deviation} mm of "
-        f"their face, up to {dist[worst]:.4f} mm (face {owner[worst]} at "
+        f"their face (or their edges' tolerance beyond the trim), up to {dist[worst]:.4f} mm "
+        f"(face {owner[worst]} at "
         f"{np.round(pts[worst], 3).tolist()})")
 
 
