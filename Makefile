@@ -49,7 +49,7 @@ bench: setup
 	$(BIN)/python -m benchmarks.run_all
 
 # the source distribution, then the wheel with the portable kernels of its sources (compiled
-# for numba's generic x86-64 CPU into checker/resources/kernels, not kept in git), in dist/
+# for LLVM's x86-64-v3 CPU (AVX2, FMA) into checker/resources/kernels, not kept in git), in dist/
 wheel: setup
 	rm -rf dist build checker/resources/kernels
 	$(BIN)/python -m build --sdist --outdir dist .

@@ -36,7 +36,7 @@ LOCATORS_ENV = "NUMBA_CACHE_LOCATOR_CLASSES"
 _LOCATORS = ("checker.kernel_locator.PackageLocator,UserProvidedCacheLocator,InTreeCacheLocator,"
              "UserWideCacheLocator,IPythonCacheLocator,ZipCacheLocator")
 KEEP_VERSIONS = 4  # kernel folders of the most recent versions of the sources kept
-KERNELS_ENV = "PATHCHECK_KERNELS"  # "host" (tuned to this CPU) or "portable" (generic x86-64)
+KERNELS_ENV = "PATHCHECK_KERNELS"  # "host" (tuned to this CPU) or "portable" (x86-64-v3)
 HOST_MARK = "host-kernels"  # in a cache folder: `pathcheck warm` compiled this CPU's kernels
 PORTABLE_STAMP = "STAMP"  # in the shipped kernels: the sources, numba and Python they are for
 PORTABLE_CPU = "x86-64-v3"  # LLVM's name; numba's "generic" x86-64 (SSE2) ran the engine 0.6x

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The package as a user gets it: build the wheel as `make wheel` does (the portable kernels
-# compiled for numba's generic CPU into a copy of the sources), install it without extras into a
+# The package as a user gets it: build the wheel as `make wheel` does (the portable kernels,
+# compiled for LLVM's x86-64-v3 CPU, into a copy of the sources), install it without extras into a
 # new venv outside the repository, and from another directory run `pathcheck info` on a sample,
 # the first check after the install with an empty cache (timed: it must load the shipped
 # kernels, and the compressor job after it compile nothing), `pathcheck warm`, which must find the kernels `make setup` compiled from the repository's
