@@ -1,8 +1,9 @@
 """pathcheck's verdicts on paths made by another CAM library over every STEP/IGES part of
 ../shared/realdata, against an independent depth oracle. For each part: an OpenCAMLib
 drop-cutter finishing raster with a ball D6 over OpenCASCADE's mesh of the part
-(tests/cad_paths.py), checked by pathcheck's real check (`checker.job.check_job`) with larger
-cutters (ball D10, bull-nose D10 r2, flat D8: they cut where the D6 only touched); at each of
+(tests/cad_paths.py), checked by pathcheck's real check (`checker.job.check_job`) with a larger
+cutter (ball D10, bull-nose D10 r2, flat D8 in turn over the parts: they cut where the D6 only
+touched); at each of
 pathcheck's checked poses (CL records, the deepest pose of every penetrating move) the depth of
 the cutter's body into a fine OpenCASCADE mesh of the part (`BRepMesh`, ORACLE_DEFLECTION mm) by
 OpenCAMLib's drop-cutter (tests/ocl_oracle.py). No pose deeper than DEEP by the oracle may be
@@ -104,9 +105,11 @@ def deeper_than(surf, z_below: float, cutter, tips: np.ndarray, d: float) -> np.
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("cutter_text", CHECKED_WITH)
-def test_larger_cutter_verdicts_agree_with_the_oracle(job, cutter_text):
+def test_larger_cutter_verdicts_agree_with_the_oracle(job):
+    """Each part with one of the larger cutters, in turn over the parts (each cutter on a third
+    of them: the suite's time)."""
     path, apt, fine, (x0, y0, x1, y1) = job
+    cutter_text = CHECKED_WITH[PARTS.index(path) % len(CHECKED_WITH)]
     doc = check_job(apt, part_path=path, cutter=cutter_text)
     poses = [p for p in doc.points if p.depth is not None
              and x0 <= p.tip[0] <= x1 and y0 <= p.tip[1] <= y1]
