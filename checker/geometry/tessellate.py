@@ -82,21 +82,39 @@ def part_triangles(part: Part, deviation: float, cfg: GeometryConfig) -> PartTri
 
 def _within(s: Surface, deviation: float, cfg: GeometryConfig):
     """`_surface_triangles` of s refined until its measured deviation is below `deviation`
-    or the sample budget stops the grid. The grid's chord tolerance starts at a quarter of it
+    (or the sample budget stops the grid). The grid's chord tolerance starts at a quarter of it
     (the triangles' interiors and the twist of the surface add to the grid lines' chord
-    error)."""
+    error); each refinement also raises the least number of grid lines a direction gets with
+    the shortfall, since a twisted face (a ruled surface, whose straight direction gets the
+    fewest lines) deviates by the product of the two spacings, not by their squares. Where the
+    sample budget stops the grid short of the deviation, it grows once with the shortfall (at
+    most 4 times)."""
     chord = 0.25 * deviation
     cfg = _kept_budget(s, cfg)
     out = _surface_triangles(s, chord, cfg)
+    grown = False
     for _ in range(_REFINES):
         if out[3] <= deviation:
             break
-        chord *= 0.8 * deviation / out[3]
+        short = out[3] / deviation
+        chord *= 0.8 / short
+        fewest = int(np.ceil(cfg.min_samples_per_direction * 1.2 * short))
+        cfg = cfg.model_copy(update={"min_samples_per_direction": fewest})
         finer = _surface_triangles(s, chord, cfg)
-        if len(finer[1]) < 1.05 * len(out[1]):  # the budget stops the grid: no finer one
-            return min(out, finer, key=lambda o: o[3])
+        if len(finer[1]) < 1.05 * len(out[1]):  # the budget stops the grid
+            if grown:
+                return min(out, finer, key=lambda o: o[3])
+            grown = True  # once: the deviation falls as the samples grow (h^2 or hu hv)
+            cfg = cfg.model_copy(update={"max_samples_per_surface": int(
+                cfg.max_samples_per_surface * min(_MOST_GROWN, 1.2 * short))})
+            finer = _surface_triangles(s, chord, cfg)
         out = finer
     return out
+
+
+_MOST_GROWN = 4.0  # the budget of a surface short of the deviation grows at most this much
+
+
 
 
 _MOST_CUT = 16.0  # a trim keeping less than 1/16 of the domain: the budget grows 16 times
