@@ -13,6 +13,19 @@ from pathlib import Path
 from tests.measured import run_measured
 
 REPO = Path(__file__).resolve().parents[1]
+MOULD = REPO / "samples" / "mould"
+# the first 40 records of the mould job: a small clean 3-axis path over the mould part
+SMALL_JOB = "\n".join(MOULD.joinpath("mould.apt").read_text().splitlines()[:40]) + "\n"
+
+
+def small_job(folder: Path) -> Path:
+    """The small mould job written into `folder` as small.apt, its part beside it."""
+    import shutil
+
+    shutil.copy(MOULD / "mould.json", folder / "small.json")
+    path = folder / "small.apt"
+    path.write_text(SMALL_JOB)
+    return path
 PATHCHECK = [sys.executable, "-m", "checker.cli"]
 LIMIT_S = 60.0  # no run may take longer
 LIMIT_RSS_MB = 2048.0  # nor hold more memory

@@ -22,11 +22,9 @@ import numpy as np
 import pytest
 
 from checker.cli import EXIT_INPUT
-from tests.hostile import REPO, run_pathcheck
+from tests.hostile import MOULD, REPO, run_pathcheck, small_job
 
-MOULD = REPO / "samples" / "mould"
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as `pathcheck --help` states
-SMALL_JOB = "\n".join(MOULD.joinpath("mould.apt").read_text().splitlines()[:40]) + "\n"
 # a CC point on the mould's first surface (the hostile programs' own)
 ON_MOULD = "-59.5,-32,-0.02,0,0,1"
 
@@ -34,10 +32,7 @@ ON_MOULD = "-59.5,-32,-0.02,0,0,1"
 @pytest.fixture()
 def job(tmp_path) -> Path:
     """The small mould job with its part beside it."""
-    shutil.copy(MOULD / "mould.json", tmp_path / "small.json")
-    path = tmp_path / "small.apt"
-    path.write_text(SMALL_JOB)
-    return path
+    return small_job(tmp_path)
 
 
 def _one_line(run, pattern: str) -> None:

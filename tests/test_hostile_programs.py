@@ -22,21 +22,15 @@ import pytest
 from checker.cli import EXIT_INPUT, EXIT_INTERNAL, main
 from checker.report.synthetic import synthetic_document
 from checker.store import ResultsStore
-from tests.hostile import REPO, assert_sane, run_pathcheck
+from tests.hostile import MOULD, REPO, SMALL_JOB, assert_sane, run_pathcheck, small_job
 
-MOULD = REPO / "samples" / "mould"
-# the first 40 records of the mould job: a small clean 3-axis path over the mould part
-SMALL_JOB = "\n".join(MOULD.joinpath("mould.apt").read_text().splitlines()[:40]) + "\n"
 GCODE_HEAD = "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z0 F100\n"
 
 
 @pytest.fixture()
 def job(tmp_path) -> Path:
     """The small mould job with its part beside it."""
-    shutil.copy(MOULD / "mould.json", tmp_path / "small.json")
-    path = tmp_path / "small.apt"
-    path.write_text(SMALL_JOB)
-    return path
+    return small_job(tmp_path)
 
 
 def _one_line(run, pattern: str) -> None:
