@@ -1,5 +1,6 @@
-"""`pathcheck warm`: compile the kernels into the per-user cache once (`make setup` runs it);
-without it the first check compiles what it needs as it goes."""
+"""`pathcheck warm`: compile the kernels for this CPU into the per-user cache once (`make setup`
+runs it); without it a wheel's first check runs on the portable kernels it ships, and a source
+checkout's compiles what it needs as it goes."""
 
 from __future__ import annotations
 
@@ -8,8 +9,8 @@ import click
 
 @click.command()
 def warm() -> None:
-    """Compile the numeric kernels into the per-user cache (once per install; about half a
-    minute on 2 cores). Later runs load them in well under a second."""
+    """Compile the numeric kernels for this CPU into the per-user cache (once per install;
+    about a minute and a half on 2 cores). Later runs load them in well under a second."""
     from checker.progress import step
     from checker.warm import warm_kernels
 
