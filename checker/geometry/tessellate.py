@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 
 from checker.config import GeometryConfig
 from checker.geometry.evaluate import evaluate
@@ -42,6 +43,8 @@ class PartTriangles:
 
 
 _REFINES = 3  # grid refinements at most to reach the deviation asked for
+_MOST_GROWN = 4.0  # the budget of a surface short of the deviation grows at most this much
+_MOST_CUT = 16.0  # a trim keeping less than 1/16 of the domain: the budget grows 16 times
 _EVAL_BLOCK = 200_000  # surface points evaluated at once when measuring the deviation
 
 
@@ -90,8 +93,9 @@ def _within(s: Surface, deviation: float, cfg: GeometryConfig):
     sample budget stops the grid short of the deviation, it grows once with the shortfall (at
     most 4 times)."""
     chord = 0.25 * deviation
-    cfg = _kept_budget(s, cfg)
-    out = _surface_triangles(s, chord, cfg)
+    region = kept_region(s)  # once: every grid below is cut to it
+    cfg = _kept_budget(s, region, cfg)
+    out = _surface_triangles(s, region, chord, cfg)
     grown = False
     for _ in range(_REFINES):
         if out[3] <= deviation:
@@ -100,34 +104,26 @@ def _within(s: Surface, deviation: float, cfg: GeometryConfig):
         chord *= 0.8 / short
         fewest = int(np.ceil(cfg.min_samples_per_direction * 1.2 * short))
         cfg = cfg.model_copy(update={"min_samples_per_direction": fewest})
-        finer = _surface_triangles(s, chord, cfg)
+        finer = _surface_triangles(s, region, chord, cfg)
         if len(finer[1]) < 1.05 * len(out[1]):  # the budget stops the grid
             if grown:
                 return min(out, finer, key=lambda o: o[3])
             grown = True  # once: the deviation falls as the samples grow (h^2 or hu hv)
             cfg = cfg.model_copy(update={"max_samples_per_surface": int(
                 cfg.max_samples_per_surface * min(_MOST_GROWN, 1.2 * short))})
-            finer = _surface_triangles(s, chord, cfg)
+            finer = _surface_triangles(s, region, chord, cfg)
         out = finer
     return out
 
 
-_MOST_GROWN = 4.0  # the budget of a surface short of the deviation grows at most this much
-
-
-
-
-_MOST_CUT = 16.0  # a trim keeping less than 1/16 of the domain: the budget grows 16 times
-
-
-def _kept_budget(s: Surface, cfg: GeometryConfig) -> GeometryConfig:
+def _kept_budget(s: Surface, region: shapely.Geometry, cfg: GeometryConfig) -> GeometryConfig:
     """`cfg` with `max_samples_per_surface` counted over the kept region: a grid over a domain
-    its trim keeps a fraction f of may have 1/f times as many corners (at most 16 times), of
-    which about the budget are kept."""
+    its trim keeps a fraction f of (`region`, its kept region) may have 1/f times as many
+    corners (at most 16 times), of which about the budget are kept."""
     if s.trim is None:
         return cfg
     (u0, u1), (v0, v1) = s.domain
-    kept = kept_region(s).area / max((u1 - u0) * (v1 - v0), 1e-300)
+    kept = region.area / max((u1 - u0) * (v1 - v0), 1e-300)
     grow = min(_MOST_CUT, 1.0 / max(kept, 1e-300))
     if grow <= 1.0:
         return cfg
@@ -135,11 +131,13 @@ def _kept_budget(s: Surface, cfg: GeometryConfig) -> GeometryConfig:
                                                                  * grow)})
 
 
-def _surface_triangles(s: Surface, chord: float, cfg: GeometryConfig):
-    """(vertices, triangles, uv, measured deviation) of one surface's grid cut to its trim
-    (`trim_cells.trimmed_grid`: whole cells inside, clipped cells along the trim loops)."""
+def _surface_triangles(s: Surface, region: shapely.Geometry, chord: float,
+                       cfg: GeometryConfig):
+    """(vertices, triangles, uv, measured deviation) of one surface's grid cut to its kept
+    `region` (`trim_cells.trimmed_grid`: whole cells inside, clipped cells along the trim
+    loops)."""
     gu, gv = surface_grid(s, chord, cfg)
-    uv, tri = trimmed_grid(s, gu, gv)
+    uv, tri = trimmed_grid(s, gu, gv, region)
     used = np.zeros(len(uv), dtype=bool)
     used[tri] = True
     if not used.all():  # vertices of dropped cells are not evaluated

@@ -53,11 +53,13 @@ def kept_region(s: Surface) -> shapely.Geometry:
     return shapely.intersection(region, domain)
 
 
-def trimmed_grid(s: Surface, gu: np.ndarray, gv: np.ndarray) -> TrimmedGrid:
+def trimmed_grid(s: Surface, gu: np.ndarray, gv: np.ndarray,
+                 region: shapely.Geometry | None = None) -> TrimmedGrid:
     """The cells of the grid `gu x gv` (increasing parameters) cut to the surface's kept
-    region and triangulated: whole cells as two triangles (a, b, c), (a, c, d) of their
-    corners, clipped cells by a constrained Delaunay triangulation of their pieces. The
-    triangles tile the kept region (up to the loops' own polylines) without overlap."""
+    region (`kept_region(s)`, or `region` where the caller has it) and triangulated: whole
+    cells as two triangles (a, b, c), (a, c, d) of their corners, clipped cells by a
+    constrained Delaunay triangulation of their pieces. The triangles tile the kept region
+    (up to the loops' own polylines) without overlap."""
     nu, nv = len(gu), len(gv)
     U, V = np.meshgrid(gu, gv, indexing="ij")
     uv = np.column_stack([U.ravel(), V.ravel()])
@@ -66,7 +68,7 @@ def trimmed_grid(s: Surface, gu: np.ndarray, gv: np.ndarray) -> TrimmedGrid:
     c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
     if s.trim is None:
         return TrimmedGrid(uv, _quads(a, b, c, d))
-    region = kept_region(s)
+    region = kept_region(s) if region is None else region
     shapely.prepare(region)
     lo_u, lo_v = uv[a, 0], uv[a, 1]
     hi_u, hi_v = uv[c, 0], uv[c, 1]
