@@ -11,7 +11,12 @@ A penetration of at most the tolerance is `within_tolerance` (counted apart, nev
 Where nothing penetrates, the pose is `ok`; `inaccessible` marks a cutting pose whose contact
 point the cutter cannot touch (advice, never a finding). The allowable cutter and the margin
 are advice about a pose and never decide a verdict.
-(docs/MATH.md §8)"""
+Against the stock (the material still there when the move is made) and the fixtures, the same
+rule with what may be touched: the cutter's body cuts stock at feed (that is machining, never a
+finding); a rapid that removes stock beyond the tolerance is a `crash`, the shank or the holder
+removing stock at feed a `holder` finding; any piece of the tool in a fixture beyond the
+tolerance is a `crash` (`decide_stock`, `decide_fixture`).
+(docs/MATH.md §8, §14)"""
 
 from __future__ import annotations
 
@@ -44,6 +49,38 @@ def decide(depth: np.ndarray, piece: np.ndarray, rapid: np.ndarray, near_contact
     out[beyond & body & ~near] = "interference"
     out[beyond & ~body] = "holder"
     out[beyond & np.asarray(rapid, bool)] = "crash"
+    return out
+
+
+def decide_stock(thickness: np.ndarray, rapid: np.ndarray,
+                 tolerance: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """Verdicts (N,) and the piece (N,) that decides each, per pose or move, from the stock's
+    largest thickness removed along one ray by each piece `thickness (N, 3)` (mm; BODY, SHANK,
+    HOLDER), whether the move is a `rapid` and the `tolerance` (mm)."""
+    thickness = np.asarray(thickness, dtype=float)
+    tol = np.broadcast_to(np.asarray(tolerance, dtype=float), thickness.shape[:1])
+    rapid = np.asarray(rapid, bool)
+    out = np.full(thickness.shape[:1], "ok", dtype=object)
+    piece = np.full(thickness.shape[:1], -1, dtype=np.int64)
+    holder = thickness[:, SHANK:].max(axis=1) > tol
+    piece[holder] = SHANK + np.argmax(thickness[holder, SHANK:], axis=1)
+    out[holder] = "holder"
+    crash = rapid & (thickness.max(axis=1) > tol)
+    piece[crash] = np.argmax(thickness[crash], axis=1)
+    out[crash] = "crash"
+    touched = ~holder & ~crash & (thickness[:, SHANK:].max(axis=1) > 0.0)
+    out[touched | (rapid & ~crash & (thickness.max(axis=1) > 0.0))] = "within_tolerance"
+    return out, piece
+
+
+def decide_fixture(depth: np.ndarray, tolerance: np.ndarray | float) -> np.ndarray:
+    """Verdicts (N,) of the tool against a fixture from its deepest penetration `depth` (mm;
+    <= 0: clear): beyond the `tolerance` a `crash`, whatever the move."""
+    depth = np.asarray(depth, dtype=float)
+    tol = np.broadcast_to(np.asarray(tolerance, dtype=float), depth.shape)
+    out = np.full(depth.shape, "ok", dtype=object)
+    out[depth > 0.0] = "within_tolerance"
+    out[depth > tol] = "crash"
     return out
 
 

@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from checker.b_axis import axis_for_b, rotate_about_y
-from checker.moves import Moves
+from checker.moves import START, Moves
 from checker.progress import step
 
 _MAX_ROUNDS = 60  # halvings at most (2^-60 of a move: far below any tolerance)
@@ -113,7 +113,7 @@ def _on_table(ma: np.ndarray, me: np.ndarray, ba: np.ndarray, be: np.ndarray, t:
     return rotate_about_y(ma + t[:, None] * (me - ma), -bt, center), axis_for_b(bt)
 
 
-def _pose_at(moves: Moves, end: np.ndarray, t: np.ndarray, b: np.ndarray | None,
+def pose_at(moves: Moves, end: np.ndarray, t: np.ndarray, b: np.ndarray | None,
              center: np.ndarray):
     """(tips, axes) at fraction t of the moves ending at `end`. With table angles `b` (per pose,
     degrees) the machine moves linearly in X, Y, Z and B (the part turns about Y through
@@ -149,9 +149,9 @@ def stretches(moves: Moves, end: np.ndarray, t0: np.ndarray, t1: np.ndarray,
     within dθ / 2 of the middle one."""
     tm = 0.5 * (t0 + t1)
     if b is None:
-        tip0, ax0 = _pose_at(moves, end, t0, b, center)
-        tip1, ax1 = _pose_at(moves, end, t1, b, center)
-        _, axm = _pose_at(moves, end, tm, b, center)
+        tip0, ax0 = pose_at(moves, end, t0, b, center)
+        tip1, ax1 = pose_at(moves, end, t1, b, center)
+        _, axm = pose_at(moves, end, tm, b, center)
         cos = np.minimum(np.einsum("ij,ij->i", ax0, axm), np.einsum("ij,ij->i", ax1, axm))
         return Stretches(0.5 * (tip0 + tip1), axm, 0.5 * (tip1 - tip0), np.zeros(len(end)),
                          np.arccos(np.clip(cos, -1.0, 1.0)))
@@ -198,6 +198,63 @@ def move_lengths(moves: Moves, end: np.ndarray, box: np.ndarray, b: np.ndarray |
     return np.linalg.norm(shift, axis=1) + np.radians(np.abs(b[end] - b[a])) * far
 
 
+@dataclass(frozen=True)
+class ProgramMotion:
+    """The poses and moves of a program as the machine makes them: `moves`, the operation of
+    each pose `op_of (P,)`, the table angle B of each pose `b (P,)` (degrees, nan: none) turning
+    the part about Y through `center`, and `path` (a `checker.five_axis.motion.MachinePath`
+    over the poses) for the operations `five_ops` whose joints run linearly."""
+
+    moves: Moves
+    op_of: np.ndarray
+    b: np.ndarray
+    center: np.ndarray
+    path: object = None
+    five_ops: frozenset[int] = frozenset()
+
+    def table(self, ends: np.ndarray) -> np.ndarray | None:
+        """The B per pose when every move ending at `ends` turns the table, else None."""
+        return self.b if len(ends) and np.isfinite(self.b[ends]).all() else None
+
+    def machine(self, op: int):
+        """The operation's `MachinePath` when its joints run linearly, else None."""
+        return self.path if self.path is not None and op in self.five_ops else None
+
+
+def tool_depths(index, box: np.ndarray, motion: ProgramMotion, pieces: dict,
+                tolerance: np.ndarray, reach: float) -> tuple[Depths, MoveDepths]:
+    """The real tool (`pieces[op]`, `checker.mesh.tool.ToolPieces`) against the triangles of
+    `index` (within the box `box (2, 3)`, grown by the reach) at every pose of `motion` and
+    along every move (`along_moves`), `tolerance (P,)` mm per pose."""
+    moves = motion.moves
+    poses = Depths.empty(len(moves))
+    parts = []
+    for o in np.unique(motion.op_of):
+        probe = PoseProbe(index, pieces[int(o)], reach)
+        P = np.flatnonzero(motion.op_of == o)
+        poses.put(P, probe(moves.tip[P], moves.axis[P]))
+        ends = P[moves.kind[P] != START]
+        parts.append(along_moves(probe, moves, ends, poses.depth, tolerance[ends], box,
+                                 motion.table(ends), motion.center,
+                                 motion=motion.machine(int(o))))
+    return poses, concat_moves(parts, len(moves))
+
+
+def concat_moves(parts: list[MoveDepths], n: int) -> MoveDepths:
+    """The moves of all operations in pose order."""
+    if not parts:
+        z = np.zeros(0, dtype=np.int64)
+        return MoveDepths(z, Depths.empty(0), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), z)
+    end = np.concatenate([p.end for p in parts])
+    order = np.argsort(end, kind="stable")
+    cat = lambda f: np.concatenate([f(p) for p in parts])[order]  # noqa: E731
+    d = Depths(cat(lambda p: p.depths.depth), cat(lambda p: p.depths.piece),
+               cat(lambda p: p.depths.point), cat(lambda p: p.depths.triangle),
+               cat(lambda p: p.depths.height))
+    return MoveDepths(end[order], d, cat(lambda p: p.t), cat(lambda p: p.tip),
+                      cat(lambda p: p.axis), cat(lambda p: p.poses))
+
+
 def along_moves(probe: PoseProbe, moves: Moves, end: np.ndarray, end_depths: np.ndarray,
                 tolerance: np.ndarray, box: np.ndarray, b: np.ndarray | None = None,
                 center: np.ndarray | None = None, precision: float = 0.25,
@@ -237,7 +294,7 @@ def along_moves(probe: PoseProbe, moves: Moves, end: np.ndarray, end_depths: np.
             if k.size == 0:
                 break
             tm = 0.5 * (t0 + t1)
-            tips, axes = (_pose_at(moves, end[k], tm, b, center) if motion is None
+            tips, axes = (pose_at(moves, end[k], tm, b, center) if motion is None
                           else motion.pose_at(end[k], tm))
             got = probe(tips, axes)
             advance(1)

@@ -25,7 +25,7 @@ from checker.four_axis.job import plan_b
 from checker.geometry.contact import cl_to_cc, contact_from_toolpath
 from checker.mesh.tool import tool_pieces
 from checker.moves import RAPID, START, Moves, machine_moves
-from checker.verify import Depths, MoveDepths, PoseProbe, along_moves
+from checker.verify import Depths, MoveDepths, ProgramMotion, tool_depths
 
 STRATEGIES = ("allowable", "contact-order")  # the multi-axis planners of --reorient
 
@@ -44,6 +44,7 @@ class Verified:
     move_verdict: np.ndarray
     tolerance: np.ndarray
     move_tolerance: np.ndarray
+    motion: ProgramMotion | None = None
 
     def findings(self, poses: np.ndarray) -> int:
         """Findings at the poses `poses` and along the moves that reach them."""
@@ -80,35 +81,31 @@ class Program:
     fives: dict[int, object] = field(default_factory=dict)  # multi-axis: `five_axis.plan`
 
 
+def program_motion(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray,
+                   center: np.ndarray) -> ProgramMotion:
+    """The poses and moves of the motions (tips, axes, table angles `b` per motion row, nan:
+    none) as the machine makes them; multi-axis operations on a 5-axis machine run its joints
+    linearly."""
+    moves = machine_moves(replace(job.m, tip=tip, axis=axis))
+    five = getattr(job, "motion", None)
+    path = None if five is None else machine_path(five, axis, job.m.line, str(job.apt_path),
+                                                  moves.row, moves.tip)
+    return ProgramMotion(moves, job.m.op[moves.row], b[moves.row], np.asarray(center, float),
+                         path, frozenset() if five is None else frozenset(five.ops))
+
+
 def verify(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray, cutters: dict, tol,
            center: np.ndarray) -> Verified:
     """The real tool at every pose of the motions (tips, axes per motion row) and along every
     move; rows with a table angle `b` (not nan) move linearly in machine X Y Z B."""
     cfg = job.cfg
-    moves = machine_moves(replace(job.m, tip=tip, axis=axis))
-    n = len(moves)
-    op_of = job.m.op[moves.row]
-    poses = Depths.empty(n)
-    tolerance = tol.value[op_of]
-    b_pose = b[moves.row]
+    motion = program_motion(job, tip, axis, b, center)
+    moves = motion.moves
+    tolerance = tol.value[motion.op_of]
     v = job.triangles.vertices
     box = np.array([v.min(axis=0), v.max(axis=0)]) + [[-cfg.check.reach], [cfg.check.reach]]
-    ends_all, along_parts = [], []
-    five = getattr(job, "motion", None)  # multi-axis operations: the machine's joints linear
-    path = None if five is None else machine_path(five, axis, job.m.line, str(job.apt_path),
-                                                  moves.row, moves.tip)
-    for o in np.unique(op_of):
-        c = cutters[int(o)]
-        probe = PoseProbe(job.index, tool_pieces(c, with_holder=True), cfg.check.reach)
-        P = np.flatnonzero(op_of == o)
-        poses.put(P, probe(moves.tip[P], moves.axis[P]))
-        ends = P[moves.kind[P] != START]
-        turning = np.isfinite(b_pose[ends]).all() and len(ends)
-        along_parts.append(along_moves(probe, moves, ends, poses.depth, tolerance[ends], box,
-                                       b_pose if turning else None, center,
-                                       motion=path if path is not None and o in five.ops else None))
-        ends_all.append(ends)
-    along = _concat_moves(along_parts, n)
+    pieces = {o: tool_pieces(cutters[o], with_holder=True) for o in np.unique(motion.op_of)}
+    poses, along = tool_depths(job.index, box, motion, pieces, tolerance, cfg.check.reach)
     near = _near(job, moves, cutters, poses.height)
     rapid_pose = (moves.kind == RAPID) | ((moves.kind == START) & job.m.rapid[moves.row])
     local = _local_deviation(job, poses.triangle)
@@ -122,7 +119,8 @@ def verify(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray, cutters: dict,
                              along.depths.piece,
                              (moves.kind[along.end] == RAPID) & ~moves.retract[along.end],
                              move_near, move_tol)
-    return Verified(moves, poses, along, pose_verdict, move_verdict, tolerance + local, move_tol)
+    return Verified(moves, poses, along, pose_verdict, move_verdict, tolerance + local, move_tol,
+                    motion)
 
 
 def _local_deviation(job, triangle: np.ndarray) -> np.ndarray:
@@ -140,21 +138,6 @@ def _near(job, moves: Moves, cutters: dict, height: np.ndarray, at: np.ndarray |
     reach = np.array([job.cfg.check.gouge_neighbourhood * 0.5 * cutters[int(o)].d
                       for o in op_of]) if len(at) else np.zeros(0)
     return np.nan_to_num(height, nan=np.inf) <= reach
-
-
-def _concat_moves(parts: list[MoveDepths], n: int) -> MoveDepths:
-    """The moves of all operations in pose order."""
-    if not parts:
-        z = np.zeros(0, dtype=np.int64)
-        return MoveDepths(z, Depths.empty(0), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), z)
-    end = np.concatenate([p.end for p in parts])
-    order = np.argsort(end, kind="stable")
-    cat = lambda f: np.concatenate([f(p) for p in parts])[order]  # noqa: E731
-    d = Depths(cat(lambda p: p.depths.depth), cat(lambda p: p.depths.piece),
-               cat(lambda p: p.depths.point), cat(lambda p: p.depths.triangle),
-               cat(lambda p: p.depths.height))
-    return MoveDepths(end[order], d, cat(lambda p: p.t), cat(lambda p: p.tip),
-                      cat(lambda p: p.axis), cat(lambda p: p.poses))
 
 
 def check_frames(job, verified: Verified, cutters: dict) -> None:

@@ -28,7 +28,7 @@ from checker.cutter import parse_cutter
 from checker.geometry import load_part
 from checker.mesh import MeshIndex, pose_depths, tool_pieces
 from checker.mesh.swept import certified_stretches
-from checker.verify import Stretches, _pose_at, stretches
+from checker.verify import Stretches, pose_at, stretches
 
 JOB = (Path(__file__).resolve().parents[2] / "shared" / "realdata" / "amorim-solidworkscam-apt"
        / "Interface-glue")
@@ -69,7 +69,7 @@ def _dense(job, moves, end, b, cutters=None):
     for o in np.unique(job.ma.op[end]):
         k = np.flatnonzero(job.ma.op[end] == o)
         e = np.repeat(end[k], SAMPLES)
-        tips, axes = _pose_at(moves, e, np.tile(t, len(k)), b, CENTER)
+        tips, axes = pose_at(moves, e, np.tile(t, len(k)), b, CENTER)
         d = pose_depths(job.index, tool_pieces(cutters[o], with_holder=True), tips, axes,
                         reach=REACH).depth
         out[k] = d.reshape(len(k), SAMPLES)
@@ -159,7 +159,7 @@ def test_the_machine_tip_runs_straight_between_the_poses(job):
     t = np.linspace(0.0, 1.0, 101)
     ref = stretches(moves, end, np.zeros(len(end)), np.ones(len(end)), b, CENTER)
     e = np.repeat(end, t.size)
-    tips, _ = _pose_at(moves, e, np.tile(t, len(end)), b, CENTER)
+    tips, _ = pose_at(moves, e, np.tile(t, len(end)), b, CENTER)
     chord = (ref.mids - ref.half)[:, None] + 2.0 * t[None, :, None] * ref.half[:, None]
     off = np.linalg.norm(tips.reshape(len(end), t.size, 3) - chord, axis=2).max(axis=1)
     assert (off <= ref.tau + 1e-9).all()
