@@ -23,6 +23,7 @@ Verdict = Literal["ok", "within_tolerance", "gouge", "interference", "holder", "
 VERDICTS: tuple[str, ...] = verdict.VERDICTS
 Piece = Literal["body", "shank", "holder"]
 PointKind = Literal["cl", "cycle", "move"]
+FindingKind = Literal["cl", "cycle", "move", "stock", "fixture"]
 Vec3 = tuple[float, float, float]
 
 
@@ -190,8 +191,9 @@ class OperationResult(_Model):
 class Finding(_Model):
     """One of the worst findings, for the summary."""
 
-    index: int
-    kind: PointKind = "cl"
+    index: int = Field(description="position in `points` (kind stock or fixture: in "
+                       "`stock.findings`)")
+    kind: FindingKind = "cl"
     verdict: Verdict
     line: int | None
     op: int = 0
@@ -209,6 +211,75 @@ class Orientation(_Model):
     greedy_total_rotation: float
     original_total_rotation: float
     infeasible_points: int
+
+
+class StockFinding(_Model):
+    """A move that hits the stock (material still there when it is made) or a fixture, by the
+    one verdict rule (`checker.verdict.decide_stock`, `decide_fixture`)."""
+
+    index: int = Field(description="position in `stock.findings`")
+    verdict: Verdict
+    against: str = Field(description='"stock", or the fixture\'s name')
+    move: int = Field(description="index of the motion (GOTO) the move reaches")
+    line: int | None = Field(None, description="line of that record in the CL file")
+    op: int = 0
+    rapid: bool = False
+    piece: Piece | None = None
+    depth: float = Field(description="stock: the largest thickness of material the piece "
+                         "removes along one vertical ray, mm; fixture: the penetration, mm")
+    tolerance: float
+    tip: Vec3 = Field(description="tool tip at the pose the move reaches, part frame, mm")
+    point: Vec3 | None = Field(None, description="where: stock, the middle of the thickest "
+                               "stretch removed; fixture, its deepest point, mm")
+
+
+class StockOperation(_Model):
+    """What one operation does to the stock."""
+
+    op: int
+    removed: float = Field(description="material removed, mm^3")
+    feed_moves: int
+    air_cuts: int = Field(description="feed moves that remove nothing beyond the tolerance")
+    air_length: float = Field(description="their length, mm")
+    air_time_s: float | None = Field(None, description="their time at the programmed feed, s "
+                                     "(None: no feed programmed)")
+    depth_max: float = Field(description="largest engaged depth (thickness removed along a "
+                             "ray by the cutter's body), mm")
+    width_max: float = Field(description="largest engaged width across the direction of "
+                             "travel, mm")
+    stl: str | None = Field(None, description="the stock after this operation (--stock-out)")
+
+
+class MoveEngagement(_Model):
+    """Per feed move of the program (parallel lists): what the cutter's body removes, for a
+    later feed optimisation."""
+
+    move: list[int] = Field(description="index of the motion (GOTO) the move reaches")
+    line: list[int]
+    volume: list[float] = Field(description="mm^3")
+    depth: list[float] = Field(description="engaged depth, mm")
+    width: list[float] = Field(description="engaged width, mm")
+
+
+class StockResult(_Model):
+    """The program against the stock and the fixtures (docs/MATH.md §14)."""
+
+    stock: str = Field(description="the stock's shape, part frame, mm")
+    placement: str | None = Field(None, description="how a stock the CL file states was placed")
+    resolution: float = Field(description="ray spacing of the Z-dexel model, mm")
+    error_bound: float = Field(description="bound on the simulated material along each ray, mm")
+    volume_initial: float = Field(description="mm^3")
+    volume_final: float = Field(description="mm^3")
+    fixtures: list[str] = Field(default_factory=list)
+    counts: VerdictCounts = Field(description="verdicts of the moves against the stock and the "
+                                  "fixtures")
+    operations: list[StockOperation] = Field(default_factory=list)
+    findings: list[StockFinding] = Field(default_factory=list)
+    engagement: MoveEngagement | None = None
+    overflow: int = Field(0, description="rays whose cut needed more intervals than the model "
+                          "holds (their material kept)")
+    final_stl: str | None = None
+    time_s: float = 0.0
 
 
 class Summary(_Model):
@@ -248,6 +319,8 @@ class ResultsDocument(_Model):
     orientation: Orientation | None = None
     points: list[PointResult]
     gcode: str | None = Field(None, description="path of the corrected G-code, when written")
+    stock: StockResult | None = Field(None, description="the program against the stock and the "
+                                      "fixtures (None: not asked)")
 
 
 def json_schema() -> dict:

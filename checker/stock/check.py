@@ -1,0 +1,228 @@
+"""The program against the stock and the fixtures: the stock's material removed move by move,
+operation by operation in program order, by the real tool (body, shank, holder: the check's own
+solid, `checker.mesh.tool`) along the motion the machine makes; each move judged by the one
+verdict rule (`checker.verdict.decide_stock`, `decide_fixture`); air cuts and the material
+removed counted per operation (docs/MATH.md §14). Part frame, mm."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from checker import verdict as vd
+from checker.mesh.tool import tool_pieces
+from checker.moves import FEED, RAPID, START
+from checker.progress import step
+from checker.results import MoveEngagement, StockFinding, StockOperation, StockResult, VerdictCounts
+from checker.stock.dexels import Dexels
+from checker.stock.fixtures import Fixture, load_fixture
+from checker.stock.motion import sweep_items
+from checker.stock.request import StockRequest
+from checker.verify import ProgramMotion, tool_depths
+
+_PIECES = ("body", "shank", "holder")
+
+
+@dataclass
+class StockCheck:
+    """Per pose of the written program (the move that reaches it): the verdict against the
+    stock and every fixture (`verdict`, the worst), its `depth` and what it was against
+    (`against`: "stock" or a fixture's name, '' none); the document's `result`."""
+
+    verdict: np.ndarray
+    depth: np.ndarray
+    against: np.ndarray
+    result: StockResult
+
+
+def build_stock(request: StockRequest, part_box: np.ndarray | None, toolpath, cfg):
+    """(Dexels, description, placement sentence or None) of the stock asked, at the resolution
+    asked or the default for its size."""
+    from checker.stock.removal import default_resolution
+    from checker.stock.solid import load_solid, solid_dexels
+    from checker.stock.spec import Box, Cylinder, parse_stock, resolve
+    from checker.stock.stated import stated_stock
+
+    spec = parse_stock(request.stock)
+    shape, placement = resolve(spec, part_box, stated_stock(toolpath))
+    if isinstance(shape, Box):
+        lo, hi = np.asarray(shape.lo, float), np.asarray(shape.hi, float)
+        h = request.resolution or default_resolution(hi - lo)
+        what = ("box " + " x ".join(f"{v:g}" for v in hi - lo) + " mm from ("
+                + ", ".join(f"{v:g}" for v in lo) + ")")
+        return Dexels.box(lo, hi, h), what, placement
+    if isinstance(shape, Cylinder):
+        ext = np.full(3, 2.0 * shape.radius)
+        ext["xyz".index(shape.axis)] = shape.end - shape.start
+        h = request.resolution or default_resolution(ext)
+        through = ", ".join(f"{v:g}" for v in shape.centre)
+        what = (f"cylinder about {shape.axis} through ({through}),"
+                f" diameter {2 * shape.radius:g} mm, from {shape.start:g} to {shape.end:g}")
+        return (Dexels.cylinder(shape.axis, np.asarray(shape.centre, float), shape.radius,
+                                shape.start, shape.end, h), what, placement)
+    vertices, triangles = load_solid(Path(shape.path), cfg)
+    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+    h = request.resolution or default_resolution(hi - lo)
+    nx, ny = (int(np.ceil((hi[k] - lo[k]) / h)) + 1 for k in (0, 1))
+    return (solid_dexels(vertices, triangles, lo[0] - 0.5 * h, lo[1] - 0.5 * h, nx, ny, h),
+            f"solid {Path(shape.path).name}", placement)
+
+
+def _stock_box(stock: Dexels) -> np.ndarray:
+    """(2, 3) the box of the stock's rays and material: the tool points that can cut it."""
+    slot = np.arange(stock.capacity)[None, None, :] < stock.count[:, :, None]
+    zlo = float(np.where(slot, stock.lo, np.inf).min(initial=np.inf))
+    zhi = float(np.where(slot, stock.hi, -np.inf).max(initial=-np.inf))
+    return np.array([[stock.x0, stock.y0, zlo],
+                     [stock.x0 + stock.nx * stock.h, stock.y0 + stock.ny * stock.h, zhi]])
+
+
+def _ops_in_order(op_of: np.ndarray) -> list[int]:
+    _, first = np.unique(op_of, return_index=True)
+    return [int(op_of[i]) for i in np.sort(first)]
+
+
+def check_stock(job, motion: ProgramMotion, cutters: dict, tol, request: StockRequest,
+                part_box: np.ndarray | None) -> StockCheck:
+    """The written program's `motion` against the stock and the fixtures of `request`, the
+    operations' `cutters` and tolerances `tol` (`checker.tolerance`)."""
+    from checker.stock.removal import error_bound, remove
+
+    t0 = time.perf_counter()
+    cfg, m, moves = job.cfg, job.m, motion.moves
+    n = len(moves)
+    tolerance = tol.value[motion.op_of]
+    rapid = ((moves.kind == RAPID) & ~moves.retract) | ((moves.kind == START) & m.rapid[moves.row])
+    pieces = {o: tool_pieces(cutters[o], with_holder=True) for o in np.unique(motion.op_of)}
+    verdict = np.full(n, "ok", dtype=object)
+    depth = np.zeros(n)
+    against = np.full(n, "", dtype=object)
+    findings: list[StockFinding] = []
+    stock_res = None
+    if request.stock is not None:
+        stock, what, placement = build_stock(request, part_box, job.toolpath, cfg)
+        h = stock.h
+        step_mm = h
+        box = _stock_box(stock)
+        volume0 = stock.volume()
+        thick = np.zeros((n, 3))
+        where = np.full((n, 3, 3), np.nan)
+        vol = np.zeros((n, 3))
+        width = np.zeros(n)
+        ops = []
+        out_dir = request.stock_out
+        with step("remove the stock", len(np.unique(motion.op_of))) as advance:
+            for o in _ops_in_order(motion.op_of):
+                P = np.flatnonzero(motion.op_of == o)
+                items = sweep_items(moves, P, box, step_mm, motion.table(P[moves.kind[P] != START]),
+                                    motion.center, motion.machine(o))
+                got = remove(stock, pieces[o], items.a, items.b, items.axis, items.move, n,
+                             step=step_mm)
+                thick[P], where[P], vol[P], width[P] = (got.thickness[P], got.where[P],
+                                                         got.volume[P], got.width[P])
+                ops.append(_operation(o, P, moves, m, thick, vol, width, tolerance, out_dir,
+                                      stock))
+                advance(1)
+        v, piece = vd.decide_stock(thick, rapid, tolerance)
+        worse = _worse(v, verdict)
+        verdict[worse], against[worse] = v[worse], "stock"
+        depth[worse] = thick[worse].max(axis=1)
+        for i in np.flatnonzero(vd.is_finding(v)):
+            p = int(piece[i])
+            findings.append(_finding(len(findings), str(v[i]), "stock", i, moves, m, rapid,
+                                     p, float(thick[i, p]), float(tolerance[i]),
+                                     where[i, p]))
+        final = None
+        if out_dir is not None:
+            from checker.stock.mesh_out import write_stl
+
+            final = str(write_stl(stock, Path(out_dir) / "stock_final.stl"))
+        feed = np.flatnonzero((moves.kind == FEED) & ~rapid)
+        stock_res = dict(
+            stock=what, placement=placement, resolution=h,
+            error_bound=float(error_bound(h, step_mm)[0]),
+            volume_initial=volume0, volume_final=stock.volume(), operations=ops,
+            engagement=MoveEngagement(
+                move=moves.row[feed].tolist(), line=m.line[moves.row[feed]].tolist(),
+                volume=np.round(vol[feed, 0], 6).tolist(),
+                depth=np.round(thick[feed, 0], 6).tolist(),
+                width=np.round(width[feed], 6).tolist()),
+            overflow=int(stock.overflow), final_stl=final)
+    fixtures = [load_fixture(text, cfg) for text in request.fixtures]
+    for fx in fixtures:
+        _against_fixture(fx, motion, pieces, tolerance, cfg.check.reach, moves, m, rapid,
+                         verdict, depth, against, findings)
+    counts = VerdictCounts(**{k: int((verdict == k).sum()) for k in vd.VERDICTS
+                              if k in VerdictCounts.model_fields})
+    base = stock_res or dict(stock="none", resolution=0.0, error_bound=0.0,
+                             volume_initial=0.0, volume_final=0.0)
+    result = StockResult(**base, fixtures=[f.name for f in fixtures], counts=counts,
+                         findings=findings, time_s=time.perf_counter() - t0)
+    return StockCheck(verdict, depth, against, result)
+
+
+_RANK = {"ok": 0, "within_tolerance": 1, "holder": 2, "crash": 3}
+
+
+def _worse(new: np.ndarray, old: np.ndarray) -> np.ndarray:
+    """(N,) bool: `new` verdicts that rank above `old` ones."""
+    rank = np.vectorize(lambda v: _RANK.get(v, 0), otypes=[int])
+    return rank(new) > rank(old)
+
+
+def _operation(o: int, P: np.ndarray, moves, m, thick, vol, width, tolerance, out_dir,
+               stock: Dexels) -> StockOperation:
+    """The operation's removed volume, air cuts and engagement; its stock written when asked."""
+    ends = P[moves.kind[P] == FEED]
+    air = ends[thick[ends].max(axis=1) <= tolerance[ends]]
+    length = np.linalg.norm(moves.tip[air] - moves.tip[air - 1], axis=1)
+    feed = m.feed[moves.row[air]]
+    timed = np.isfinite(feed) & (feed > 0)
+    stl = None
+    if out_dir is not None:
+        from checker.stock.mesh_out import write_stl
+
+        stl = str(write_stl(stock, Path(out_dir) / f"stock_op{o + 1:02d}.stl"))
+    return StockOperation(
+        op=o, removed=float(vol[P, 0].sum()), feed_moves=int(ends.size), air_cuts=int(air.size),
+        air_length=float(length.sum()),
+        air_time_s=float((60.0 * length[timed] / feed[timed]).sum()) if timed.any() else None,
+        depth_max=float(thick[ends, 0].max(initial=0.0)),
+        width_max=float(width[ends].max(initial=0.0)), stl=stl)
+
+
+def _finding(index: int, verdict: str, against: str, i: int, moves, m, rapid, piece: int,
+             depth: float, tolerance: float, point) -> StockFinding:
+    row = int(moves.row[i])
+    pt = None if point is None or not np.isfinite(point).all() else tuple(map(float, point))
+    return StockFinding(index=index, verdict=verdict, against=against, move=row,
+                        line=int(m.line[row]), op=int(m.op[row]), rapid=bool(rapid[i]),
+                        piece=_PIECES[piece] if piece >= 0 else None, depth=depth,
+                        tolerance=tolerance, tip=tuple(map(float, moves.tip[i])), point=pt)
+
+
+def _against_fixture(fx: Fixture, motion: ProgramMotion, pieces: dict, tolerance, reach: float,
+                     moves, m, rapid, verdict, depth, against, findings) -> None:
+    """The tool against fixture `fx` at every pose and along every move: verdicts merged into
+    `verdict`/`depth`/`against` (per pose: a move's verdict goes to the pose it reaches) and
+    findings appended."""
+    box = fx.box + [[-reach], [reach]]
+    with step(f"check against the fixture {fx.name}"):
+        poses, along = tool_depths(fx.index, box, motion, pieces, tolerance, reach)
+    deepest = poses.depth.copy()
+    at = np.full(len(moves), -1)
+    more = along.depths.depth > deepest[along.end]
+    deepest[along.end[more]] = along.depths.depth[more]
+    at[along.end[more]] = np.flatnonzero(more)
+    v = vd.decide_fixture(deepest, tolerance)
+    worse = _worse(v, verdict)
+    verdict[worse], against[worse], depth[worse] = v[worse], fx.name, deepest[worse]
+    for i in np.flatnonzero(vd.is_finding(v)):
+        k = at[i]
+        piece = int(poses.piece[i] if k < 0 else along.depths.piece[k])
+        point = poses.point[i] if k < 0 else along.depths.point[k]
+        findings.append(_finding(len(findings), str(v[i]), fx.name, int(i), moves, m, rapid,
+                                 piece, float(deepest[i]), float(tolerance[i]), point))
