@@ -339,6 +339,9 @@ def build_document(job, program, cutters: dict, classes: dict, tol, ppath: Path,
             piece=_PIECES[int(along.depths.piece[k])] if along.depths.piece[k] >= 0 else None,
             point=_vec(along.depths.point[k]), surface=_surface(job, along.depths.triangle[k])))
     summary = _summary(job, program, points, advice, cutters, tol, w, t0, time)
+    stock = None if program.stock is None else program.stock.result
+    if stock is not None:
+        _with_stock(summary, stock)
     first = cutters[int(m.op[np.flatnonzero(~m.rapid)[0]])]
     info = JobInfo(
         path=str(job.apt_path), dialect=job.toolpath.dialect, units=job.toolpath.units,
@@ -349,7 +352,20 @@ def build_document(job, program, cutters: dict, classes: dict, tol, ppath: Path,
         axis_class=_job_class(classes))
     return ResultsDocument(job=info, summary=summary,
                            operations=_operations(job, program, cutters, classes, tol),
-                           orientation=_orientation(job, program), points=points)
+                           orientation=_orientation(job, program), points=points, stock=stock)
+
+
+def _with_stock(summary: Summary, stock) -> None:
+    """The findings against the stock and the fixtures in the summary: its counts, status and
+    worst findings."""
+    for f in stock.findings:
+        setattr(summary.counts, f.verdict, getattr(summary.counts, f.verdict) + 1)
+    if stock.findings:
+        summary.status = "findings"
+    extra = [Finding(index=f.index, kind="stock" if f.against == "stock" else "fixture",
+                     verdict=f.verdict, line=f.line, op=f.op, tip=f.tip, point=f.point,
+                     depth=f.depth) for f in stock.findings]
+    summary.worst = sorted(summary.worst + extra, key=lambda f: -(f.depth or 0.0))[:_WORST]
 
 
 def _surface(job, triangle) -> int | None:

@@ -32,6 +32,8 @@ from checker.mesh.bvh import MeshIndex
 from checker.posting import post_checked
 from checker.progress import step
 from checker.results import ResultsDocument
+from checker.stock.check import check_stock
+from checker.stock.request import StockRequest
 from checker.tolerance import operation_tolerances
 from postproc.kinematics import Chain
 from postproc.post import machine_for_toolpath
@@ -53,7 +55,7 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
               output=None, *, b_range: tuple[float, float] | None = None,
               reorient: bool = False, strategy: str = "allowable",
               part_transform: str | None = None, cutter_units: str | None = None,
-              on_findings: str = "refuse") -> ResultsDocument:
+              on_findings: str = "refuse", stock: StockRequest | None = None) -> ResultsDocument:
     """Check a job: `apt_path` the CL file; `part_path` the part (default: the file beside the
     job with the same stem); `cutter` a `Cutter` or "CUTTER/..." overriding the file's; `config`
     a Config or a TOML path; `machine` a machine name, TOML file or `Machine` (default: the CL
@@ -67,14 +69,15 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
     `part_transform` moves a part exported in another frame (`geometry.transform`);
     `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's);
     `on_findings` what posting does when the program as written has findings or points
-    without a feasible B (`posting.post_checked`: refuse raises `posting.PostRefusedError`)."""
+    without a feasible B (`posting.post_checked`: refuse raises `posting.PostRefusedError`);
+    `stock` the stock and the fixtures to check the written program against (`checker.stock`)."""
     t0 = time.perf_counter()
     with step("read the CL file"):
         toolpath = read_cl(Path(apt_path), require_cutter=cutter is None)
     return check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=machine,
                           config=config, output=output, b_range=b_range, reorient=reorient,
                           strategy=strategy, part_transform=part_transform, started=t0,
-                          cutter_units=cutter_units, on_findings=on_findings)
+                          cutter_units=cutter_units, on_findings=on_findings, stock=stock)
 
 
 def _machine_motion(mach, ops: set[int], cfg: Config):
@@ -125,14 +128,16 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
                    reorient: bool = False, strategy: str = "allowable",
                    part_transform: str | None = None, started: float | None = None,
                    cutter_units: str | None = None,
-                   on_findings: str = "refuse") -> ResultsDocument:
+                   on_findings: str = "refuse",
+                   stock: StockRequest | None = None) -> ResultsDocument:
     """`check_job` on a tool path already in memory (read from a CL file, or from a G-code
     program by `pathcheck check-gcode`); `toolpath.path` names the job. With `output`, the
     checked program is posted there (`posting.post_checked`)."""
     checked = check_program(toolpath, part_path=part_path, cutter=cutter, machine=machine,
                             config=config, b_range=b_range, reorient=reorient,
                             strategy=strategy, part_transform=part_transform, started=started,
-                            cutter_units=cutter_units, to_post=output is not None)
+                            cutter_units=cutter_units, to_post=output is not None,
+                            stock=stock)
     if output is not None:
         post_checked(checked, output, on_findings)
     return checked.document
@@ -142,10 +147,11 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
                   b_range: tuple[float, float] | None = None, reorient: bool = False,
                   strategy: str = "allowable", part_transform: str | None = None,
                   started: float | None = None, cutter_units: str | None = None,
-                  to_post: bool = False) -> written.Checked:
+                  to_post: bool = False, stock: StockRequest | None = None) -> written.Checked:
     """The check of `check_toolpath` without posting: the results document and what is to be
     written (the program, its machine, cutters and finding counts). `to_post`: the program will
-    be posted, so its machine is resolved even when no operation is planned."""
+    be posted, so its machine is resolved even when no operation is planned. `stock`: the
+    stock and the fixtures the written program is checked against (`checker.stock`)."""
     t0 = time.perf_counter() if started is None else started
     if strategy not in written.STRATEGIES:
         raise PathcheckError(f"strategy '{strategy}': expected one of "
@@ -195,6 +201,10 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
     with step("plan and check the program"):
         program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach,
                                        reoriented, strategy)
+    if stock is not None and stock.asked:
+        v = tris.vertices
+        program.stock = check_stock(job, program.written.motion, cutters, tol, stock,
+                                    np.array([v.min(axis=0), v.max(axis=0)]))
     with step("advice at the cutting poses"):
         doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
     doc.summary.time_s = time.perf_counter() - t0

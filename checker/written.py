@@ -79,6 +79,7 @@ class Program:
     handling: dict[int, str]
     plans: dict[int, Plan] = field(default_factory=dict)
     fives: dict[int, object] = field(default_factory=dict)  # multi-axis: `five_axis.plan`
+    stock: object = None  # against the stock and the fixtures: `checker.stock.check.StockCheck`
 
 
 def program_motion(job, tip: np.ndarray, axis: np.ndarray, b: np.ndarray,
@@ -333,6 +334,13 @@ def flags(job, program: Program) -> list[str]:
             at.setdefault(row, []).append(f"{str(verdict[i]).upper()} "
                                           f"{where.format(line=int(job.m.line[row]))} "
                                           f"DEPTH {depth[i]:.4f}")
+    if program.stock is not None:
+        st = program.stock
+        hit = np.flatnonzero(vd.is_finding(st.verdict))
+        for i in hit:
+            row = int(w.moves.row[i])
+            at.setdefault(row, []).append(f"{str(st.verdict[i]).upper()} INTO "
+                                          f"{str(st.against[i]).upper()} DEPTH {st.depth[i]:.4f}")
     for row in infeasible_rows(program).tolist():
         at.setdefault(int(row), []).append("NO FEASIBLE B")
     out = [""] * len(job.m)

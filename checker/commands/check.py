@@ -50,6 +50,7 @@ def summary_view(doc):
         head += (f"\nrotary motion: chosen {o.dp_total_rotation:.1f} deg (shortest path), "
                  f"greedy {o.greedy_total_rotation:.1f} deg, CAM {o.original_total_rotation:.1f}"
                  f" deg; {o.infeasible_points} points with no feasible B")
+    head += "\n" + stock_line(doc.stock)
     if doc.gcode:
         head += f"\nG-code written: {doc.gcode}"
     out = [head]
@@ -81,6 +82,24 @@ def summary_view(doc):
         else f"{var} = {s.largest_safe_cutter:.4f} mm")
         + f"; largest safe standard cutter: {s.largest_safe_standard_cutter or 'none'}")
     return out
+
+
+def stock_line(stock) -> str:
+    """One line on the stock and the fixtures: what was checked against them and what the
+    program does to the stock, or that rapids and holders were not checked against stock."""
+    if stock is None:
+        return ("stock: not checked (no --stock): rapids and holders were checked against the "
+                "part only")
+    c = stock.counts
+    found = f"crash {c.crash}  holder {c.holder}"
+    fixtures = f"; fixtures {', '.join(stock.fixtures)}" if stock.fixtures else ""
+    if stock.resolution == 0.0:
+        return f"against the fixtures{fixtures}: {found}"
+    air = sum(o.air_cuts for o in stock.operations)
+    air_t = sum(o.air_time_s or 0.0 for o in stock.operations)
+    return (f"stock {stock.stock} at {stock.resolution:g} mm{fixtures}: {found}; removed "
+            f"{stock.volume_initial - stock.volume_final:.0f} of {stock.volume_initial:.0f} mm^3;"
+            f" air cuts {air} ({air_t:.0f} s)")
 
 
 def parse_b_range(text: str | None) -> tuple[float, float] | None:
@@ -152,9 +171,10 @@ def record(doc, store_path: Path | None = None) -> None:
 @click.option("--no-check", is_flag=True,
               help="post -o without checking (no part read); the program's header says NOT "
                    "CHECKED")
+@opt.stock_options
 def check(job, part_path, cutter_text, units, tool_name, tool_library, config_path, json_out,
           output, machine, b_range, reorient, strategy, part_transform, store_path, no_store,
-          on_findings, no_check) -> None:
+          on_findings, no_check, stock_text, fixtures, stock_resolution, stock_out) -> None:
     """Check JOB (APT-CL or NX CLSF) against its part: allowable cutter, verdict and margin at
     every CC point.
 
@@ -179,6 +199,7 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
                     job_inputs(job, part_path or find_part_beside(job), config_path,
                                tool_library, machine, store, no_check or no_store))
     cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
+    stock = opt.stock_request(stock_text, fixtures, stock_resolution, stock_out)
     if no_check:
         post_without_check(job, output, cutter, machine, config_path, part_path, json_out, units)
         return
@@ -191,8 +212,7 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
         doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
                         output=output, machine=machine, b_range=parse_b_range(b_range),
                         reorient=reorient, strategy=strategy, part_transform=part_transform,
-                        cutter_units=units,
-                        on_findings=on_findings)
+                        cutter_units=units, on_findings=on_findings, stock=stock)
     except PostRefusedError as refused:
         try:
             finish(refused.document, json_out, store=not no_store, store_path=store)

@@ -1,7 +1,8 @@
 """The options every command spells the same way (`--part`, `--cutter`, `--tool`,
 `--tool-library`, `--machine`, `--config`, `--store`, `-o/--output`, `--json FILE|-`,
-`--units`) and the exit-code text of every command's help. An old spelling kept for scripts is
-a hidden alias of its option (`AliasOption`), not a second option."""
+`--units`, the stock and fixture options) and the exit-code text of every command's help. An
+old spelling kept for scripts is a hidden alias of its option (`AliasOption`), not a second
+option."""
 
 from __future__ import annotations
 
@@ -105,6 +106,44 @@ def json_option(what: str = "the results document") -> Callable:
                         default=None, metavar="FILE|-",
                         help=f"write {what} as JSON to FILE, or to stdout with '-' (the text "
                              "then goes to stderr)")
+
+
+def stock_options(command: Callable) -> Callable:
+    """`--stock`, `--fixture` (repeatable), `--stock-resolution`, `--stock-out` ->
+    `stock_text, fixtures, stock_resolution, stock_out` (`stock_request` makes the request)."""
+    for option in reversed((
+            click.option("--stock", "stock_text", default=None, metavar="SPEC",
+                         help="check against the stock, part frame, mm: box:+M (a margin "
+                              "around the part; +MX,+MY,+MZ per axis; six per side), "
+                              "box:X0,Y0,Z0,X1,Y1,Z1, cylinder:AXIS:+M or "
+                              "cylinder:AXIS[@C1,C2]:D,START,END (bar stock), a solid (STL, "
+                              "STEP, IGES), or cl (the stock the CL file states)"),
+            click.option("--fixture", "fixtures", multiple=True, metavar="FILE[@RX,..,DZ]",
+                         help="a fixture (vise, clamp, table: STL, STEP, IGES), placed by "
+                              "rotations about X, Y, Z (degrees) then an offset (mm); "
+                              "repeatable"),
+            click.option("--stock-resolution", "stock_resolution", type=float, default=None,
+                         metavar="MM", help="ray spacing of the stock model, mm [default: from "
+                                            "the stock's size]"),
+            click.option("--stock-out", "stock_out",
+                         type=click.Path(file_okay=False, path_type=Path), default=None,
+                         metavar="DIR", help="write the stock after each operation and at the "
+                                             "end here (STL)"))):
+        command = option(command)
+    return command
+
+
+def stock_request(stock_text: str | None, fixtures: tuple[str, ...],
+                  stock_resolution: float | None, stock_out: Path | None):
+    """The `checker.stock.request.StockRequest` of the stock options; a resolution that is not
+    a positive number of mm is a usage error."""
+    from checker.errors import PathcheckError
+    from checker.stock.request import StockRequest
+
+    if stock_resolution is not None and not (0.001 <= stock_resolution <= 100.0):
+        raise PathcheckError(f"--stock-resolution {stock_resolution:g}: expected a ray spacing "
+                             "between 0.001 and 100 mm", code="usage")
+    return StockRequest(stock_text, tuple(fixtures), stock_resolution, stock_out)
 
 
 def json_to_stdout(json_out: Path | None) -> bool:
