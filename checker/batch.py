@@ -1,8 +1,9 @@
-"""Batch runs: check many jobs, on this machine with a process pool or on an existing Dask
-distributed cluster, and record every result (or failure, with its reason) in the store. A job
-that fails is recorded as failed and the batch goes on; a job whose worker process dies (killed,
-out of memory) runs once more on its own and, if it dies again, fails alone; a store that
-cannot record an outcome (a full disk) is said per job, and the batch goes on."""
+"""Batch runs: check many jobs (each against the stock and fixtures its folder states), on this
+machine with a process pool or on an existing Dask distributed cluster, and record every result (or
+failure, with its reason) in the store. A job that fails is recorded as failed and the batch goes
+on; a job whose worker process dies (killed, out of memory) runs once more on its own and, if it
+dies again, fails alone; a store that cannot record an outcome (a full disk) is said per job, and
+the batch goes on."""
 
 from __future__ import annotations
 
@@ -75,10 +76,15 @@ def _job_function(name: str) -> Callable[..., ResultsDocument]:
 
 
 def run_one(path: str, job_function: str = DEFAULT_JOB_FUNCTION) -> JobOutcome:
-    """Check one job (in a pool worker or on a Dask worker); never raises for a bad job."""
+    """Check one job (in a pool worker or on a Dask worker); never raises for a bad job. A
+    folder's `pathcheck-stock.toml` gives its jobs a stock and fixtures
+    (`checker.stock.request.folder_stock`)."""
+    from checker.stock.request import folder_stock
+
     start = time.perf_counter()
     try:
-        doc = _job_function(job_function)(path)
+        stock = folder_stock(Path(path))
+        doc = _job_function(job_function)(path, **({} if stock is None else {"stock": stock}))
         return JobOutcome(path, doc.model_dump_json(), None, time.perf_counter() - start)
     except PathcheckError as err:
         reason = str(err)

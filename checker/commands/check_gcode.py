@@ -57,8 +57,10 @@ def assumed_units(moves, given: str | None, machine) -> None:
 @opt.json_option("the program's summary (with --part and --cutter: the results document)")
 @opt.store_option()
 @click.option("--no-store", is_flag=True, help="do not record this check in the results store")
+@opt.stock_options
 def check_gcode(program: Path, machine, dialect, units, block_delete, part_path, cutter_text,
-                tool_name, tool_library, config_path, json_out, store_path, no_store) -> None:
+                tool_name, tool_library, config_path, json_out, store_path, no_store,
+                stock_text, fixtures, stock_resolution, stock_out) -> None:
     """Read PROGRAM (G-code) for a machine, bring its moves back into the part frame and, with
     --part and --cutter, check them like `pathcheck JOB.apt` (exit 1 on findings).
 
@@ -78,6 +80,7 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
 
     mach = load_machine(machine)
     cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
+    stock = opt.stock_request(stock_text, fixtures, stock_resolution, stock_out)
     if part_path is not None and not part_path.is_file():
         raise PathcheckError(
             "part file not found: expected an existing file", path=part_path, code="part"
@@ -116,7 +119,7 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
 
     toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)
     result = check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=mach,
-                            config=config_path)
+                            config=config_path, stock=stock)
     finish(result, json_out, store=not no_store, store_path=store)
     if doc["machine_checks"]:
         sys.exit(1)

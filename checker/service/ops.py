@@ -116,12 +116,13 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
             if part_path is None and given_apt is not None:
                 part_path = files.beside(given_apt)
             machine = _machine(req.machine, toolpath, files)
+            stock = _stock(req, files)
             doc = check_toolpath(toolpath, part_path=part_path, cutter=req.cutter,
                                  machine=machine, config=config, output=gcode_path,
                                  b_range=req.b_range, reorient=req.reorient,
                                  strategy=req.strategy,
                                  part_transform=req.part_transform, started=t0,
-                                 on_findings=req.on_findings)
+                                 on_findings=req.on_findings, stock=stock)
         except PostRefusedError as err:
             doc, refused = err.document, f"G-code not written: {err} (on_findings=refuse)"
         except PathcheckError as err:
@@ -136,6 +137,24 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
         elif gcode_path is not None:
             out["gcode"] = gcode_path.read_text()
         return out
+
+
+def _stock(req: p.CheckRequest, files: _Files):
+    """The stock request of a check: the stock's and the fixtures' files read through the
+    roots; nothing is written by the service (no stock files)."""
+    from checker.stock.fixtures import parse_fixture
+    from checker.stock.request import StockRequest
+    from checker.stock.spec import SolidFile, parse_stock
+
+    stock = req.stock
+    if stock is not None and isinstance(parse_stock(stock), SolidFile):
+        stock = str(files.get(stock, "stock", "a stock solid (STL, STEP, IGES)", "input"))
+    fixtures = []
+    for text in req.fixtures:
+        path, placement = parse_fixture(text)
+        found = str(files.get(str(path), "fixtures", "a fixture (STL, STEP, IGES)", "input"))
+        fixtures.append(found if placement is None else f"{found}@{placement}")
+    return StockRequest(stock, tuple(fixtures), req.stock_resolution)
 
 
 def _machine(name: str | None, toolpath: Any, files: _Files) -> str | None:

@@ -126,6 +126,15 @@ class CheckRequest(_Request):
         "placement in the CL frame (as `pathcheck --part-transform`)")
     post: bool = False
     on_findings: Literal["refuse", "stop", "comment"] = "refuse"
+    stock: str | None = Field(
+        None, min_length=1, max_length=400, description="the stock (as `pathcheck check "
+        "--stock`: box:+M, box:X0,..,Z1, cylinder:..., cl, or a solid's path, read through the "
+        "roots)")
+    fixtures: list[str] = Field(
+        default_factory=list, max_length=32, description="fixtures (as `--fixture`: "
+        "FILE[@RX,RY,RZ,DX,DY,DZ], files read through the roots)")
+    stock_resolution: float | None = Field(
+        None, ge=0.001, le=100.0, description="ray spacing of the stock model, mm")
 
     @model_validator(mode="after")
     def _one_source(self) -> CheckRequest:

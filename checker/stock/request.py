@@ -6,6 +6,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from pydantic import BaseModel, ConfigDict, Field
+
+from checker.toml_load import read_toml, validated
+
+FOLDER_FILE = "pathcheck-stock.toml"  # a batch folder's stock and fixtures
+
 
 @dataclass(frozen=True)
 class StockRequest:
@@ -23,3 +29,33 @@ class StockRequest:
     def asked(self) -> bool:
         """Whether there is anything to check against: a stock or a fixture."""
         return self.stock is not None or bool(self.fixtures)
+
+
+class _FolderStock(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    stock: str | None = Field(None, min_length=1)
+    fixtures: list[str] = Field(default_factory=list)
+    resolution: float | None = Field(None, ge=0.001, le=100.0)
+
+
+def folder_stock(job: Path) -> StockRequest | None:
+    """The stock and fixtures of the jobs of a folder (`pathcheck batch`): the file
+    `pathcheck-stock.toml` beside the job (`stock = "box:+3"`, `fixtures = ["vise.stl"]`,
+    `resolution = 0.1`; files relative to that folder), or None when there is none."""
+    path = Path(job).parent / FOLDER_FILE
+    if not path.is_file():
+        return None
+    got = validated(_FolderStock, read_toml(path, what="stock file", code="config"),
+                    subject="stock file", code="config", path=path)
+    here = path.parent
+
+    def local(text: str) -> str:
+        name, at, placement = text.rpartition("@") if "@" in text else (text, "", "")
+        inside = here / name if not Path(name).is_absolute() else Path(name)
+        return f"{inside}{at}{placement}" if inside.is_file() else text
+
+    stock = got.stock
+    if stock is not None and (here / stock).is_file():
+        stock = str(here / stock)
+    return StockRequest(stock, tuple(local(f) for f in got.fixtures), got.resolution)
