@@ -323,6 +323,24 @@ class ResultsDocument(_Model):
                                       "fixtures (None: not asked)")
 
 
+def stock_line(stock: StockResult | None) -> str:
+    """One line on the stock and the fixtures: what was checked against them and what the
+    program does to the stock, or that rapids and holders were not checked against stock."""
+    if stock is None:
+        return ("stock: not checked (no --stock): rapids and holders were checked against the "
+                "part only")
+    c = stock.counts
+    found = f"crash {c.crash}  holder {c.holder}"
+    fixtures = f"; fixtures {', '.join(stock.fixtures)}" if stock.fixtures else ""
+    if stock.resolution == 0.0:
+        return f"against the fixtures{fixtures}: {found}"
+    air = sum(o.air_cuts for o in stock.operations)
+    air_t = sum(o.air_time_s or 0.0 for o in stock.operations)
+    return (f"stock {stock.stock} at {stock.resolution:g} mm{fixtures}: {found}; removed "
+            f"{stock.volume_initial - stock.volume_final:.0f} of {stock.volume_initial:.0f} mm^3;"
+            f" air cuts {air} ({air_t:.0f} s)")
+
+
 def json_schema() -> dict:
     """The published JSON schema of the results document
     (checker/resources/schemas/results.schema.json)."""

@@ -25,7 +25,7 @@ import numpy as np
 
 from checker.config import default_config
 from checker.errors import PathcheckError
-from checker.results import VERDICTS, ResultsDocument
+from checker.results import VERDICTS, ResultsDocument, stock_line
 
 JobStatus = Literal["ok", "findings", "failed"]
 JOB_STATUSES: tuple[str, ...] = ("ok", "findings", "failed")
@@ -77,6 +77,9 @@ MIGRATIONS: tuple[str, ...] = (
     ALTER TABLE jobs ADD COLUMN n_within_tolerance INTEGER;
     ALTER TABLE jobs ADD COLUMN n_crash INTEGER;
     """,
+    """
+    ALTER TABLE jobs ADD COLUMN stock TEXT;
+    """,
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 
@@ -117,6 +120,7 @@ class JobRow:
     elapsed_s: float
     cutter_size: float | None
     cutter_kind: str | None
+    stock: str | None = None  # the stock and fixtures line (`checker.results.stock_line`)
 
 
 _ROW_COLUMNS = ", ".join(JobRow.__dataclass_fields__)
@@ -383,6 +387,7 @@ class ResultsStore:
                 worst_margin=s.worst_margin, worst_depth=s.worst_depth,
                 largest_safe_cutter=s.largest_safe_cutter,
                 largest_safe_standard=s.largest_safe_standard_cutter,
+                stock=None if doc.stock is None else stock_line(doc.stock),
                 document=zlib.compress(doc.model_dump_json().encode(), 1),
                 arrays=_pack_arrays(point_arrays(doc)),
             )

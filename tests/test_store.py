@@ -168,7 +168,7 @@ def test_migration_from_version_1_keeps_rows(tmp_path, doc):
     con.commit()
     con.close()
     with ResultsStore(path) as store:
-        assert store.schema_version == SCHEMA_VERSION == 3
+        assert store.schema_version == SCHEMA_VERSION == 4
         (old,) = store.jobs()
         assert (old.job_path, old.n_gouge, old.cutter_kind, old.n_crash) == ("old.apt", 7, None,
                                                                       None)

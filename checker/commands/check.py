@@ -33,6 +33,7 @@ def summary_view(doc):
     from rich.table import Table
 
     from checker.cutter import parse_cutter
+    from checker.results import stock_line
 
     s, j = doc.summary, doc.job
     var = parse_cutter(j.cutter).size_symbol
@@ -82,24 +83,6 @@ def summary_view(doc):
         else f"{var} = {s.largest_safe_cutter:.4f} mm")
         + f"; largest safe standard cutter: {s.largest_safe_standard_cutter or 'none'}")
     return out
-
-
-def stock_line(stock) -> str:
-    """One line on the stock and the fixtures: what was checked against them and what the
-    program does to the stock, or that rapids and holders were not checked against stock."""
-    if stock is None:
-        return ("stock: not checked (no --stock): rapids and holders were checked against the "
-                "part only")
-    c = stock.counts
-    found = f"crash {c.crash}  holder {c.holder}"
-    fixtures = f"; fixtures {', '.join(stock.fixtures)}" if stock.fixtures else ""
-    if stock.resolution == 0.0:
-        return f"against the fixtures{fixtures}: {found}"
-    air = sum(o.air_cuts for o in stock.operations)
-    air_t = sum(o.air_time_s or 0.0 for o in stock.operations)
-    return (f"stock {stock.stock} at {stock.resolution:g} mm{fixtures}: {found}; removed "
-            f"{stock.volume_initial - stock.volume_final:.0f} of {stock.volume_initial:.0f} mm^3;"
-            f" air cuts {air} ({air_t:.0f} s)")
 
 
 def parse_b_range(text: str | None) -> tuple[float, float] | None:

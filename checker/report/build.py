@@ -29,7 +29,7 @@ CSV_COLUMNS = (
     "id", "recorded_at", "job_path", "status", "error", "points", "ok", "gouge", "interference",
     "holder", "crash", "inaccessible", "worst_margin", "worst_depth", "largest_safe_cutter",
     "largest_safe_standard", "regions", "previous_status", "previous_gouges", "elapsed_s",
-    "cutter", "cutter_kind", "part", "part_hash", "machine", "axis_class",
+    "cutter", "cutter_kind", "part", "part_hash", "machine", "axis_class", "stock",
 )
 POINT_COLUMNS = (  # the per-point CSV: part frame, mm, degrees; empty = null
     "job_id", "job_path", "recorded_at", "index", "operation", "line", "kind", "rapid", "x", "y",
@@ -109,6 +109,7 @@ def job_summary(row: JobRow, previous: JobRow | None) -> dict:
         "elapsed_s": row.elapsed_s, "cutter": row.cutter, "cutter_kind": row.cutter_kind,
         "part": row.part,
         "part_hash": row.part_hash, "machine": row.machine, "axis_class": row.axis_class,
+        "stock": row.stock,
     }
 
 

@@ -141,7 +141,9 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
 
 def _stock(req: p.CheckRequest, files: _Files):
     """The stock request of a check: the stock's and the fixtures' files read through the
-    roots; nothing is written by the service (no stock files)."""
+    roots; nothing is written by the service (no stock files). None when neither is asked."""
+    if req.stock is None and not req.fixtures:
+        return None
     from checker.stock.fixtures import parse_fixture
     from checker.stock.request import StockRequest
     from checker.stock.spec import SolidFile, parse_stock
