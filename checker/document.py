@@ -355,6 +355,37 @@ def build_document(job, program, cutters: dict, classes: dict, tol, ppath: Path,
                            orientation=_orientation(job, program), points=points, stock=stock)
 
 
+def stock_document(job, motion, checked, cutters: dict, classes: dict, tol, mach,
+                   t0: float) -> ResultsDocument:
+    """The results document of a check against the stock and the fixtures alone (no part):
+    no points, the stock's verdicts as the counts (`checked`: `checker.stock.check.StockCheck`,
+    per pose of `motion`)."""
+    import time
+
+    m, stock = job.m, checked.result
+    first = cutters[int(m.op[0])]
+    summary = Summary(
+        status="findings" if stock.findings else "ok", points=0, cl_points=0, move_points=0,
+        poses_checked=len(motion.moves), counts=counts(list(checked.verdict)),
+        tolerance=float(tol.value.max()), part_deviation=0.0, worst_margin=None,
+        worst_depth=max((f.depth for f in stock.findings), default=None),
+        largest_safe_cutter=None, largest_safe_standard_cutter=None, worst=[],
+        time_s=time.perf_counter() - t0)
+    _with_stock(summary, stock)
+    summary.counts = counts(list(checked.verdict))
+    info = JobInfo(path=str(job.apt_path), dialect=job.toolpath.dialect,
+                   units=job.toolpath.units, cutter=first.to_apt(), cutter_kind=first.kind,
+                   cutter_size=float(first.size),
+                   cutters=[cutters[o].to_apt() for o in sorted(cutters)],
+                   machine=None if mach is None else mach.name, axis_class=_job_class(classes))
+    ops = [OperationResult(
+        index=o, name=job.toolpath.operations[o].name, cutter=cutters[o].to_apt(),
+        axis_class=classes[o], handling="as-programmed", tolerance=float(tol.value[o]),
+        tolerance_source=tol.source[o], counts=counts(list(checked.verdict[motion.op_of == o])))
+        for o in sorted(classes)]
+    return ResultsDocument(job=info, summary=summary, operations=ops, points=[], stock=stock)
+
+
 def _with_stock(summary: Summary, stock) -> None:
     """The findings against the stock and the fixtures in the summary: its counts, status and
     worst findings."""

@@ -16,14 +16,14 @@ from pathlib import Path
 
 import numpy as np
 
-from checker import input_limits, written
+from checker import input_limits, verdict, written
 from checker.apt import read_cl
 from checker.b_axis import check_four_axis
 from checker.config import Config
-from checker.document import build_document
+from checker.document import build_document, stock_document
 from checker.errors import PathcheckError
 from checker.five_axis.motion import MachineMotion
-from checker.geometry import load_part
+from checker.geometry import find_part_beside, load_part
 from checker.geometry.sampling import sample_part
 from checker.geometry.tessellate import part_triangles
 from checker.geometry.transform import parse_transform, transform_part
@@ -78,6 +78,38 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
                           config=config, output=output, b_range=b_range, reorient=reorient,
                           strategy=strategy, part_transform=part_transform, started=t0,
                           cutter_units=cutter_units, on_findings=on_findings, stock=stock)
+
+
+def _against_stock_only(toolpath, cutter, machine, config, stock: StockRequest, t0: float,
+                        cutter_units: str | None, to_post: bool) -> written.Checked:
+    """The program as written against the stock and the fixtures alone (no part): the CAM's
+    own motion, nothing planned, nothing posted."""
+    apt_path = Path(toolpath.path)
+    if to_post:
+        raise PathcheckError("a check without a part does not post: the corrected program needs "
+                             "the part (give --part, or drop -o)", code="usage")
+    cfg = job_config(config)
+    m = toolpath.motion_arrays(arc_chord_tol=cfg.check.arc_chord_tolerance)
+    input_limits.refuse_beyond(len(m), input_limits.MAX_CHECK_POSES, "poses to check",
+                               "MAX_CHECK_POSES", path=apt_path)
+    if len(m) == 0:
+        raise PathcheckError("no motion: expected GOTO records", path=apt_path, code="parse")
+    ops = np.unique(m.op)
+    cutters = operation_cutters(toolpath, ops, cutter, apt_path, cutter_units)
+    tol = operation_tolerances(toolpath, cfg.check.depth_tolerance, 0.0,
+                               cfg.check.arc_chord_tolerance)
+    classes = {int(o): operation_class(m.axis[m.op == o], cfg.four_axis.axis_j_tolerance)
+               for o in ops}
+    job = _Job(toolpath, m, None, None, None, cfg, apt_path)
+    mach = machine_for_toolpath(toolpath, machine)
+    job.motion = _machine_motion(mach, {o for o, c in classes.items() if c == "multi-axis"}, cfg)
+    motion = written.programmed_motion(job, classes, mach)
+    checked = check_stock(job, motion, cutters, tol, stock, None)
+    doc = stock_document(job, motion, checked, cutters, classes, tol, mach, t0)
+    program = written.Program(m.tip, m.axis, written.cam_b(job), None, None,
+                              {o: "as-programmed" for o in classes}, stock=checked)
+    counts = {v: int(getattr(doc.summary.counts, v)) for v in verdict.FINDINGS}
+    return written.Checked(doc, job, program, mach, cutters, counts, t0)
 
 
 def _machine_motion(mach, ops: set[int], cfg: Config):
@@ -153,6 +185,10 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
     be posted, so its machine is resolved even when no operation is planned. `stock`: the
     stock and the fixtures the written program is checked against (`checker.stock`)."""
     t0 = time.perf_counter() if started is None else started
+    if part_path is None and stock is not None and stock.asked and \
+            find_part_beside(Path(toolpath.path)) is None:
+        return _against_stock_only(toolpath, cutter, machine, config, stock, t0, cutter_units,
+                                   to_post)
     if strategy not in written.STRATEGIES:
         raise PathcheckError(f"strategy '{strategy}': expected one of "
                              f"{', '.join(written.STRATEGIES)}", code="usage")

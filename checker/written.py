@@ -232,6 +232,14 @@ def _five_plan(job, o: int, cutter, tolerance: float, strategy: str):
     return planner(job, cutting_rows(job, op_rows), op_rows, cutter, tolerance, chain, job.cfg)
 
 
+def programmed_motion(job, classes: dict, mach) -> ProgramMotion:
+    """The program as the CAM wrote it, as the machine makes it (its 4-axis moves turning the
+    table), for a check without a part: against the stock and the fixtures alone."""
+    turning = np.isin(job.m.op, [o for o, c in classes.items() if c == "4-axis-Y"])
+    b_move = np.where(turning, cam_b(job), np.nan)
+    return program_motion(job, job.m.tip, job.m.axis, b_move, _center(mach))
+
+
 def plan_program(job, cutters: dict, classes: dict, planned: set, tol, b_range, mach,
                  reoriented: set = frozenset(), strategy: str = "allowable") -> Program:
     """The program to write and the real tool along it (see the module docstring); `planned`

@@ -38,9 +38,11 @@ def summary_view(doc):
     s, j = doc.summary, doc.job
     var = parse_cutter(j.cutter).size_symbol
     cutters = list(dict.fromkeys(short_cutter(c) for c in (j.cutters or [j.cutter])))
+    part = ("no part: checked against the stock and the fixtures only" if j.part is None
+            else f"part deviation {s.part_deviation:.4f}")
     head = (f"{j.path}: {s.cl_points} poses, {s.move_points} moves ({s.poses_checked} poses "
             f"checked), {len(doc.operations)} operation(s), {j.axis_class}, tolerance up to "
-            f"{s.tolerance:.4f} mm (part deviation {s.part_deviation:.4f}), {s.time_s:.2f} s\n"
+            f"{s.tolerance:.4f} mm ({part}), {s.time_s:.2f} s\n"
             f"cutter{'s' if len(cutters) > 1 else ''} (mm): {', '.join(cutters)}; job in "
             f"{j.units}\n"
             f"{'FINDINGS' if s.status == 'findings' else 'clean'}: {_counts_line(s.counts)}")
@@ -78,6 +80,8 @@ def summary_view(doc):
                       f"{f.depth or 0:.4f}", "-" if f.b is None else f"{f.b:.3f}",
                       ", ".join(f"{x:.3f}" for x in where))
         out.append(t)
+    if j.part is None:
+        return out
     out.append("largest safe cutter (advice): " + (
         "unbounded" if s.largest_safe_cutter is None
         else f"{var} = {s.largest_safe_cutter:.4f} mm")

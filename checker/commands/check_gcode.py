@@ -85,7 +85,7 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
         raise PathcheckError(
             "part file not found: expected an existing file", path=part_path, code="part"
         )
-    checking = part_path is not None and cutter is not None
+    checking = cutter is not None and (part_path is not None or stock.asked)
     store = opt.store_of(store_path, config_path) if checking and not no_store else None
     prepare_outputs([("--json", json_out, "results JSON")],
                     job_inputs(program, part_path, config_path, tool_library, machine, store,
@@ -105,8 +105,9 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
         motions = part_motions(moves, mach)
         doc = describe_program(moves, motions, mach)
     opt.say(format_program_summary(doc), json_out=json_out)
-    if part_path is None or cutter is None:
-        opt.say("give --part and --cutter to check the program for gouges and interference",
+    if not checking:
+        opt.say("give --cutter and --part (gouges and interference) or --stock/--fixture (crashes "
+                "into the stock and the fixtures) to check the program",
                 json_out=json_out)
         if json_out is not None:
             opt.write_json(json_out, json.dumps(doc, indent=2), what="program JSON")
