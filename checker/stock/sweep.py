@@ -1,0 +1,614 @@
+"""The material-removal kernel: tool pieces swept along straight translations cut the Z-dexel
+stock, ray by ray, in program order (docs/MATH.md §14). Part frame, mm.
+
+A piece is a convex solid of revolution: the core polygon (counter-clockwise (r, h) vertices,
+r >= 0, h above the tip along the axis) grown by a ball of radius rho (checker/mesh/tool.py).
+An item translates the tool from tip `a` to tip `b` at a constant unit axis.
+
+- Vertical axis (+z): exact per ray. At radial distance d the piece spans h in
+  [h_low(d), h_high(d)]; over the item the ray lies in the swept piece for z in
+  [min_t z(t) + h_low(d(t)), max_t z(t) + h_high(d(t))] over the t with d(t) <= r_max
+  (closed-form t-range). The ends are closed forms for a cylinder (flat end, shank, holder)
+  and a capsule (ball end); otherwise a golden-section search of the convex (concave) function,
+  with the end values taken exactly.
+- Any other axis: the translation sampled at spacing <= step; per pose the ray's interval in
+  the piece, from the convex distance f(s) = dist2D((r, h), core) - rho along the ray
+  (golden-section minimum, then bisected roots).
+
+Pieces are applied in the order given (the driver passes holder, shank, then body), each
+against the ray's material as the earlier ones left it: material two pieces overlap in one
+item is charged to the non-cutting piece, so a holder or shank entry is never hidden behind
+the body's own cut of the same item.
+
+The grid is cut in square tiles run in parallel; each tile runs the items touching it in
+program order, so no two threads touch one ray and each tile-item pair writes its own row
+of statistics (`ST_*` columns), reduced per move after."""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+TILE = 64                       # rays per tile side
+GENERIC, CYLINDER, CAPSULE = 0, 1, 2
+ENGAGE_COLS = 3
+# statistics columns of one tile-item row
+ST_LEN = 0          # 3: material length removed per kind, summed over rays (mm)
+ST_THICK = 3        # 3: the largest length removed on one ray per kind (mm)
+ST_WHERE = 6        # 9: per kind the (x, y, z-middle) of that ray's removed stretch
+ST_Q = 15           # 4: body engaged rays' extent: q min, q max, q2 min, q2 max (mm)
+NST = 19
+_INVPHI = 0.6180339887498949
+_TOL = 1e-6         # mm: the searches' tolerance
+
+
+@nb.njit(cache=True)
+def prof_span(prof, n, rho, d):
+    """(h_low, h_high) of the core prof[:n] grown by rho on the line r = d (d >= 0); (inf,
+    -inf) when the line misses it. Each edge grown by rho is a capsule: its extent on the
+    line comes from its two end discs and its two long sides."""
+    lo = np.inf
+    hi = -np.inf
+    for i in range(n):
+        ri = prof[i, 0]
+        hi_ = prof[i, 1]
+        e = abs(d - ri)
+        if e <= rho:
+            w = math.sqrt(max(rho * rho - e * e, 0.0))
+            lo = min(lo, hi_ - w)
+            hi = max(hi, hi_ + w)
+        if n == 1:
+            break
+        j = i + 1 if i + 1 < n else 0
+        er = prof[j, 0] - ri
+        eh = prof[j, 1] - hi_
+        ln = math.sqrt(er * er + eh * eh)
+        if ln <= 0.0 or abs(er) <= 1e-15:
+            continue
+        nr = eh / ln
+        nh = -er / ln
+        for sgn in (-1.0, 1.0):
+            sr = ri + sgn * rho * nr
+            sh = hi_ + sgn * rho * nh
+            t = (d - sr) / er
+            if 0.0 <= t <= 1.0:
+                z = sh + t * eh
+                lo = min(lo, z)
+                hi = max(hi, z)
+    return lo, hi
+
+
+@nb.njit(cache=True)
+def prof_dist(prof, n, r, h):
+    """2-D distance from (r, h) to the convex polygon prof[:n] (0 inside)."""
+    inside = n >= 3
+    best = np.inf
+    for i in range(n):
+        j = i + 1 if i + 1 < n else 0
+        pr, ph = prof[i, 0], prof[i, 1]
+        er, eh = prof[j, 0] - pr, prof[j, 1] - ph
+        wr, wh = r - pr, h - ph
+        if er * wh - eh * wr < 0.0:
+            inside = False
+        l2 = er * er + eh * eh
+        t = 0.0
+        if l2 > 0.0:
+            t = min(max((wr * er + wh * eh) / l2, 0.0), 1.0)
+        dr, dh = wr - t * er, wh - t * eh
+        best = min(best, math.sqrt(dr * dr + dh * dh))
+        if n == 1:
+            break
+    return 0.0 if inside else best
+
+
+@nb.njit(cache=True)
+def _swept_end(t, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax):
+    """sign +1: z(t) + h_low(d(t)); sign -1: -(z(t) + h_high(d(t)))."""
+    dx = ax + t * vx - px
+    dy = ay + t * vy - py
+    d = min(math.sqrt(dx * dx + dy * dy), rmax)
+    lo, hi = prof_span(prof, n, rho, d)
+    if sign > 0.0:
+        return az + t * vz + lo
+    return -(az + t * vz + hi)
+
+
+@nb.njit(cache=True)
+def _golden_swept(t0, t1, sign, stop, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax):
+    """Minimum over [t0, t1] of the convex _swept_end (sign as there); stops early once a value
+    <= stop is found (the answer is then only known to be <= stop)."""
+    best = min(_swept_end(t0, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax),
+               _swept_end(t1, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax))
+    if best <= stop or t1 - t0 <= 0.0:
+        return best
+    speed = math.sqrt(vx * vx + vy * vy + vz * vz)
+    tol = _TOL * 0.1 / max(speed, 1e-12)
+    a, b = t0, t1
+    c = b - _INVPHI * (b - a)
+    e = a + _INVPHI * (b - a)
+    fc = _swept_end(c, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax)
+    fe = _swept_end(e, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax)
+    for _ in range(100):
+        best = min(best, fc, fe)
+        if best <= stop or b - a <= tol:
+            break
+        if fc < fe:
+            b = e
+            e = c
+            fe = fc
+            c = b - _INVPHI * (b - a)
+            fc = _swept_end(c, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax)
+        else:
+            a = c
+            c = e
+            fc = fe
+            e = a + _INVPHI * (b - a)
+            fe = _swept_end(e, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax)
+    return best
+
+
+@nb.njit(cache=True)
+def capsule_line(cx, cy, cz, vx, vy, vz, rho, px, py):
+    """(zlo, zhi) of the vertical line (px, py) inside the capsule of radius rho about the
+    segment c + t v, t in [0, 1]; (inf, -inf) when it misses."""
+    lo = np.inf
+    hi = -np.inf
+    for k in range(2):
+        ex = cx + k * vx - px
+        ey = cy + k * vy - py
+        w = rho * rho - ex * ex - ey * ey
+        if w >= 0.0:
+            s = math.sqrt(w)
+            z = cz + k * vz
+            lo = min(lo, z - s)
+            hi = max(hi, z + s)
+    l2 = vx * vx + vy * vy + vz * vz
+    hz = vx * vx + vy * vy
+    if l2 > 0.0 and hz > 1e-18 * l2:
+        wx, wy = px - cx, py - cy
+        k = wx * vx + wy * vy
+        qa = hz / l2                      # u^2 coefficient, u = z - cz
+        qb = -k * vz / l2                 # half the u coefficient
+        qc = wx * wx + wy * wy - k * k / l2 - rho * rho
+        disc = qb * qb - qa * qc
+        if disc >= 0.0:
+            s = math.sqrt(disc)
+            for sg in (-1.0, 1.0):
+                u = (-qb + sg * s) / qa
+                t = (k + u * vz) / l2
+                if 0.0 <= t <= 1.0:
+                    lo = min(lo, cz + u)
+                    hi = max(hi, cz + u)
+    return lo, hi
+
+
+@nb.njit(cache=True)
+def vertical_interval(ptype, prof, n, rho, rmax, geo, ax, ay, az, vx, vy, vz, px, py,
+                      mbot, mtop):
+    """(c0, c1) of the ray (px, py) inside the piece swept vertically from tip a by v, clipped
+    to what matters against material in [mbot, mtop]; c0 >= c1 when the sweep misses the
+    material. `geo` the piece's (h_bottom, h_top) for a cylinder, sphere centres' (h0, h1)
+    for a capsule."""
+    wx, wy = ax - px, ay - py
+    qa = vx * vx + vy * vy
+    t0, t1 = 0.0, 1.0
+    ts = 0.0
+    if qa < 1e-24:
+        if wx * wx + wy * wy > rmax * rmax:
+            return 0.0, -1.0
+    else:
+        qb = wx * vx + wy * vy
+        qc = wx * wx + wy * wy - rmax * rmax
+        disc = qb * qb - qa * qc
+        if disc < 0.0:
+            return 0.0, -1.0
+        s = math.sqrt(disc)
+        t0 = max((-qb - s) / qa, 0.0)
+        t1 = min((-qb + s) / qa, 1.0)
+        if t0 > t1:
+            return 0.0, -1.0
+        ts = min(max(-qb / qa, t0), t1)
+    dx, dy = wx + ts * vx, wy + ts * vy
+    dmin = min(math.sqrt(dx * dx + dy * dy), rmax)
+    z0, z1 = az + t0 * vz, az + t1 * vz
+    zlo, zhi = min(z0, z1), max(z0, z1)
+    if ptype == CYLINDER:
+        return max(zlo + geo[0], mbot), min(zhi + geo[1], mtop)
+    if ptype == CAPSULE:
+        c0, _ = capsule_line(ax, ay, az + geo[0], vx, vy, vz, rho, px, py)
+        _, c1 = capsule_line(ax, ay, az + geo[1], vx, vy, vz, rho, px, py)
+        return max(c0, mbot), min(c1, mtop)
+    hl, hh = prof_span(prof, n, rho, dmin)
+    if zlo + hl >= mtop or zhi + hh <= mbot:
+        return 0.0, -1.0
+    if vz == 0.0:
+        return max(az + hl, mbot), min(az + hh, mtop)
+    zs = az + ts * vz
+    c0 = _golden_swept(t0, t1, 1.0, mbot, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax)
+    c1 = zs + hh
+    if c1 < mtop:
+        c1 = -_golden_swept(t0, t1, -1.0, -mtop, ax, ay, az, vx, vy, vz, px, py, prof, n,
+                            rho, rmax)
+    return max(c0, mbot), min(c1, mtop)
+
+
+@nb.njit(cache=True)
+def _f_ray(s, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho):
+    wx, wy, wz = px - tx, py - ty, s - tz
+    hh = wx * ux + wy * uy + wz * uz
+    rx, ry, rz = wx - hh * ux, wy - hh * uy, wz - hh * uz
+    r = math.sqrt(rx * rx + ry * ry + rz * rz)
+    return prof_dist(prof, n, r, hh) - rho
+
+
+@nb.njit(cache=True)
+def posed_interval(prof, n, rho, tx, ty, tz, ux, uy, uz, px, py, s0, s1):
+    """(c0, c1) of the vertical ray (px, py), within [s0, s1], inside the piece at tip t, unit
+    axis u; c0 >= c1 when it misses. f(s) = dist2D - rho is convex along the ray: a golden
+    search finds a point with f <= 0 (or none), then both roots are bisected to 1e-6 mm."""
+    fa = _f_ray(s0, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho)
+    fb = _f_ray(s1, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho)
+    sin_ = np.nan
+    if fa <= 0.0:
+        sin_ = s0
+    elif fb <= 0.0:
+        sin_ = s1
+    else:
+        a, b = s0, s1
+        c = b - _INVPHI * (b - a)
+        e = a + _INVPHI * (b - a)
+        fc = _f_ray(c, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho)
+        fe = _f_ray(e, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho)
+        for _ in range(100):
+            if fc <= 0.0:
+                sin_ = c
+                break
+            if fe <= 0.0:
+                sin_ = e
+                break
+            if b - a <= _TOL:
+                break
+            # f > 0 at both probes: the minimum (f is convex, 1-Lipschitz) cannot be <= 0
+            # farther than f from a probe
+            if fc < fe:
+                b = e
+                e = c
+                fe = fc
+                c = b - _INVPHI * (b - a)
+                fc = _f_ray(c, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho)
+            else:
+                a = c
+                c = e
+                fc = fe
+                e = a + _INVPHI * (b - a)
+                fe = _f_ray(e, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho)
+            if min(fc, fe) > b - a:
+                break
+    if math.isnan(sin_):
+        return 0.0, -1.0
+    c0 = s0
+    if fa > 0.0:
+        a, b = s0, sin_
+        while b - a > _TOL:
+            m = 0.5 * (a + b)
+            if _f_ray(m, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho) <= 0.0:
+                b = m
+            else:
+                a = m
+        c0 = a
+    c1 = s1
+    if fb > 0.0:
+        a, b = sin_, s1
+        while b - a > _TOL:
+            m = 0.5 * (a + b)
+            if _f_ray(m, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho) <= 0.0:
+                a = m
+            else:
+                b = m
+        c1 = b
+    return c0, c1
+
+
+@nb.njit(cache=True)
+def subtract(lo, hi, count, j, i, c0, c1, out):
+    """Remove [c0, c1] from ray (j, i). Returns the length removed (mm) and writes the lowest
+    and highest removed z to out[0], out[1]; -1.0 when the cut would need more intervals than
+    the ray's capacity (the ray is then left as it was)."""
+    c = count[j, i]
+    cap = lo.shape[2]
+    nlo = np.empty(2 * cap + 1, np.float32)
+    nhi = np.empty(2 * cap + 1, np.float32)
+    f0, f1 = np.float32(c0), np.float32(c1)
+    m = 0
+    removed = 0.0
+    zr0 = np.inf
+    zr1 = -np.inf
+    for k in range(c):
+        l, u = lo[j, i, k], hi[j, i, k]
+        if u <= f0 or l >= f1:
+            nlo[m], nhi[m] = l, u
+            m += 1
+            continue
+        a = max(float(l), c0)
+        b = min(float(u), c1)
+        removed += b - a
+        zr0 = min(zr0, a)
+        zr1 = max(zr1, b)
+        if l < f0:
+            nlo[m], nhi[m] = l, f0
+            m += 1
+        if u > f1:
+            nlo[m], nhi[m] = f1, u
+            m += 1
+    if removed <= 0.0 and m == c:
+        return 0.0
+    if m > cap:
+        return -1.0
+    for k in range(m):
+        lo[j, i, k] = nlo[k]
+        hi[j, i, k] = nhi[k]
+    count[j, i] = m
+    out[0] = zr0
+    out[1] = zr1
+    return removed
+
+
+@nb.njit(cache=True)
+def _record(st, e, kind, length, zr0, zr1, px, py):
+    st[e, ST_LEN + kind] += length
+    if length > st[e, ST_THICK + kind]:
+        st[e, ST_THICK + kind] = length
+        st[e, ST_WHERE + 3 * kind] = px
+        st[e, ST_WHERE + 3 * kind + 1] = py
+        st[e, ST_WHERE + 3 * kind + 2] = 0.5 * (zr0 + zr1)
+
+
+@nb.njit(cache=True)
+def _engaged(st, e, px, py, nxq, nyq, plunge):
+    if plunge:
+        q, q2 = px, py
+    else:
+        q, q2 = px * nxq + py * nyq, 0.0
+    st[e, ST_Q] = min(st[e, ST_Q], q)
+    st[e, ST_Q + 1] = max(st[e, ST_Q + 1], q)
+    st[e, ST_Q + 2] = min(st[e, ST_Q + 2], q2)
+    st[e, ST_Q + 3] = max(st[e, ST_Q + 3], q2)
+
+
+@nb.njit(cache=True)
+def piece_box(prof, n, rho, ux, uy, uz, out):
+    """Write the axis-aligned box of the piece about its tip (tip at 0, unit axis u) into
+    out[0:6] = (xmin, xmax, ymin, ymax, zmin, zmax): each core vertex is a circle of radius r
+    about h u, its extent along coordinate k is r sqrt(1 - u_k^2); grown by rho."""
+    u = (ux, uy, uz)
+    for k in range(3):
+        ek = math.sqrt(max(1.0 - u[k] * u[k], 0.0))
+        lo = np.inf
+        hi = -np.inf
+        for v in range(n):
+            c = prof[v, 1] * u[k]
+            w = prof[v, 0] * ek
+            lo = min(lo, c - w)
+            hi = max(hi, c + w)
+        out[2 * k] = lo - rho
+        out[2 * k + 1] = hi + rho
+
+
+@nb.njit(cache=True)
+def item_windows(prof, nprof, rho, a, b, axis, x0, y0, h, nx, ny):
+    """Per item the rays its pieces can reach, (S, 4) int64 i0, i1, j0, j1 (inclusive; i0 > i1
+    when none), and its lowest reach in z (S,)."""
+    S = a.shape[0]
+    P = prof.shape[0]
+    win = np.empty((S, 4), np.int64)
+    zlow = np.empty(S)
+    box = np.empty(6)
+    for s in range(S):
+        xl, xh, yl, yh, zl = np.inf, -np.inf, np.inf, -np.inf, np.inf
+        for p in range(P):
+            piece_box(prof[p], nprof[p], rho[p], axis[s, 0], axis[s, 1], axis[s, 2], box)
+            xl = min(xl, min(a[s, 0], b[s, 0]) + box[0])
+            xh = max(xh, max(a[s, 0], b[s, 0]) + box[1])
+            yl = min(yl, min(a[s, 1], b[s, 1]) + box[2])
+            yh = max(yh, max(a[s, 1], b[s, 1]) + box[3])
+            zl = min(zl, min(a[s, 2], b[s, 2]) + box[4])
+        win[s, 0] = max(math.ceil((xl - x0) / h - 0.5), 0)
+        win[s, 1] = min(math.floor((xh - x0) / h - 0.5), nx - 1)
+        win[s, 2] = max(math.ceil((yl - y0) / h - 0.5), 0)
+        win[s, 3] = min(math.floor((yh - y0) / h - 0.5), ny - 1)
+        zlow[s] = zl
+        if win[s, 0] > win[s, 1] or win[s, 2] > win[s, 3]:
+            win[s, 0], win[s, 1] = 1, 0
+    return win, zlow
+
+
+@nb.njit(cache=True)
+def bin_items(win, ntx, nty):
+    """The tile-item pairs, tiles in row-major order and items in program order within each:
+    (start (ntiles + 1,), item (E,))."""
+    S = win.shape[0]
+    nt = ntx * nty
+    cnt = np.zeros(nt + 1, np.int64)
+    for s in range(S):
+        if win[s, 0] > win[s, 1]:
+            continue
+        for tj in range(win[s, 2] // TILE, win[s, 3] // TILE + 1):
+            for ti in range(win[s, 0] // TILE, win[s, 1] // TILE + 1):
+                cnt[tj * ntx + ti + 1] += 1
+    for t in range(nt):
+        cnt[t + 1] += cnt[t]
+    fill = cnt[:-1].copy()
+    item = np.empty(cnt[nt], np.int64)
+    for s in range(S):
+        if win[s, 0] > win[s, 1]:
+            continue
+        for tj in range(win[s, 2] // TILE, win[s, 3] // TILE + 1):
+            for ti in range(win[s, 0] // TILE, win[s, 1] // TILE + 1):
+                t = tj * ntx + ti
+                item[fill[t]] = s
+                fill[t] += 1
+    return cnt, item
+
+
+@nb.njit(cache=True)
+def _tile_top(lo, hi, count, i0, i1, j0, j1):
+    z = -np.inf
+    for j in range(j0, j1 + 1):
+        for i in range(i0, i1 + 1):
+            c = count[j, i]
+            if c > 0:
+                z = max(z, hi[j, i, c - 1])
+    return z
+
+
+@nb.njit(cache=True)
+def _run_item(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo, a, b, u,
+              step, engage, i0, i1, j0, j1, st, e):
+    """Cut rays [i0, i1] x [j0, j1] by one item; statistics to row e. Returns refused cuts."""
+    P = prof.shape[0]
+    ax, ay, az = a[0], a[1], a[2]
+    vx, vy, vz = b[0] - ax, b[1] - ay, b[2] - az
+    vertical = u[2] >= 1.0 - 1e-9
+    hv = math.sqrt(vx * vx + vy * vy)
+    plunge = hv <= 1e-9
+    nxq, nyq = 0.0, 0.0
+    if not plunge:
+        nxq, nyq = -vy / hv, vx / hv
+    length3 = math.sqrt(vx * vx + vy * vy + vz * vz)
+    nsamp = 1
+    if not vertical:
+        nsamp = max(int(math.ceil(length3 / step)) + 1, 2) if length3 > 0.0 else 1
+    boxes = np.empty((P, 6))
+    for p in range(P):
+        piece_box(prof[p], nprof[p], rho[p], u[0], u[1], u[2], boxes[p])
+    out = np.empty(2)
+    rlen = np.empty(3)
+    rz0 = np.empty(3)
+    rz1 = np.empty(3)
+    refused = 0
+    for j in range(j0, j1 + 1):
+        py = y0 + (j + 0.5) * h
+        for i in range(i0, i1 + 1):
+            if count[j, i] == 0:
+                continue
+            px = x0 + (i + 0.5) * h
+            rlen[:] = 0.0
+            rz0[:] = np.inf
+            rz1[:] = -np.inf
+            for k in range(nsamp):
+                f = k / (nsamp - 1) if nsamp > 1 else 0.0
+                tx, ty, tz = ax + f * vx, ay + f * vy, az + f * vz
+                for p in range(P):
+                    c = count[j, i]
+                    if c == 0:
+                        break
+                    mbot = float(lo[j, i, 0])
+                    mtop = float(hi[j, i, c - 1])
+                    if vertical:
+                        c0, c1 = vertical_interval(ptype[p], prof[p], nprof[p], rho[p],
+                                                   rmax[p], geo[p], ax, ay, az, vx, vy, vz,
+                                                   px, py, mbot, mtop)
+                    else:
+                        bx = boxes[p]
+                        if (px < tx + bx[0] or px > tx + bx[1] or py < ty + bx[2]
+                                or py > ty + bx[3]):
+                            continue
+                        s0 = max(tz + bx[4], mbot)
+                        s1 = min(tz + bx[5], mtop)
+                        if s0 >= s1:
+                            continue
+                        c0, c1 = posed_interval(prof[p], nprof[p], rho[p], tx, ty, tz,
+                                                u[0], u[1], u[2], px, py, s0, s1)
+                    if c0 >= c1:
+                        continue
+                    got = subtract(lo, hi, count, j, i, c0, c1, out)
+                    if got < 0.0:
+                        refused += 1
+                    elif got > 0.0:
+                        kd = kind[p]
+                        rlen[kd] += got
+                        rz0[kd] = min(rz0[kd], out[0])
+                        rz1[kd] = max(rz1[kd], out[1])
+            for kd in range(3):
+                if rlen[kd] > 0.0:
+                    _record(st, e, kd, rlen[kd], rz0[kd], rz1[kd], px, py)
+            if rlen[0] > engage:
+                _engaged(st, e, px, py, nxq, nyq, plunge)
+    return refused
+
+
+@nb.njit(cache=True, parallel=True)
+def sweep(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo, a, b, axis,
+          step, engage, win, zlow, start, item):
+    """Cut the stock (lo, hi, count) by every item in program order (module docstring).
+    Returns the statistics (E, NST) per tile-item pair (row order of `item`) and the cuts
+    refused for want of interval slots."""
+    ny, nx = count.shape
+    ntx = (nx + TILE - 1) // TILE
+    nt = start.shape[0] - 1
+    st = np.zeros((item.shape[0], NST))
+    for e in range(item.shape[0]):
+        st[e, ST_Q] = np.inf
+        st[e, ST_Q + 1] = -np.inf
+        st[e, ST_Q + 2] = np.inf
+        st[e, ST_Q + 3] = -np.inf
+    refused = np.zeros(nt, np.int64)
+    for t in nb.prange(nt):
+        if start[t + 1] == start[t]:
+            continue
+        ti0 = (t % ntx) * TILE
+        tj0 = (t // ntx) * TILE
+        ti1 = min(ti0 + TILE, nx) - 1
+        tj1 = min(tj0 + TILE, ny) - 1
+        top = _tile_top(lo, hi, count, ti0, ti1, tj0, tj1)
+        for e in range(start[t], start[t + 1]):
+            s = item[e]
+            if zlow[s] >= top:
+                continue
+            i0 = max(win[s, 0], ti0)
+            i1 = min(win[s, 1], ti1)
+            j0 = max(win[s, 2], tj0)
+            j1 = min(win[s, 3], tj1)
+            if i0 > i1 or j0 > j1:
+                continue
+            refused[t] += _run_item(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype,
+                                    rmax, geo, a[s], b[s], axis[s], step, engage, i0, i1, j0,
+                                    j1, st, e)
+    return st, refused
+
+
+@nb.njit(cache=True)
+def per_move(st, item, move, n_moves, h):
+    """Reduce the tile-item rows to moves: volume (M, 3) mm^3, thickness (M, 3) mm, where
+    (M, 3, 3), and the body's engaged width (M,) mm (the largest over the move's items of the
+    engaged rays' extent across the travel, plus one ray's h)."""
+    S = move.shape[0]
+    vol = np.zeros((n_moves, 3))
+    thick = np.zeros((n_moves, 3))
+    where = np.full((n_moves, 3, 3), np.nan)
+    q = np.empty((S, 4))
+    q[:, 0] = np.inf
+    q[:, 1] = -np.inf
+    q[:, 2] = np.inf
+    q[:, 3] = -np.inf
+    for e in range(item.shape[0]):
+        s = item[e]
+        m = move[s]
+        for k in range(3):
+            vol[m, k] += st[e, ST_LEN + k] * h * h
+            if st[e, ST_THICK + k] > thick[m, k]:
+                thick[m, k] = st[e, ST_THICK + k]
+                for c in range(3):
+                    where[m, k, c] = st[e, ST_WHERE + 3 * k + c]
+        q[s, 0] = min(q[s, 0], st[e, ST_Q])
+        q[s, 1] = max(q[s, 1], st[e, ST_Q + 1])
+        q[s, 2] = min(q[s, 2], st[e, ST_Q + 2])
+        q[s, 3] = max(q[s, 3], st[e, ST_Q + 3])
+    width = np.zeros(n_moves)
+    for s in range(S):
+        if q[s, 1] >= q[s, 0]:
+            w = max(q[s, 1] - q[s, 0], q[s, 3] - q[s, 2]) + h
+            width[move[s]] = max(width[move[s]], w)
+    return vol, thick, where, width
