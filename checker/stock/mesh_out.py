@@ -14,7 +14,7 @@ non-manifold edge). Built with numpy in bands of rows."""
 
 from __future__ import annotations
 
-import io
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +22,7 @@ import numpy as np
 from checker.atomic import write_file
 from checker.stock.dexels import Dexels
 
+_HEADER = 84  # binary STL: 80 bytes of text, the triangle count as uint32
 _BAND_COLUMNS = 25_000  # columns per band: bounds the walls' temporaries (~250 MB at most)
 
 
@@ -119,48 +120,77 @@ def _walls(zp, zq, p_xy, q_xy, a_lo, a_hi, b_lo, b_hi, normal_axis) -> np.ndarra
     return tri
 
 
-def stock_triangles(d: Dexels) -> np.ndarray:
-    """The closed surface of the dexel solid `d` as triangles `(M, 3, 3)` float64, part frame,
-    mm, counter-clockwise seen from outside (the module docstring gives the faces)."""
+def _bands(d: Dexels, plo: np.ndarray, phi: np.ndarray):
+    """Per band of column rows j0 .. j1 - 1: (j0, j1, the corner points of corner rows
+    j0 .. j1, the walls across x and across y whose two columns differ, as (jj, ii, a_lo, a_hi,
+    b_lo, b_hi) with jj the band's local row, a the column on the low side)."""
+    band = max(1, _BAND_COLUMNS // max(d.nx, 1))
+    for j0 in range(0, d.ny, band):
+        j1 = min(d.ny, j0 + band)
+        walls = []
+        top = j1 + 1 if j1 == d.ny else j1  # the walls across y at Y[ny] go with the last band
+        for a, b in (((slice(j0 + 1, j1 + 1), slice(None, -1)),
+                      (slice(j0 + 1, j1 + 1), slice(1, None))),
+                     ((slice(j0, top), slice(1, -1)), (slice(j0 + 1, top + 1), slice(1, -1)))):
+            a_lo, a_hi, b_lo, b_hi = plo[a], phi[a], plo[b], phi[b]
+            jj, ii = np.nonzero(((a_lo != b_lo) | (a_hi != b_hi)).any(-1))
+            walls.append((jj, ii, a_lo[jj, ii], a_hi[jj, ii], b_lo[jj, ii], b_hi[jj, ii]))
+        yield j0, j1, _corner_points(plo, phi, j0, j1), walls
+
+
+def band_triangles(d: Dexels) -> Iterator[np.ndarray]:
+    """The closed surface of the dexel solid `d` as triangles `(M, 3, 3)` float32, part frame,
+    mm, counter-clockwise seen from outside (the module docstring gives the faces), a band of
+    grid rows at a time."""
     plo, phi = _ends(d)
     X = d.x0 + np.arange(d.nx + 1) * d.h
     Y = d.y0 + np.arange(d.ny + 1) * d.h
-    band = max(1, _BAND_COLUMNS // max(d.nx, 1))
-    pieces = [np.zeros((0, 3, 3))]
-    for j0 in range(0, d.ny, band):
-        j1 = min(d.ny, j0 + band)
-        pieces.append(_caps(plo, phi, X, Y, j0, j1))
-        zc = _corner_points(plo, phi, j0, j1)  # corner rows j0 .. j1
-        # walls across x at x = X[i] between columns i - 1 and i, rows j0 .. j1 - 1
-        a_lo, a_hi = plo[j0 + 1:j1 + 1, :-1], phi[j0 + 1:j1 + 1, :-1]
-        b_lo, b_hi = plo[j0 + 1:j1 + 1, 1:], phi[j0 + 1:j1 + 1, 1:]
-        jj, ii = np.nonzero(((a_lo != b_lo) | (a_hi != b_hi)).any(-1))
-        pieces.append(_walls(zc[jj, ii], zc[jj + 1, ii],
-                             np.column_stack([X[ii], Y[jj + j0]]),
-                             np.column_stack([X[ii], Y[jj + j0 + 1]]),
-                             a_lo[jj, ii], a_hi[jj, ii], b_lo[jj, ii], b_hi[jj, ii], 0))
-        # walls across y at y = Y[j] between rows j - 1 and j, for j = j0 .. j1 (- 1 but last)
-        top = j1 + 1 if j1 == d.ny else j1
-        a_lo, a_hi = plo[j0:top, 1:-1], phi[j0:top, 1:-1]
-        b_lo, b_hi = plo[j0 + 1:top + 1, 1:-1], phi[j0 + 1:top + 1, 1:-1]
-        jj, ii = np.nonzero(((a_lo != b_lo) | (a_hi != b_hi)).any(-1))
-        pieces.append(_walls(zc[jj, ii], zc[jj, ii + 1],
-                             np.column_stack([X[ii], Y[jj + j0]]),
-                             np.column_stack([X[ii + 1], Y[jj + j0]]),
-                             a_lo[jj, ii], a_hi[jj, ii], b_lo[jj, ii], b_hi[jj, ii], 1))
-    return np.concatenate(pieces)
+    for j0, j1, zc, (across_x, across_y) in _bands(d, plo, phi):
+        pieces = [_caps(plo, phi, X, Y, j0, j1)]
+        jj, ii, *columns = across_x  # at x = X[i] between columns i - 1 and i
+        pieces.append(_walls(zc[jj, ii], zc[jj + 1, ii], np.column_stack([X[ii], Y[jj + j0]]),
+                             np.column_stack([X[ii], Y[jj + j0 + 1]]), *columns, 0))
+        jj, ii, *columns = across_y  # at y = Y[j] between rows j - 1 and j
+        pieces.append(_walls(zc[jj, ii], zc[jj, ii + 1], np.column_stack([X[ii], Y[jj + j0]]),
+                             np.column_stack([X[ii + 1], Y[jj + j0]]), *columns, 1))
+        yield np.concatenate(pieces).astype(np.float32)
+
+
+def most_triangles(d: Dexels) -> int:
+    """An upper bound of `band_triangles`' count: two per interval end (its cap) and, per wall,
+    its two corner lines' points less two (the zipper's triangles)."""
+    plo, phi = _ends(d)
+    most = 2 * int(np.isfinite(plo).sum() + np.isfinite(phi).sum())
+    for _, _, zc, (across_x, across_y) in _bands(d, plo, phi):
+        n = np.isfinite(zc).sum(axis=-1)
+        jj, ii = across_x[:2]
+        most += int(np.maximum(n[jj, ii] + n[jj + 1, ii] - 2, 0).sum())
+        jj, ii = across_y[:2]
+        most += int(np.maximum(n[jj, ii] + n[jj, ii + 1] - 2, 0).sum())
+    return most
+
+
+def stock_triangles(d: Dexels) -> np.ndarray:
+    """All of `band_triangles(d)` as one `(M, 3, 3)` float32 array."""
+    return np.concatenate([np.zeros((0, 3, 3), np.float32), *band_triangles(d)])
 
 
 def write_stl(dexels: Dexels, path: str | Path) -> Path:
-    """Write the dexel stock's closed surface (`stock_triangles`) to `path` as binary STL with
-    numpy-stl, whole or not at all (`checker.atomic`); the path written."""
-    from stl import Mode
+    """Write the dexel stock's closed surface (`band_triangles`) to `path` as binary STL (numpy-
+    stl's records and normals), whole or not at all (`checker.atomic`); the path written. The
+    file is assembled in memory (50 bytes a triangle; room for `most_triangles` reserved, only
+    what is written is touched)."""
     from stl import mesh as stl_mesh
 
-    tri = stock_triangles(dexels)
-    m = stl_mesh.Mesh(np.zeros(len(tri), dtype=stl_mesh.Mesh.dtype), remove_empty_areas=False)
-    m.vectors[:] = tri.astype(np.float32)
-    m.update_normals()
-    buf = io.BytesIO()
-    m.save(Path(path).name, fh=buf, mode=Mode.BINARY, update_normals=False)
-    return write_file(path, buf.getvalue(), what="stock STL")
+    record = stl_mesh.Mesh.dtype.itemsize
+    out = np.empty(_HEADER + most_triangles(dexels) * record, np.uint8)
+    at = _HEADER
+    for tri in band_triangles(dexels):
+        m = stl_mesh.Mesh(np.zeros(len(tri), dtype=stl_mesh.Mesh.dtype), remove_empty_areas=False)
+        m.vectors[:] = tri
+        m.update_normals()
+        out[at:at + len(tri) * record] = m.data.view(np.uint8)
+        at += len(tri) * record
+    out[:80] = np.frombuffer(b"pathcheck dexel stock".ljust(80), np.uint8)
+    out[80:84] = np.frombuffer(np.uint32((at - _HEADER) // record).tobytes(), np.uint8)
+    return write_file(path, memoryview(out[:at]), what="stock STL")

@@ -22,12 +22,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numba as nb
 import numpy as np
 
 from checker.errors import PathcheckError
 from checker.stock.dexels import Dexels
+
+if TYPE_CHECKING:
+    from checker.config import Config
 
 _INT_BITS = 29  # snapped coordinates below 2^29: edge functions below 2^61 in int64
 _MOST_CROSSINGS = 200_000_000  # crossings held at once (1.6 GB of float64)
@@ -177,7 +181,8 @@ def require_closed(dexels: SolidDexels, path: str | Path, what: str = "stock sol
                              "closed solid", path=path, code="stock")
 
 
-def load_solid(path: str | Path, cfg, what: str = "stock solid") -> tuple[np.ndarray, np.ndarray]:
+def load_solid(path: str | Path, cfg: Config,
+               what: str = "stock solid") -> tuple[np.ndarray, np.ndarray]:
     """`(vertices (V, 3) mm, triangles (T, 3))` of the solid in `path`: an STL as it is, a STEP
     or IGES part's faces as triangles within `cfg.check.part_deviation` (`cfg` a
     `checker.config.Config`); errors name the file as the `what` they are."""
@@ -189,6 +194,7 @@ def load_solid(path: str | Path, cfg, what: str = "stock solid") -> tuple[np.nda
         tris = part_triangles(part, cfg.check.part_deviation, cfg.geometry)
     except PathcheckError as err:
         message = err.message.replace("part file", what)
-        raise PathcheckError(f"{what}: {message}", path=err.path, line=err.line,
-                             code=err.code) from None
+        if what not in message:
+            message = f"{what}: {message}"
+        raise PathcheckError(message, path=err.path, line=err.line, code=err.code) from None
     return tris.vertices, tris.triangles

@@ -21,7 +21,7 @@ A margin form needs the part; `cl` needs a CL file that states its stock."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -124,7 +124,7 @@ class SolidFile:
     """A solid stock to be read from `path` (`checker.stock.solid.load_solid`)."""
 
     path: Path
-    how: str = field(default="")
+    how: str = ""
 
 
 Stock = Box | Cylinder | SolidFile

@@ -61,7 +61,11 @@ def stated_stock(toolpath: ToolPath) -> StatedStock | None:
 
 
 def _mm(v: float) -> str:
-    return f"{v:.6g}"
+    return f"{v + 0.0:.6g}"  # + 0.0: no "-0"
+
+
+def _extent(box: np.ndarray) -> str:
+    return ", ".join(f"{a} {_mm(box[0, k])}..{_mm(box[1, k])}" for k, a in enumerate("XYZ"))
 
 
 def place(stated: StatedStock, part_box: np.ndarray | None) -> tuple[np.ndarray, str]:
@@ -72,8 +76,7 @@ def place(stated: StatedStock, part_box: np.ndarray | None) -> tuple[np.ndarray,
     said = f"stated stock {' x '.join(map(_mm, size))} mm (line {stated.line})"
     if part_box is None:
         box = np.array([[0.0, 0.0, -size[2]], [size[0], size[1], 0.0]])
-        return box, f"{said}, its top's low corner at the origin: X 0..{_mm(size[0])}, " \
-                    f"Y 0..{_mm(size[1])}, Z {_mm(-size[2])}..0"
+        return box, f"{said}, its top's low corner at the origin: {_extent(box)}"
     pb = np.asarray(part_box, float).reshape(2, 3)
     centre = pb.mean(axis=0)
     fits_below_zero = pb[1, 2] <= _FIT and pb[0, 2] >= -size[2] - _FIT
@@ -84,7 +87,7 @@ def place(stated: StatedStock, part_box: np.ndarray | None) -> tuple[np.ndarray,
     how = (f"{said}, centred on the part in X and Y, top at "
            + ("Z 0 (the CL frame's origin)" if fits_below_zero else
               f"the part's top Z {_mm(top)} (the part stands above Z 0 or below Z "
-              f"{_mm(-size[2])})"))
+              f"{_mm(-size[2])})") + f": {_extent(box)}")
     out = np.maximum(box[0] - pb[0], pb[1] - box[1])
     if (out > _FIT).any():
         k = int(np.argmax(out))
