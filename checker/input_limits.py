@@ -24,6 +24,8 @@ MAX_CL_STATEMENTS = 2_000_000
 MAX_CHECK_POSES = 2_000_000
 #: CC points one `allowable` search takes: its document keeps about 1 kB for each
 MAX_CC_POINTS = 1_000_000
+#: rays of a stock model (checker.stock.dexels): about 36 bytes each at 4 intervals per ray
+MAX_STOCK_RAYS = 40_000_000
 
 
 def refuse_beyond(count: int, limit: int, what: str, name: str, *, path: str | Path | None,

@@ -226,7 +226,9 @@ class StockFinding(_Model):
     rapid: bool = False
     piece: Piece | None = None
     depth: float = Field(description="stock: the largest thickness of material the piece "
-                         "removes along one vertical ray, mm; fixture: the penetration, mm")
+                         "removes along one vertical ray, mm; fixture: the penetration (the "
+                         "deepest point of the fixture inside the tool, its distance to the "
+                         "tool's surface, as for the part), mm")
     tolerance: float
     tip: Vec3 = Field(description="tool tip at the pose the move reaches, part frame, mm")
     point: Vec3 | None = Field(None, description="where: stock, the middle of the thickest "
@@ -265,7 +267,6 @@ class StockResult(_Model):
     """The program against the stock and the fixtures (docs/MATH.md §14)."""
 
     stock: str = Field(description="the stock's shape, part frame, mm")
-    placement: str | None = Field(None, description="how a stock the CL file states was placed")
     resolution: float = Field(description="ray spacing of the Z-dexel model, mm")
     error_bound: float = Field(description="bound on the simulated material along each ray, mm")
     volume_initial: float = Field(description="mm^3")

@@ -1,9 +1,9 @@
 """The stock and the fixtures on a real job: SolidWorks CAM's Teste-Metrologia (amorim, a 14 mm
-flat end mill roughing around its part, the stock it states: 85 x 38 x 48 mm, top at Z 0) on
-its STL. Made from the real program and kept as tests: a rapid lowered into the stock, a holder
-that reaches the stock beside the deep passes, a table (fixture) raised into the path; each is
-reported with its line, verdict and depth, and the same program without the change is clean
-against the stock and the fixtures."""
+flat end mill roughing around its part, then along its sides with the tool axis along +X; the
+stock it states: 85 x 38 x 48 mm, top at Z 0) on its STL. Made from the real program and kept as
+tests: a rapid lowered into the stock, a holder that reaches the stock beside the deep passes, a
+table (fixture) raised into the path; each is reported with its line, verdict and depth, and the
+same program without the change is clean against the stock and the fixtures."""
 
 from __future__ import annotations
 
@@ -21,21 +21,23 @@ from checker.stock.request import StockRequest
 JOB = "Teste-Metrologia"
 TOP = 0.0              # the stated stock's top (placed with its top at Z 0)
 DEEPEST = -51.4375     # the program's lowest tip
-RAPID_LINE = 34        # `GOTO/-3.655561,-17.5,-7.5` after RAPID/: moved into the stock
+HOLDER_R = 20.0        # the holder's radius
+RAPID_LINE = 35        # `GOTO/-3.655561,-17.5,-7.5` after RAPID/: moved into the stock
 RESOLUTION = 0.25      # mm: ray spacing of these tests
 
 
-def _cutter(stickout: float):
+def _cutter(stickout: float, flutes: float = 32.0):
     """The job's CUTTER/14,0,7,...,84 with its flute length (CSI_SET_FLUTE_LENGTH/32.), a 14 mm
     shank and an ER32-like holder 40 mm wide and 50 mm long at `stickout` mm."""
     c = parse_cutter("CUTTER/14,0,7,0,0,0,84")
-    return dataclasses.replace(c, flute_length=32.0, shank_diameter=14.0, stickout=stickout,
+    return dataclasses.replace(c, flute_length=flutes, shank_diameter=14.0, stickout=stickout,
                                holder_diameter=40.0, holder_length=50.0)
 
 
 def _table(path: Path, top: float) -> Path:
-    """A table top under the stock: the box [-40, 125] x [-40, 80] x [top - 15, top] as STL."""
-    lo, hi = np.array([-40.0, -40.0, top - 15.0]), np.array([125.0, 80.0, top])
+    """A table under the stock: the box [-300, 400] x [-300, 300] x [top - 100, top] as STL
+    (wide and thick: a piece of the tool in it is deepest below its top)."""
+    lo, hi = np.array([-300.0, -300.0, top - 100.0]), np.array([400.0, 300.0, top])
     corners = np.array([[hi[0] if i & 1 else lo[0], hi[1] if i & 2 else lo[1],
                          hi[2] if i & 4 else lo[2]] for i in range(8)])
     faces = [(0, 2, 1), (1, 2, 3), (4, 5, 6), (5, 7, 6), (0, 1, 4), (1, 5, 4),
@@ -54,11 +56,12 @@ def job(realdata, tmp_path_factory) -> dict:
     apt.write_text((src / f"{JOB}.apt").read_text())
     part = src / f"{JOB}.STL"
     return {"apt": apt, "part": part, "folder": folder,
-            "table": _table(folder / "table.stl", -55.0)}
+            "table": _table(folder / "table.stl", -80.0)}
 
 
-def _check(apt: Path, part: Path, stickout: float, fixtures=(), stock="cl"):
-    return check_job(apt, part_path=part, cutter=_cutter(stickout), on_findings="comment",
+def _check(apt: Path, part: Path, stickout: float, fixtures=(), stock="cl", flutes=32.0):
+    return check_job(apt, part_path=part, cutter=_cutter(stickout, flutes),
+                     on_findings="comment",
                      stock=StockRequest(stock, tuple(str(f) for f in fixtures), RESOLUTION))
 
 
@@ -73,7 +76,7 @@ def test_the_real_program_is_clean_against_its_stock_and_the_table(clean):
     assert s.volume_initial == pytest.approx(85 * 38 * 48, rel=0.01)
     assert 0.0 < s.volume_final < s.volume_initial
     assert s.fixtures == ["table.stl"]
-    assert s.placement and "line" in s.placement
+    assert "stated stock 85 x 38 x 48 mm (line 9)" in s.stock
     # roughing around the part: material is removed and some feed moves cut nothing
     assert sum(op.removed for op in s.operations) == pytest.approx(
         s.volume_initial - s.volume_final, rel=1e-3)
@@ -100,14 +103,17 @@ def test_a_rapid_lowered_into_the_stock_is_a_crash_at_its_line(job, tmp_path):
 
 
 def test_a_short_stickout_puts_the_holder_into_the_stock(job):
-    doc = _check(job["apt"], job["part"], 40.0, [job["table"]])
+    """Flutes 20 mm long held at 20 mm: the first passes step down by 5.875 mm from Z -17, so
+    at Z -22.875 the holder (40 mm wide) goes 2.875 mm into the stock beside the cut."""
+    doc = _check(job["apt"], job["part"], 20.0, [job["table"]], flutes=20.0)
     hits = [f for f in doc.stock.findings if f.verdict == "holder"]
-    assert hits, "the holder's bottom at 40 mm above a tip at Z -51.4 is 11.4 mm in the stock"
-    deepest = max(hits, key=lambda f: f.depth)
-    assert deepest.piece == "holder"
-    # the holder's bottom goes down to DEEPEST + 40 below the top: that much stock beside it
-    assert deepest.depth == pytest.approx(TOP - (DEEPEST + 40.0), abs=0.5)
-    assert all(f.line is not None for f in hits)
+    assert hits and all(f.against == "stock" and f.line is not None for f in hits)
+    first = min(hits, key=lambda f: f.line)
+    assert first.piece == "holder"
+    assert first.tip[2] == pytest.approx(-22.875)
+    assert first.depth == pytest.approx(TOP - (-22.875 + 20.0), abs=1e-3)
+    clean = _check(job["apt"], job["part"], 60.0, [job["table"]], flutes=20.0)
+    assert clean.stock.counts.holder == 0
 
 
 def test_a_table_raised_into_the_path_is_a_crash_naming_it(job, tmp_path):
@@ -115,6 +121,10 @@ def test_a_table_raised_into_the_path_is_a_crash_naming_it(job, tmp_path):
     doc = _check(job["apt"], job["part"], 60.0, [table])
     into = [f for f in doc.stock.findings if f.against == "table.stl"]
     assert into and all(f.verdict == "crash" for f in into)
-    assert max(f.depth for f in into) == pytest.approx(-50.0 - DEEPEST, abs=0.02)
-    lowest = max(into, key=lambda f: f.depth)
-    assert lowest.tip[2] == pytest.approx(DEEPEST, abs=1e-6)
+    # the deepest: the side passes (axis along +X) at the lowest tip, 1.4375 mm below the
+    # table's top; a fixture's depth is that of its deepest point inside the tool (as for the
+    # part): the top face on the axis's level, its distance to the tool's surface
+    below = -50.0 - DEEPEST
+    deepest = max(into, key=lambda f: f.depth)
+    assert deepest.piece == "holder" and deepest.tip[2] == pytest.approx(DEEPEST, abs=1e-6)
+    assert deepest.depth == pytest.approx(HOLDER_R - below, abs=0.02)

@@ -146,10 +146,10 @@ def _stock(req: p.CheckRequest, files: _Files):
         return None
     from checker.stock.fixtures import parse_fixture
     from checker.stock.request import StockRequest
-    from checker.stock.spec import SolidFile, parse_stock
+    from checker.stock.spec import SolidPath, parse_stock
 
     stock = req.stock
-    if stock is not None and isinstance(parse_stock(stock), SolidFile):
+    if stock is not None and isinstance(parse_stock(stock), SolidPath):
         stock = str(files.get(stock, "stock", "a stock solid (STL, STEP, IGES)", "input"))
     fixtures = []
     for text in req.fixtures:

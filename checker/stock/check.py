@@ -12,7 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
+from checker import input_limits
 from checker import verdict as vd
+from checker.errors import PathcheckError
 from checker.mesh.tool import tool_pieces
 from checker.moves import FEED, RAPID, START
 from checker.progress import step
@@ -38,37 +40,48 @@ class StockCheck:
     result: StockResult
 
 
-def build_stock(request: StockRequest, part_box: np.ndarray | None, toolpath, cfg):
-    """(Dexels, description, placement sentence or None) of the stock asked, at the resolution
-    asked or the default for its size."""
+def build_stock(request: StockRequest, part_box: np.ndarray | None, part_points, toolpath,
+                cfg) -> tuple[Dexels, str]:
+    """(Dexels, one sentence saying what the stock is and where it came from) of the stock
+    asked, at the resolution asked or the default for its size (`default_resolution`); a model
+    beyond `input_limits.MAX_STOCK_RAYS` rays is refused."""
     from checker.stock.removal import default_resolution
-    from checker.stock.solid import load_solid, solid_dexels
+    from checker.stock.solid import load_solid, require_closed, solid_dexels
     from checker.stock.spec import Box, Cylinder, parse_stock, resolve
     from checker.stock.stated import stated_stock
 
-    spec = parse_stock(request.stock)
-    shape, placement = resolve(spec, part_box, stated_stock(toolpath))
+    shape = resolve(parse_stock(request.stock), part_box, stated_stock(toolpath),
+                    part_points=part_points)
     if isinstance(shape, Box):
         lo, hi = np.asarray(shape.lo, float), np.asarray(shape.hi, float)
-        h = request.resolution or default_resolution(hi - lo)
-        what = ("box " + " x ".join(f"{v:g}" for v in hi - lo) + " mm from ("
-                + ", ".join(f"{v:g}" for v in lo) + ")")
-        return Dexels.box(lo, hi, h), what, placement
+        h = _resolution(request, hi - lo, default_resolution)
+        return Dexels.box(lo, hi, h), shape.how
     if isinstance(shape, Cylinder):
         ext = np.full(3, 2.0 * shape.radius)
         ext["xyz".index(shape.axis)] = shape.end - shape.start
-        h = request.resolution or default_resolution(ext)
-        through = ", ".join(f"{v:g}" for v in shape.centre)
-        what = (f"cylinder about {shape.axis} through ({through}),"
-                f" diameter {2 * shape.radius:g} mm, from {shape.start:g} to {shape.end:g}")
+        h = _resolution(request, ext, default_resolution)
         return (Dexels.cylinder(shape.axis, np.asarray(shape.centre, float), shape.radius,
-                                shape.start, shape.end, h), what, placement)
+                                shape.start, shape.end, h), shape.how)
     vertices, triangles = load_solid(Path(shape.path), cfg)
     lo, hi = vertices.min(axis=0), vertices.max(axis=0)
-    h = request.resolution or default_resolution(hi - lo)
+    h = _resolution(request, hi - lo, default_resolution)
     nx, ny = (int(np.ceil((hi[k] - lo[k]) / h)) + 1 for k in (0, 1))
-    return (solid_dexels(vertices, triangles, lo[0] - 0.5 * h, lo[1] - 0.5 * h, nx, ny, h),
-            f"solid {Path(shape.path).name}", placement)
+    stock = solid_dexels(vertices, triangles, lo[0] - 0.5 * h, lo[1] - 0.5 * h, nx, ny, h)
+    require_closed(stock, shape.path)
+    return stock, shape.how
+
+
+def _resolution(request: StockRequest, extent: np.ndarray, default) -> float:
+    """The ray spacing: asked, else the default for `extent (3,)`; refused when the model
+    would hold more rays than `MAX_STOCK_RAYS`."""
+    h = float(request.resolution or default(extent))
+    rays = float(np.ceil(max(extent[0], h) / h) + 1) * float(np.ceil(max(extent[1], h) / h) + 1)
+    if rays > input_limits.MAX_STOCK_RAYS:
+        raise PathcheckError(
+            f"--stock-resolution {h:g} mm: the stock ({extent[0]:g} x {extent[1]:g} mm) would "
+            f"need {rays:,.0f} rays; expected at most {input_limits.MAX_STOCK_RAYS:,} "
+            "(a coarser resolution)", code="usage")
+    return h
 
 
 def _stock_box(stock: Dexels) -> np.ndarray:
@@ -103,7 +116,8 @@ def check_stock(job, motion: ProgramMotion, cutters: dict, tol, request: StockRe
     findings: list[StockFinding] = []
     stock_res = None
     if request.stock is not None:
-        stock, what, placement = build_stock(request, part_box, job.toolpath, cfg)
+        part_points = None if job.triangles is None else job.triangles.vertices
+        stock, what = build_stock(request, part_box, part_points, job.toolpath, cfg)
         h = stock.h
         step_mm = h
         box = _stock_box(stock)
@@ -142,7 +156,7 @@ def check_stock(job, motion: ProgramMotion, cutters: dict, tol, request: StockRe
             final = str(write_stl(stock, Path(out_dir) / "stock_final.stl"))
         feed = np.flatnonzero((moves.kind == FEED) & ~rapid)
         stock_res = dict(
-            stock=what, placement=placement, resolution=h,
+            stock=what, resolution=h,
             error_bound=float(error_bound(h, step_mm)[0]),
             volume_initial=volume0, volume_final=stock.volume(), operations=ops,
             engagement=MoveEngagement(

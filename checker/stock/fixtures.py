@@ -52,7 +52,7 @@ def load_fixture(text: str, cfg) -> Fixture:
     if not path.is_file():
         raise PathcheckError("fixture file not found: expected an existing STL, STEP or IGES "
                              "file", path=path)
-    vertices, triangles = load_solid(path, cfg)
+    vertices, triangles = load_solid(path, cfg, what="fixture")
     if placement is not None:
         try:
             R, t = parse_transform(placement)
