@@ -569,7 +569,30 @@ def copy_warmup_job() -> None:
         (resource("warmup") / f"warmup{suffix}").write_bytes(data)
 
 
+def build_vise(folder: Path) -> Path:
+    """`vise.stl`: the two jaws of a machine vise holding the mould's stock (`--stock box:+2`:
+    X -82..82, Y -57..57, Z -25..2) by its Y faces, 10 mm below its top: each jaw 180 x 20 x
+    25 mm (X -90..90, Y 57..77 and -77..-57, Z -33..-8), as a closed binary STL."""
+    import stl
+    from stl import mesh
+
+    faces = np.array([(0, 2, 1), (1, 2, 3), (4, 5, 6), (5, 7, 6), (0, 1, 4), (1, 5, 4),
+                      (2, 6, 3), (3, 6, 7), (0, 4, 2), (2, 4, 6), (1, 3, 5), (3, 7, 5)])
+    jaws = []
+    for y0, y1 in ((57.0, 77.0), (-77.0, -57.0)):
+        lo, hi = np.array([-90.0, y0, -33.0]), np.array([90.0, y1, -8.0])
+        corners = np.array([[hi[0] if i & 1 else lo[0], hi[1] if i & 2 else lo[1],
+                             hi[2] if i & 4 else lo[2]] for i in range(8)])
+        jaws.append(corners[faces])
+    vise = mesh.Mesh(np.zeros(24, dtype=mesh.Mesh.dtype))
+    vise.vectors[:] = np.concatenate(jaws)
+    folder.mkdir(parents=True, exist_ok=True)
+    vise.save(str(folder / "vise.stl"), mode=stl.Mode.BINARY)
+    return folder / "vise.stl"
+
+
 def main() -> None:
+    build_vise(HERE / "fixtures")
     comp = build_compressor(HERE / "compressor")
     mould = build_mould(HERE / "mould")
     impeller = build_impeller(HERE / "impeller")
