@@ -80,6 +80,7 @@ def test_facing_passes_leave_the_programmed_plane_and_remove_the_analytic_volume
     assert first == pytest.approx(3.5, abs=1e-5)
     # the first pass engages y in [0, 3] of its 10 mm: its width is 3 (within one ray)
     assert abs(rem.width[0] - 3.0) <= stock.h
+    assert rem.rays[0] == 30 * 400 and rem.rays[2] == 70 * 400     # y in [0, 3], then (3, 10]
 
 
 def test_ball_slot_cross_section_is_the_balls_circle():

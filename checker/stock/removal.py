@@ -28,12 +28,14 @@ class Removal:
     3)` that ray's (x, y) and the z of the middle of its removed stretch (nan where nothing was
     removed), `width (M,)` the body's engaged width across the travel (mm: the extent of the
     rays it removed more than ENGAGE from, one ray's h included; a plunge: the larger of the
-    x and y extents), `refused` cuts left undone for want of interval slots."""
+    x and y extents), `rays (M,)` how many rays the body removed more than ENGAGE from (summed
+    over the move's items), `refused` cuts left undone for want of interval slots."""
 
     volume: np.ndarray
     thickness: np.ndarray
     where: np.ndarray
     width: np.ndarray
+    rays: np.ndarray
     refused: int = 0
 
 
@@ -165,7 +167,7 @@ def remove(stock: Dexels, pieces: ToolPieces, a, b, axis, move, n_moves: int, *,
     a, b, axis, move = _as_items(a, b, axis, move, n_moves)
     M = int(n_moves)
     empty = Removal(np.zeros((M, 3)), np.zeros((M, 3)), np.full((M, 3, 3), np.nan),
-                    np.zeros(M))
+                    np.zeros(M), np.zeros(M, np.int64))
     if len(a) == 0 or len(pieces) == 0:
         return empty
     prof, nprof, rho, kind, ptype, rmax, geo = _prepared(pieces, _reach(stock, a, b))
@@ -179,7 +181,7 @@ def remove(stock: Dexels, pieces: ToolPieces, a, b, axis, move, n_moves: int, *,
     st, refused = sw.sweep(stock.lo, stock.hi, stock.count, stock.x0, stock.y0, stock.h, prof,
                            nprof, rho, kind, ptype, rmax, geo, a, b, axis, float(step),
                            float(engage), win, zlow, start, item)
-    vol, thick, where, width = sw.per_move(st, item, move, M, stock.h)
+    vol, thick, where, width, rays = sw.per_move(st, item, move, M, stock.h)
     n_ref = int(refused.sum())
     stock.overflow += n_ref
-    return Removal(vol, thick, where, width, n_ref)
+    return Removal(vol, thick, where, width, rays, n_ref)

@@ -39,7 +39,8 @@ ST_LEN = 0          # 3: material length removed per kind, summed over rays (mm)
 ST_THICK = 3        # 3: the largest length removed on one ray per kind (mm)
 ST_WHERE = 6        # 9: per kind the (x, y, z-middle) of that ray's removed stretch
 ST_Q = 15           # 4: body engaged rays' extent: q min, q max, q2 min, q2 max (mm)
-NST = 19
+ST_RAYS = 19        # the rays the body is engaged on (removes more than `engage` from)
+NST = 20
 _INVPHI = 0.6180339887498949
 _TOL = 1e-6         # mm: the searches' tolerance
 
@@ -217,6 +218,8 @@ def vertical_interval(ptype, prof, n, rho, rmax, geo, ax, ay, az, vx, vy, vz, px
     if ptype == CYLINDER:
         return max(zlo + geo[0], mbot), min(zhi + geo[1], mtop)
     if ptype == CAPSULE:
+        if zlo + geo[0] - math.sqrt(max(rho * rho - dmin * dmin, 0.0)) >= mtop:
+            return 0.0, -1.0
         c0, _ = capsule_line(ax, ay, az + geo[0], vx, vy, vz, rho, px, py)
         _, c1 = capsule_line(ax, ay, az + geo[1], vx, vy, vz, rho, px, py)
         return max(c0, mbot), min(c1, mtop)
@@ -375,6 +378,7 @@ def _engaged(st, e, px, py, nxq, nyq, plunge):
     st[e, ST_Q + 1] = max(st[e, ST_Q + 1], q)
     st[e, ST_Q + 2] = min(st[e, ST_Q + 2], q2)
     st[e, ST_Q + 3] = max(st[e, ST_Q + 3], q2)
+    st[e, ST_RAYS] += 1.0
 
 
 @nb.njit(cache=True)
@@ -488,15 +492,18 @@ def _run_item(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo
     rz0 = np.empty(3)
     rz1 = np.empty(3)
     refused = 0
+    dirty = True
     for j in range(j0, j1 + 1):
         py = y0 + (j + 0.5) * h
         for i in range(i0, i1 + 1):
             if count[j, i] == 0:
                 continue
             px = x0 + (i + 0.5) * h
-            rlen[:] = 0.0
-            rz0[:] = np.inf
-            rz1[:] = -np.inf
+            if dirty:
+                rlen[:] = 0.0
+                rz0[:] = np.inf
+                rz1[:] = -np.inf
+                dirty = False
             for k in range(nsamp):
                 f = k / (nsamp - 1) if nsamp > 1 else 0.0
                 tx, ty, tz = ax + f * vx, ay + f * vy, az + f * vz
@@ -528,14 +535,16 @@ def _run_item(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo
                         refused += 1
                     elif got > 0.0:
                         kd = kind[p]
+                        dirty = True
                         rlen[kd] += got
                         rz0[kd] = min(rz0[kd], out[0])
                         rz1[kd] = max(rz1[kd], out[1])
-            for kd in range(3):
-                if rlen[kd] > 0.0:
-                    _record(st, e, kd, rlen[kd], rz0[kd], rz1[kd], px, py)
-            if rlen[0] > engage:
-                _engaged(st, e, px, py, nxq, nyq, plunge)
+            if dirty:
+                for kd in range(3):
+                    if rlen[kd] > 0.0:
+                        _record(st, e, kd, rlen[kd], rz0[kd], rz1[kd], px, py)
+                if rlen[0] > engage:
+                    _engaged(st, e, px, py, nxq, nyq, plunge)
     return refused
 
 
@@ -583,7 +592,7 @@ def sweep(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo, a,
 def per_move(st, item, move, n_moves, h):
     """Reduce the tile-item rows to moves: volume (M, 3) mm^3, thickness (M, 3) mm, where
     (M, 3, 3), and the body's engaged width (M,) mm (the largest over the move's items of the
-    engaged rays' extent across the travel, plus one ray's h)."""
+    engaged rays' extent across the travel, plus one ray's h) and engaged ray count (M,)."""
     S = move.shape[0]
     vol = np.zeros((n_moves, 3))
     thick = np.zeros((n_moves, 3))
@@ -606,9 +615,12 @@ def per_move(st, item, move, n_moves, h):
         q[s, 1] = max(q[s, 1], st[e, ST_Q + 1])
         q[s, 2] = min(q[s, 2], st[e, ST_Q + 2])
         q[s, 3] = max(q[s, 3], st[e, ST_Q + 3])
+    rays = np.zeros(n_moves, np.int64)
+    for e in range(item.shape[0]):
+        rays[move[item[e]]] += int(st[e, ST_RAYS])
     width = np.zeros(n_moves)
     for s in range(S):
         if q[s, 1] >= q[s, 0]:
             w = max(q[s, 1] - q[s, 0], q[s, 3] - q[s, 2]) + h
             width[move[s]] = max(width[move[s]], w)
-    return vol, thick, where, width
+    return vol, thick, where, width, rays
