@@ -97,13 +97,14 @@ def amorim(h: float = 0.05) -> None:
         a, b, axis = mv.tip[sel - 1], mv.tip[sel], mv.axis[sel]
         t = time.perf_counter()
         rem = remove(stock, pieces, a, b, axis, np.arange(len(sel)), len(sel), step=0.05)
-        total += time.perf_counter() - t
+        dt = time.perf_counter() - t
+        total += dt
         n_items += len(sel)
         removed += float(rem.volume.sum())
         engaged += int(rem.rays.sum())
         print(f"  op {o} {tp.operations[int(o)].name}: {len(sel)} moves, cutter {cutter.kind} "
               f"d={cutter.d:g}, removed {rem.volume.sum():,.0f} mm^3, "
-              f"air moves {int(np.sum(rem.volume.sum(axis=1) <= 0.0))}")
+              f"air moves {int(np.sum(rem.volume.sum(axis=1) <= 0.0))}, {dt:.2f} s")
     _report("amorim Interface-glue", n_items, total, stock, engaged, removed)
 
 
