@@ -61,9 +61,10 @@ def raster(n_moves: int = 100_000) -> None:
     axis = np.tile(Z, (len(a), 1))
     ball = Cutter("ball", d=6.0, r=3.0, R=0.0, flute_length=20.0)
     pieces = tool_pieces(ball, with_holder=False)
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     rem = remove(stock, pieces, a, b, axis, np.arange(len(a)), len(a), step=0.1)
     dt = time.perf_counter() - t
+    print(f"  cpu {time.process_time() - c:.2f} s over all threads")
     _report("raster", len(a), dt, stock, int(rem.rays.sum()), float(rem.volume.sum()))
 
 
@@ -95,16 +96,18 @@ def amorim(h: float = 0.05) -> None:
         cutter = tp.operations[int(o)].cutter
         pieces = tool_pieces(cutter, with_holder=True)
         a, b, axis = mv.tip[sel - 1], mv.tip[sel], mv.axis[sel]
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         rem = remove(stock, pieces, a, b, axis, np.arange(len(sel)), len(sel), step=0.05)
         dt = time.perf_counter() - t
+        cpu = time.process_time() - c
         total += dt
         n_items += len(sel)
         removed += float(rem.volume.sum())
         engaged += int(rem.rays.sum())
         print(f"  op {o} {tp.operations[int(o)].name}: {len(sel)} moves, cutter {cutter.kind} "
               f"d={cutter.d:g}, removed {rem.volume.sum():,.0f} mm^3, "
-              f"air moves {int(np.sum(rem.volume.sum(axis=1) <= 0.0))}, {dt:.2f} s")
+              f"air moves {int(np.sum(rem.volume.sum(axis=1) <= 0.0))}, "
+              f"engaged rays {int(rem.rays.sum()):,}, {dt:.2f} s (cpu {cpu:.2f} s)")
     _report("amorim Interface-glue", n_items, total, stock, engaged, removed)
 
 

@@ -188,13 +188,19 @@ def capsule_line(cx, cy, cz, vx, vy, vz, rho, px, py):
     return lo, hi
 
 
-@nb.njit(cache=True)
-def vertical_interval(ptype, prof, n, rho, rmax, geo, ax, ay, az, vx, vy, vz, px, py,
-                      mbot, mtop):
+@nb.njit(cache=True, inline="always")
+def vertical_interval(q, ptypes, profs, nprofs, rhos, rmaxs, geos, ax, ay, az, vx, vy, vz,
+                      px, py, mbot, mtop):
     """(c0, c1) of the ray (px, py) inside the piece swept vertically from tip a by v, clipped
     to what matters against material in [mbot, mtop]; c0 >= c1 when the sweep misses the
-    material. `geo` the piece's (h_bottom, h_top) for a cylinder, sphere centres' (h0, h1)
-    for a capsule."""
+    material. Piece q of the arrays; `geo` its (h_bottom, h_top) for a cylinder, its sphere
+    centres' (h0, h1) for a capsule. (Scalars are read here rather than array views passed:
+    a view per ray costs reference counting in the hot loop.)"""
+    ptype = ptypes[q]
+    rho = rhos[q]
+    rmax = rmaxs[q]
+    g0 = geos[q, 0]
+    g1 = geos[q, 1]
     wx, wy = ax - px, ay - py
     qa = vx * vx + vy * vy
     if vz == 0.0:                               # level: the nearest point of the travel
@@ -206,11 +212,11 @@ def vertical_interval(ptype, prof, n, rho, rmax, geo, ax, ay, az, vx, vy, vz, px
         if d2 > rmax * rmax:
             return 0.0, -1.0
         if ptype == CYLINDER:
-            return max(az + geo[0], mbot), min(az + geo[1], mtop)
+            return max(az + g0, mbot), min(az + g1, mtop)
         if ptype == CAPSULE:
             w = math.sqrt(max(rho * rho - d2, 0.0))
-            return max(az + geo[0] - w, mbot), min(az + geo[1] + w, mtop)
-        hl, hh = prof_span(prof, n, rho, math.sqrt(d2))
+            return max(az + g0 - w, mbot), min(az + g1 + w, mtop)
+        hl, hh = prof_span(profs[q], nprofs[q], rho, math.sqrt(d2))
         return max(az + hl, mbot), min(az + hh, mtop)
     t0, t1 = 0.0, 1.0
     ts = 0.0
@@ -234,15 +240,17 @@ def vertical_interval(ptype, prof, n, rho, rmax, geo, ax, ay, az, vx, vy, vz, px
     z0, z1 = az + t0 * vz, az + t1 * vz
     zlo, zhi = min(z0, z1), max(z0, z1)
     if ptype == CYLINDER:
-        return max(zlo + geo[0], mbot), min(zhi + geo[1], mtop)
+        return max(zlo + g0, mbot), min(zhi + g1, mtop)
     if ptype == CAPSULE:
-        if zlo + geo[0] - math.sqrt(max(rho * rho - dmin * dmin, 0.0)) >= mtop:
+        if zlo + g0 - math.sqrt(max(rho * rho - dmin * dmin, 0.0)) >= mtop:
             return 0.0, -1.0
-        c0, _ = capsule_line(ax, ay, az + geo[0], vx, vy, vz, rho, px, py)
-        if zlo + geo[1] >= mtop:                # the top sphere's centre is above: c1 too
+        c0, _ = capsule_line(ax, ay, az + g0, vx, vy, vz, rho, px, py)
+        if zlo + g1 >= mtop:                # the top sphere's centre is above: c1 too
             return max(c0, mbot), mtop
-        _, c1 = capsule_line(ax, ay, az + geo[1], vx, vy, vz, rho, px, py)
+        _, c1 = capsule_line(ax, ay, az + g1, vx, vy, vz, rho, px, py)
         return max(c0, mbot), min(c1, mtop)
+    prof = profs[q]
+    n = nprofs[q]
     hl, hh = prof_span(prof, n, rho, dmin)
     if zlo + hl >= mtop or zhi + hh <= mbot:
         return 0.0, -1.0
@@ -332,7 +340,7 @@ def posed_interval(prof, n, rho, tx, ty, tz, ux, uy, uz, px, py, s0, s1):
     return c0, c1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def subtract(lo, hi, count, j, i, c0, c1, out, nlo, nhi):
     """Remove [c0, c1] from ray (j, i). Returns the length removed (mm) and writes the lowest
     and highest removed z to out[0], out[1]; -1.0 when the cut would need more intervals than
@@ -421,7 +429,7 @@ def row_span(ax, ay, vx, vy, r, y):
     return xl - 1e-9, xr + 1e-9
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _record(st, e, kind, length, zr0, zr1, px, py):
     st[e, ST_LEN + kind] += length
     if length > st[e, ST_THICK + kind]:
@@ -431,7 +439,7 @@ def _record(st, e, kind, length, zr0, zr1, px, py):
         st[e, ST_WHERE + 3 * kind + 2] = 0.5 * (zr0 + zr1)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _engaged(st, e, px, py, nxq, nyq, plunge):
     if plunge:
         q, q2 = px, py
@@ -627,9 +635,9 @@ def _run_item(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo
                             mbot = float(lo[j, i, 0])
                             mtop = float(hi[j, i, c - 1])
                             if vertical:
-                                c0, c1 = vertical_interval(ptype[p], prof[p], nprof[p], rho[p],
-                                                           rmax[p], geo[p], ax, ay, az, vx, vy,
-                                                           vz, px, py, mbot, mtop)
+                                c0, c1 = vertical_interval(p, ptype, prof, nprof, rho, rmax,
+                                                           geo, ax, ay, az, vx, vy, vz, px, py,
+                                                           mbot, mtop)
                             else:
                                 bx = boxes[p]
                                 if (px < tx + bx[0] or px > tx + bx[1] or py < ty + bx[2]
