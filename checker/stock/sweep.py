@@ -34,6 +34,7 @@ import numpy as np
 
 TILE = 64                       # rays per tile side
 BLOCK = 8                       # rays per side of a block skipped whole when out of reach
+VERTICAL = 1e-9                 # an axis whose x and y are within this of 0 (and z > 0) is +z
 GENERIC, CYLINDER, CAPSULE = 0, 1, 2
 ENGAGE_COLS = 3
 # statistics columns of one tile-item row
@@ -565,7 +566,7 @@ def _run_item(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo
     ny, nx = count.shape
     ax, ay, az = a[0], a[1], a[2]
     vx, vy, vz = b[0] - ax, b[1] - ay, b[2] - az
-    vertical = u[2] >= 1.0 - 1e-9
+    vertical = u[2] > 0.0 and abs(u[0]) <= VERTICAL and abs(u[1]) <= VERTICAL
     hv = math.sqrt(vx * vx + vy * vy)
     plunge = hv <= 1e-9
     nxq, nyq = 0.0, 0.0
