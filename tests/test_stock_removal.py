@@ -80,6 +80,7 @@ def test_facing_passes_leave_the_programmed_plane_and_remove_the_analytic_volume
     assert first == pytest.approx(3.5, abs=1e-5)
     # the first pass engages y in [0, 3] of its 10 mm: its width is 3 (within one ray)
     assert abs(rem.width[0] - 3.0) <= stock.h
+    assert rem.rays[0] == 30 * 400 and rem.rays[2] == 70 * 400     # y in [0, 3], then (3, 10]
 
 
 def test_ball_slot_cross_section_is_the_balls_circle():
@@ -297,3 +298,21 @@ def test_tilted_constant_axis_within_half_a_step_of_point_membership():
     vol_oracle = hit.sum() * dz * h * h
     assert rem.volume[0, 0] <= vol_oracle + 2 * dz * h * h * len(px)
     assert rem.volume[0, 0] >= 0.95 * vol_oracle
+
+
+def test_items_cut_in_chunks_give_the_same_stock_and_statistics(monkeypatch):
+    import checker.stock.removal as removal
+    ball = Cutter("ball", d=4.0, r=2.0, R=0.0, flute_length=20.0)
+    path = [[-3, 2, 9.0], [20, 2, 8.0], [20, 5, 8.5], [-3, 5, 7.0], [-3, 8, 7.0], [20, 8, 9.5]]
+    moves = [0, 0, 1, 1, 2]                            # moves of several items
+    one = Dexels.box([0, 0, 0], [17, 10, 10], 0.1)
+    r1 = _cut(one, ball, path, moves=moves)
+    monkeypatch.setattr(removal, "CHUNK", 2)
+    two = Dexels.box([0, 0, 0], [17, 10, 10], 0.1)
+    r2 = _cut(two, ball, path, moves=moves)
+    assert np.array_equal(one.top(), two.top(), equal_nan=True)
+    assert np.allclose(r1.volume, r2.volume, rtol=1e-12)
+    assert np.array_equal(r1.thickness, r2.thickness)
+    assert np.array_equal(r1.where, r2.where, equal_nan=True)
+    assert np.array_equal(r1.width, r2.width) and np.array_equal(r1.rays, r2.rays)
+    assert r1.volume.sum() == pytest.approx(17 * 10 * 10 - one.volume())

@@ -18,6 +18,7 @@ from checker.stock import sweep as sw
 from checker.stock.dexels import Dexels
 
 ENGAGE = 1e-3        # mm: a ray the body removes more than this from counts as engaged
+CHUNK = 100_000      # items cut per kernel call
 _NICE = (0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0)
 
 
@@ -28,12 +29,14 @@ class Removal:
     3)` that ray's (x, y) and the z of the middle of its removed stretch (nan where nothing was
     removed), `width (M,)` the body's engaged width across the travel (mm: the extent of the
     rays it removed more than ENGAGE from, one ray's h included; a plunge: the larger of the
-    x and y extents), `refused` cuts left undone for want of interval slots."""
+    x and y extents), `rays (M,)` how many rays the body removed more than ENGAGE from (summed
+    over the move's items), `refused` cuts left undone for want of interval slots."""
 
     volume: np.ndarray
     thickness: np.ndarray
     where: np.ndarray
     width: np.ndarray
+    rays: np.ndarray
     refused: int = 0
 
 
@@ -162,24 +165,42 @@ def remove(stock: Dexels, pieces: ToolPieces, a, b, axis, move, n_moves: int, *,
     removed per move; `stock.overflow` grows by the cuts refused for want of slots."""
     if not step > 0.0:
         raise ValueError(f"step must be > 0 mm, found {step}")
+    if not (stock.lo.dtype == np.float32 and stock.hi.dtype == np.float32
+            and stock.count.dtype == np.uint8 and stock.lo.flags.c_contiguous
+            and stock.hi.flags.c_contiguous and stock.count.flags.c_contiguous):
+        raise ValueError("the stock's lo, hi must be C-contiguous float32 and count uint8")
     a, b, axis, move = _as_items(a, b, axis, move, n_moves)
     M = int(n_moves)
     empty = Removal(np.zeros((M, 3)), np.zeros((M, 3)), np.full((M, 3, 3), np.nan),
-                    np.zeros(M))
+                    np.zeros(M), np.zeros(M, np.int64))
     if len(a) == 0 or len(pieces) == 0:
         return empty
     prof, nprof, rho, kind, ptype, rmax, geo = _prepared(pieces, _reach(stock, a, b))
     if len(prof) == 0:
         return empty
-    win, zlow = sw.item_windows(prof, nprof, rho, a, b, axis, stock.x0, stock.y0, stock.h,
-                                stock.nx, stock.ny)
+    out = empty
+    n_ref = 0
     ntx = (stock.nx + sw.TILE - 1) // sw.TILE
     nty = (stock.ny + sw.TILE - 1) // sw.TILE
-    start, item = sw.bin_items(win, ntx, nty)
-    st, refused = sw.sweep(stock.lo, stock.hi, stock.count, stock.x0, stock.y0, stock.h, prof,
-                           nprof, rho, kind, ptype, rmax, geo, a, b, axis, float(step),
-                           float(engage), win, zlow, start, item)
-    vol, thick, where, width = sw.per_move(st, item, move, M, stock.h)
-    n_ref = int(refused.sum())
+    for c in range(0, len(a), CHUNK):          # in order; bounds the statistics' memory
+        ca, cb, cx = a[c:c + CHUNK], b[c:c + CHUNK], axis[c:c + CHUNK]
+        win, zlow = sw.item_windows(prof, nprof, rho, ca, cb, cx, stock.x0, stock.y0,
+                                    stock.h, stock.nx, stock.ny)
+        start, item = sw.bin_items(win, ntx, nty)
+        st, refused = sw.sweep(stock.lo, stock.hi, stock.count, stock.x0, stock.y0, stock.h,
+                               prof, nprof, rho, kind, ptype, rmax, geo, ca, cb, cx,
+                               float(step), float(engage), win, zlow, start, item)
+        part = Removal(*sw.per_move(st, item, move[c:c + CHUNK], M, stock.h))
+        out = part if c == 0 else _merged(out, part)
+        n_ref += int(refused.sum())
     stock.overflow += n_ref
-    return Removal(vol, thick, where, width, n_ref)
+    out.refused = n_ref
+    return out
+
+
+def _merged(x: Removal, y: Removal) -> Removal:
+    """The statistics of two runs of items over the same moves, one after the other."""
+    deeper = y.thickness > x.thickness
+    return Removal(x.volume + y.volume, np.maximum(x.thickness, y.thickness),
+                   np.where(deeper[:, :, None], y.where, x.where),
+                   np.maximum(x.width, y.width), x.rays + y.rays)

@@ -27,11 +27,14 @@ of statistics (`ST_*` columns), reduced per move after."""
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
 
 TILE = 64                       # rays per tile side
+BLOCK = 8                       # rays per side of a block skipped whole when out of reach
+VERTICAL = 1e-9                 # an axis whose x and y are within this of 0 (and z > 0) is +z
 GENERIC, CYLINDER, CAPSULE = 0, 1, 2
 ENGAGE_COLS = 3
 # statistics columns of one tile-item row
@@ -39,9 +42,11 @@ ST_LEN = 0          # 3: material length removed per kind, summed over rays (mm)
 ST_THICK = 3        # 3: the largest length removed on one ray per kind (mm)
 ST_WHERE = 6        # 9: per kind the (x, y, z-middle) of that ray's removed stretch
 ST_Q = 15           # 4: body engaged rays' extent: q min, q max, q2 min, q2 max (mm)
-NST = 19
+ST_RAYS = 19        # the rays the body is engaged on (removes more than `engage` from)
+NST = 20
 _INVPHI = 0.6180339887498949
 _TOL = 1e-6         # mm: the searches' tolerance
+_F32 = 2.0 ** -23   # float32's relative spacing: a stored end is within this of the value cut
 
 
 @nb.njit(cache=True)
@@ -184,15 +189,36 @@ def capsule_line(cx, cy, cz, vx, vy, vz, rho, px, py):
     return lo, hi
 
 
-@nb.njit(cache=True)
-def vertical_interval(ptype, prof, n, rho, rmax, geo, ax, ay, az, vx, vy, vz, px, py,
-                      mbot, mtop):
+@nb.njit(cache=True, inline="always")
+def vertical_interval(q, ptypes, profs, nprofs, rhos, rmaxs, geos, ax, ay, az, vx, vy, vz,
+                      px, py, mbot, mtop):
     """(c0, c1) of the ray (px, py) inside the piece swept vertically from tip a by v, clipped
     to what matters against material in [mbot, mtop]; c0 >= c1 when the sweep misses the
-    material. `geo` the piece's (h_bottom, h_top) for a cylinder, sphere centres' (h0, h1)
-    for a capsule."""
+    material. Piece q of the arrays; `geo` its (h_bottom, h_top) for a cylinder, its sphere
+    centres' (h0, h1) for a capsule. (Scalars are read here rather than array views passed:
+    a view per ray costs reference counting in the hot loop.)"""
+    ptype = ptypes[q]
+    rho = rhos[q]
+    rmax = rmaxs[q]
+    g0 = geos[q, 0]
+    g1 = geos[q, 1]
     wx, wy = ax - px, ay - py
     qa = vx * vx + vy * vy
+    if vz == 0.0:                               # level: the nearest point of the travel
+        ts = 0.0
+        if qa > 0.0:
+            ts = min(max(-(wx * vx + wy * vy) / qa, 0.0), 1.0)
+        dx, dy = wx + ts * vx, wy + ts * vy
+        d2 = dx * dx + dy * dy
+        if d2 > rmax * rmax:
+            return 0.0, -1.0
+        if ptype == CYLINDER:
+            return max(az + g0, mbot), min(az + g1, mtop)
+        if ptype == CAPSULE:
+            w = math.sqrt(max(rho * rho - d2, 0.0))
+            return max(az + g0 - w, mbot), min(az + g1 + w, mtop)
+        hl, hh = prof_span(profs[q], nprofs[q], rho, math.sqrt(d2))
+        return max(az + hl, mbot), min(az + hh, mtop)
     t0, t1 = 0.0, 1.0
     ts = 0.0
     if qa < 1e-24:
@@ -215,16 +241,20 @@ def vertical_interval(ptype, prof, n, rho, rmax, geo, ax, ay, az, vx, vy, vz, px
     z0, z1 = az + t0 * vz, az + t1 * vz
     zlo, zhi = min(z0, z1), max(z0, z1)
     if ptype == CYLINDER:
-        return max(zlo + geo[0], mbot), min(zhi + geo[1], mtop)
+        return max(zlo + g0, mbot), min(zhi + g1, mtop)
     if ptype == CAPSULE:
-        c0, _ = capsule_line(ax, ay, az + geo[0], vx, vy, vz, rho, px, py)
-        _, c1 = capsule_line(ax, ay, az + geo[1], vx, vy, vz, rho, px, py)
+        if zlo + g0 - math.sqrt(max(rho * rho - dmin * dmin, 0.0)) >= mtop:
+            return 0.0, -1.0
+        c0, _ = capsule_line(ax, ay, az + g0, vx, vy, vz, rho, px, py)
+        if zlo + g1 >= mtop:                # the top sphere's centre is above: c1 too
+            return max(c0, mbot), mtop
+        _, c1 = capsule_line(ax, ay, az + g1, vx, vy, vz, rho, px, py)
         return max(c0, mbot), min(c1, mtop)
+    prof = profs[q]
+    n = nprofs[q]
     hl, hh = prof_span(prof, n, rho, dmin)
     if zlo + hl >= mtop or zhi + hh <= mbot:
         return 0.0, -1.0
-    if vz == 0.0:
-        return max(az + hl, mbot), min(az + hh, mtop)
     zs = az + ts * vz
     c0 = _golden_swept(t0, t1, 1.0, mbot, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax)
     c1 = zs + hh
@@ -311,16 +341,36 @@ def posed_interval(prof, n, rho, tx, ty, tz, ux, uy, uz, px, py, s0, s1):
     return c0, c1
 
 
-@nb.njit(cache=True)
-def subtract(lo, hi, count, j, i, c0, c1, out):
+@nb.njit(cache=True, inline="always")
+def subtract(lo, hi, count, j, i, c0, c1, out, nlo, nhi):
     """Remove [c0, c1] from ray (j, i). Returns the length removed (mm) and writes the lowest
     and highest removed z to out[0], out[1]; -1.0 when the cut would need more intervals than
-    the ray's capacity (the ray is then left as it was)."""
+    the ray's capacity (the ray is then left as it was). `nlo, nhi` scratch (>= 2 capacity)."""
     c = count[j, i]
     cap = lo.shape[2]
-    nlo = np.empty(2 * cap + 1, np.float32)
-    nhi = np.empty(2 * cap + 1, np.float32)
     f0, f1 = np.float32(c0), np.float32(c1)
+    if c == 1:                                  # one interval: the common case, in place
+        l, u = lo[j, i, 0], hi[j, i, 0]
+        if u <= f0 or l >= f1:
+            return 0.0
+        a = max(float(l), c0)
+        b = min(float(u), c1)
+        out[0] = a
+        out[1] = b
+        if l < f0 and u > f1:
+            if cap < 2:
+                return -1.0
+            lo[j, i, 1] = f1
+            hi[j, i, 1] = u
+            hi[j, i, 0] = f0
+            count[j, i] = 2
+        elif l < f0:
+            hi[j, i, 0] = f0
+        elif u > f1:
+            lo[j, i, 0] = f1
+        else:
+            count[j, i] = 0
+        return b - a
     m = 0
     removed = 0.0
     zr0 = np.inf
@@ -356,6 +406,31 @@ def subtract(lo, hi, count, j, i, c0, c1, out):
 
 
 @nb.njit(cache=True)
+def row_span(ax, ay, vx, vy, r, y):
+    """(xmin, xmax) of the line at y inside the 2-D capsule of radius r about the segment from
+    (ax, ay) by (vx, vy); xmin > xmax when it misses."""
+    xl = np.inf
+    xr = -np.inf
+    for k in range(2):
+        dy = y - (ay + k * vy)
+        if abs(dy) <= r:
+            w = math.sqrt(r * r - dy * dy)
+            cx = ax + k * vx
+            xl = min(xl, cx - w)
+            xr = max(xr, cx + w)
+    ln = math.sqrt(vx * vx + vy * vy)
+    if ln > 0.0 and abs(vy) > 1e-15:
+        nx, ny = -vy / ln * r, vx / ln * r
+        for sg in (-1.0, 1.0):
+            t = (y - ay - sg * ny) / vy
+            if 0.0 <= t <= 1.0:
+                x = ax + sg * nx + t * vx
+                xl = min(xl, x)
+                xr = max(xr, x)
+    return xl - 1e-9, xr + 1e-9
+
+
+@nb.njit(cache=True, inline="always")
 def _record(st, e, kind, length, zr0, zr1, px, py):
     st[e, ST_LEN + kind] += length
     if length > st[e, ST_THICK + kind]:
@@ -365,7 +440,7 @@ def _record(st, e, kind, length, zr0, zr1, px, py):
         st[e, ST_WHERE + 3 * kind + 2] = 0.5 * (zr0 + zr1)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _engaged(st, e, px, py, nxq, nyq, plunge):
     if plunge:
         q, q2 = px, py
@@ -375,6 +450,7 @@ def _engaged(st, e, px, py, nxq, nyq, plunge):
     st[e, ST_Q + 1] = max(st[e, ST_Q + 1], q)
     st[e, ST_Q + 2] = min(st[e, ST_Q + 2], q2)
     st[e, ST_Q + 3] = max(st[e, ST_Q + 3], q2)
+    st[e, ST_RAYS] += 1.0
 
 
 @nb.njit(cache=True)
@@ -453,7 +529,24 @@ def bin_items(win, ntx, nty):
 
 
 @nb.njit(cache=True)
-def _tile_top(lo, hi, count, i0, i1, j0, j1):
+def _low_at(prof, nprof, rho, ptype, rmax, geo, d):
+    """The lowest h of any piece at radial distance d (inf when none reaches d)."""
+    best = np.inf
+    for p in range(prof.shape[0]):
+        if d > rmax[p]:
+            continue
+        if ptype[p] == CYLINDER:
+            v = geo[p, 0]
+        elif ptype[p] == CAPSULE:
+            v = geo[p, 0] - math.sqrt(max(rho[p] * rho[p] - d * d, 0.0))
+        else:
+            v, _ = prof_span(prof[p], nprof[p], rho[p], d)
+        best = min(best, v)
+    return best
+
+
+@nb.njit(cache=True)
+def _block_top(lo, hi, count, i0, i1, j0, j1):
     z = -np.inf
     for j in range(j0, j1 + 1):
         for i in range(i0, i1 + 1):
@@ -465,12 +558,15 @@ def _tile_top(lo, hi, count, i0, i1, j0, j1):
 
 @nb.njit(cache=True)
 def _run_item(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo, a, b, u,
-              step, engage, i0, i1, j0, j1, st, e):
-    """Cut rays [i0, i1] x [j0, j1] by one item; statistics to row e. Returns refused cuts."""
+              step, engage, zlow, i0, i1, j0, j1, st, e, btop, bi0, bj0, sc):
+    """Cut rays [i0, i1] x [j0, j1] by one item; statistics to row e. Blocks of BLOCK x BLOCK
+    rays whose highest material `btop` (block (bj0, bi0) at btop[0, 0]) lies below the
+    item's lowest reach over them are skipped. Returns refused cuts."""
     P = prof.shape[0]
+    ny, nx = count.shape
     ax, ay, az = a[0], a[1], a[2]
     vx, vy, vz = b[0] - ax, b[1] - ay, b[2] - az
-    vertical = u[2] >= 1.0 - 1e-9
+    vertical = u[2] > 0.0 and abs(u[0]) <= VERTICAL and abs(u[1]) <= VERTICAL
     hv = math.sqrt(vx * vx + vy * vy)
     plunge = hv <= 1e-9
     nxq, nyq = 0.0, 0.0
@@ -480,63 +576,113 @@ def _run_item(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo
     nsamp = 1
     if not vertical:
         nsamp = max(int(math.ceil(length3 / step)) + 1, 2) if length3 > 0.0 else 1
-    boxes = np.empty((P, 6))
+    boxes = sc.boxes
     for p in range(P):
         piece_box(prof[p], nprof[p], rho[p], u[0], u[1], u[2], boxes[p])
-    out = np.empty(2)
-    rlen = np.empty(3)
-    rz0 = np.empty(3)
-    rz1 = np.empty(3)
+    out, nlo, nhi = sc.out, sc.nlo, sc.nhi
+    rlen, rz0, rz1 = sc.rlen, sc.rz0, sc.rz1
+    rmx = 0.0
+    for p in range(P):
+        rmx = max(rmx, rmax[p])
+    zmin = min(az, az + vz)
+    half = (BLOCK - 1) * h / math.sqrt(2.0)
     refused = 0
-    for j in range(j0, j1 + 1):
-        py = y0 + (j + 0.5) * h
-        for i in range(i0, i1 + 1):
-            if count[j, i] == 0:
+    dirty = True
+    for bj in range(j0 // BLOCK, j1 // BLOCK + 1):
+        for bi in range(i0 // BLOCK, i1 // BLOCK + 1):
+            top = btop[bj - bj0, bi - bi0]
+            if top == -np.inf:
                 continue
-            px = x0 + (i + 0.5) * h
-            rlen[:] = 0.0
-            rz0[:] = np.inf
-            rz1[:] = -np.inf
-            for k in range(nsamp):
-                f = k / (nsamp - 1) if nsamp > 1 else 0.0
-                tx, ty, tz = ax + f * vx, ay + f * vy, az + f * vz
-                for p in range(P):
-                    c = count[j, i]
-                    if c == 0:
-                        break
-                    mbot = float(lo[j, i, 0])
-                    mtop = float(hi[j, i, c - 1])
-                    if vertical:
-                        c0, c1 = vertical_interval(ptype[p], prof[p], nprof[p], rho[p],
-                                                   rmax[p], geo[p], ax, ay, az, vx, vy, vz,
-                                                   px, py, mbot, mtop)
-                    else:
-                        bx = boxes[p]
-                        if (px < tx + bx[0] or px > tx + bx[1] or py < ty + bx[2]
-                                or py > ty + bx[3]):
-                            continue
-                        s0 = max(tz + bx[4], mbot)
-                        s1 = min(tz + bx[5], mtop)
-                        if s0 >= s1:
-                            continue
-                        c0, c1 = posed_interval(prof[p], nprof[p], rho[p], tx, ty, tz,
-                                                u[0], u[1], u[2], px, py, s0, s1)
-                    if c0 >= c1:
+            if vertical:
+                cx = x0 + (bi * BLOCK + 0.5 * BLOCK) * h
+                cy = y0 + (bj * BLOCK + 0.5 * BLOCK) * h
+                wx, wy = ax - cx, ay - cy
+                qa = vx * vx + vy * vy
+                ts = 0.0
+                if qa > 0.0:
+                    ts = min(max(-(wx * vx + wy * vy) / qa, 0.0), 1.0)
+                dseg = math.sqrt((wx + ts * vx) ** 2 + (wy + ts * vy) ** 2)
+                lb = zmin + _low_at(prof, nprof, rho, ptype, rmax, geo, max(dseg - half, 0.0))
+            else:
+                lb = zlow
+            if lb >= top - _F32 * max(abs(top), 1.0):    # top is a rounded float32
+                continue
+            touched = False
+            ja, jb = max(j0, bj * BLOCK), min(j1, bj * BLOCK + BLOCK - 1)
+            ka, kb = max(i0, bi * BLOCK), min(i1, bi * BLOCK + BLOCK - 1)
+            for j in range(ja, jb + 1):
+                py = y0 + (j + 0.5) * h
+                ia, ib = ka, kb
+                if vertical:
+                    xl, xr = row_span(ax, ay, vx, vy, rmx, py)
+                    ia = max(ka, int(math.ceil((xl - x0) / h - 0.5)))
+                    ib = min(kb, int(math.floor((xr - x0) / h - 0.5)))
+                for i in range(ia, ib + 1):
+                    if count[j, i] == 0:
                         continue
-                    got = subtract(lo, hi, count, j, i, c0, c1, out)
-                    if got < 0.0:
-                        refused += 1
-                    elif got > 0.0:
-                        kd = kind[p]
-                        rlen[kd] += got
-                        rz0[kd] = min(rz0[kd], out[0])
-                        rz1[kd] = max(rz1[kd], out[1])
-            for kd in range(3):
-                if rlen[kd] > 0.0:
-                    _record(st, e, kd, rlen[kd], rz0[kd], rz1[kd], px, py)
-            if rlen[0] > engage:
-                _engaged(st, e, px, py, nxq, nyq, plunge)
+                    px = x0 + (i + 0.5) * h
+                    if dirty:
+                        rlen[:] = 0.0
+                        rz0[:] = np.inf
+                        rz1[:] = -np.inf
+                        dirty = False
+                    for k in range(nsamp):
+                        f = k / (nsamp - 1) if nsamp > 1 else 0.0
+                        tx, ty, tz = ax + f * vx, ay + f * vy, az + f * vz
+                        for p in range(P):
+                            c = count[j, i]
+                            if c == 0:
+                                break
+                            mbot = float(lo[j, i, 0])
+                            mtop = float(hi[j, i, c - 1])
+                            if vertical:
+                                c0, c1 = vertical_interval(p, ptype, prof, nprof, rho, rmax,
+                                                           geo, ax, ay, az, vx, vy, vz, px, py,
+                                                           mbot, mtop)
+                            else:
+                                bx = boxes[p]
+                                if (px < tx + bx[0] or px > tx + bx[1] or py < ty + bx[2]
+                                        or py > ty + bx[3]):
+                                    continue
+                                s0 = max(tz + bx[4], mbot)
+                                s1 = min(tz + bx[5], mtop)
+                                if s0 >= s1:
+                                    continue
+                                c0, c1 = posed_interval(prof[p], nprof[p], rho[p], tx, ty, tz,
+                                                        u[0], u[1], u[2], px, py, s0, s1)
+                            if c0 >= c1:
+                                continue
+                            got = subtract(lo, hi, count, j, i, c0, c1, out, nlo, nhi)
+                            if got < 0.0:
+                                refused += 1
+                            elif got > 0.0:
+                                kd = kind[p]
+                                dirty = True
+                                touched = True
+                                rlen[kd] += got
+                                rz0[kd] = min(rz0[kd], out[0])
+                                rz1[kd] = max(rz1[kd], out[1])
+                    if dirty:
+                        for kd in range(3):
+                            if rlen[kd] > 0.0:
+                                _record(st, e, kd, rlen[kd], rz0[kd], rz1[kd], px, py)
+                        if rlen[0] > engage:
+                            _engaged(st, e, px, py, nxq, nyq, plunge)
+            if touched:
+                btop[bj - bj0, bi - bi0] = _block_top(
+                    lo, hi, count, bi * BLOCK, min(bi * BLOCK + BLOCK, nx) - 1, bj * BLOCK,
+                    min(bj * BLOCK + BLOCK, ny) - 1)
     return refused
+
+
+class _Scratch(NamedTuple):
+    boxes: np.ndarray
+    out: np.ndarray
+    nlo: np.ndarray
+    nhi: np.ndarray
+    rlen: np.ndarray
+    rz0: np.ndarray
+    rz1: np.ndarray
 
 
 @nb.njit(cache=True, parallel=True)
@@ -548,6 +694,9 @@ def sweep(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo, a,
     ny, nx = count.shape
     ntx = (nx + TILE - 1) // TILE
     nt = start.shape[0] - 1
+    P = prof.shape[0]
+    cap = lo.shape[2]
+    nb_ = TILE // BLOCK
     st = np.zeros((item.shape[0], NST))
     for e in range(item.shape[0]):
         st[e, ST_Q] = np.inf
@@ -562,7 +711,19 @@ def sweep(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo, a,
         tj0 = (t // ntx) * TILE
         ti1 = min(ti0 + TILE, nx) - 1
         tj1 = min(tj0 + TILE, ny) - 1
-        top = _tile_top(lo, hi, count, ti0, ti1, tj0, tj1)
+        btop = np.full((nb_, nb_), -np.inf)
+        for lj in range(nb_):
+            for li in range(nb_):
+                bi, bj = ti0 + li * BLOCK, tj0 + lj * BLOCK
+                if bi <= ti1 and bj <= tj1:
+                    btop[lj, li] = _block_top(lo, hi, count, bi, min(bi + BLOCK - 1, ti1), bj,
+                                              min(bj + BLOCK - 1, tj1))
+        top = -np.inf
+        for lj in range(nb_):
+            for li in range(nb_):
+                top = max(top, btop[lj, li])
+        sc = _Scratch(np.empty((P, 6)), np.empty(2), np.empty(2 * cap + 1, np.float32),
+                      np.empty(2 * cap + 1, np.float32), np.empty(3), np.empty(3), np.empty(3))
         for e in range(start[t], start[t + 1]):
             s = item[e]
             if zlow[s] >= top:
@@ -574,8 +735,8 @@ def sweep(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo, a,
             if i0 > i1 or j0 > j1:
                 continue
             refused[t] += _run_item(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype,
-                                    rmax, geo, a[s], b[s], axis[s], step, engage, i0, i1, j0,
-                                    j1, st, e)
+                                    rmax, geo, a[s], b[s], axis[s], step, engage, zlow[s], i0,
+                                    i1, j0, j1, st, e, btop, ti0 // BLOCK, tj0 // BLOCK, sc)
     return st, refused
 
 
@@ -583,7 +744,7 @@ def sweep(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo, a,
 def per_move(st, item, move, n_moves, h):
     """Reduce the tile-item rows to moves: volume (M, 3) mm^3, thickness (M, 3) mm, where
     (M, 3, 3), and the body's engaged width (M,) mm (the largest over the move's items of the
-    engaged rays' extent across the travel, plus one ray's h)."""
+    engaged rays' extent across the travel, plus one ray's h) and engaged ray count (M,)."""
     S = move.shape[0]
     vol = np.zeros((n_moves, 3))
     thick = np.zeros((n_moves, 3))
@@ -606,9 +767,12 @@ def per_move(st, item, move, n_moves, h):
         q[s, 1] = max(q[s, 1], st[e, ST_Q + 1])
         q[s, 2] = min(q[s, 2], st[e, ST_Q + 2])
         q[s, 3] = max(q[s, 3], st[e, ST_Q + 3])
+    rays = np.zeros(n_moves, np.int64)
+    for e in range(item.shape[0]):
+        rays[move[item[e]]] += int(st[e, ST_RAYS])
     width = np.zeros(n_moves)
     for s in range(S):
         if q[s, 1] >= q[s, 0]:
             w = max(q[s, 1] - q[s, 0], q[s, 3] - q[s, 2]) + h
             width[move[s]] = max(width[move[s]], w)
-    return vol, thick, where, width
+    return vol, thick, where, width, rays
