@@ -136,13 +136,20 @@ def stock_options(command: Callable) -> Callable:
 def stock_request(stock_text: str | None, fixtures: tuple[str, ...],
                   stock_resolution: float | None, stock_out: Path | None):
     """The `checker.stock.request.StockRequest` of the stock options; a resolution that is not
-    a positive number of mm is a usage error."""
+    a positive number of mm is a usage error, and the `--stock-out` folder is made and must take
+    a file before any work."""
+    from checker.commands.outputs import probe_folder
     from checker.errors import PathcheckError
     from checker.stock.request import StockRequest
 
     if stock_resolution is not None and not (0.001 <= stock_resolution <= 100.0):
         raise PathcheckError(f"--stock-resolution {stock_resolution:g}: expected a ray spacing "
                              "between 0.001 and 100 mm", code="usage")
+    if stock_out is not None:
+        if stock_out.exists() and not stock_out.is_dir():
+            raise PathcheckError("--stock-out: expected a folder for the stock's STL files, "
+                                 "found a file", path=stock_out, code="usage")
+        probe_folder(stock_out / "stock_final.stl", "the stock's STL")
     return StockRequest(stock_text, tuple(fixtures), stock_resolution, stock_out)
 
 
