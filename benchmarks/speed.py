@@ -9,12 +9,17 @@ Prints, on this machine, in this run (so the ratios hold on a noisy machine):
 - `pathcheck allowable` with 100 CC points end to end (a fresh process: start-up, part, answer);
 - `pathcheck info` and `pathcheck --help` (start-up);
 - the full 4-axis compressor job (best B over -180..180, the program written and checked) and
-  the largest amorim mesh job (Interface-glue), each in a fresh process: wall time, peak memory.
+  the largest amorim mesh job (Interface-glue), each in a fresh process: wall time, peak memory;
+  Interface-glue again against a box stock 3 mm around its part at 0.05 mm (`--stock box:+3`):
+  the stock simulation's own time beside the check's;
+- the stock's material removal alone (`benchmarks.bench_stock`): moves/s and engaged rays/s on a
+  100,000-move 3-axis raster and on Interface-glue.
 The kernels come from the warm per-user cache (`pathcheck warm`)."""
 
 from __future__ import annotations
 
 import argparse
+import json
 import platform
 import resource
 import subprocess
@@ -132,6 +137,23 @@ def jobs() -> None:
             wall, peak = _timed(cmd)
             print(f"job {job.name}: {wall:.1f} s wall, peak {peak:.0f} MB (largest process "
                   "so far)")
+        if AMORIM.is_file():
+            out = Path(tmp) / "stock.json"
+            wall, peak = _timed([*PATHCHECK, str(AMORIM), "--json", str(out), "--no-store",
+                                 "--stock", "box:+3", "--stock-resolution", "0.05"])
+            doc = json.loads(out.read_text())
+            st = doc["stock"]
+            print(f"job {AMORIM.name} with --stock box:+3 at 0.05 mm: {wall:.1f} s wall "
+                  f"(the stock simulation {st['time_s']:.1f} s of the check's "
+                  f"{doc['summary']['time_s']:.1f} s), peak {peak:.0f} MB; removed "
+                  f"{st['volume_initial'] - st['volume_final']:,.0f} mm^3, air cuts "
+                  f"{sum(o['air_cuts'] for o in st['operations'])}")
+
+
+def stock_removal() -> None:
+    from benchmarks import bench_stock
+
+    bench_stock.main(["all"])
 
 
 def main() -> None:
@@ -145,6 +167,7 @@ def main() -> None:
         return
     cli_times()
     jobs()
+    stock_removal()
 
 
 if __name__ == "__main__":
