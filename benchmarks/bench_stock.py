@@ -3,7 +3,7 @@ engaged rays/s on (1) a 100,000-move 3-axis ball-nose finishing raster over a 10
 box at h = 0.1 mm and (2) the amorim Interface-glue job on a box 3 mm around its STL at
 h = 0.05 mm. Peak memory: run under `/usr/bin/time -v`.
 
-    python -m benchmarks.bench_stock [raster|amorim|all]
+    python -m benchmarks.bench_stock [raster|bullnose|amorim|all]
 """
 
 from __future__ import annotations
@@ -42,9 +42,10 @@ def _report(name: str, n_moves: int, seconds: float, stock: Dexels, engaged_rays
           f"overflow {stock.overflow}")
 
 
-def raster(n_moves: int = 100_000) -> None:
-    """A ball-nose R = 3 mm finishing raster of 1 mm moves over z = 45 + 2 sin(x/10) cos(y/10)
-    on a 100 x 100 x 50 mm box at h = 0.1 mm."""
+def raster(n_moves: int = 100_000, kind: str = "ball") -> None:
+    """A ball-nose R = 3 mm (or a bull-nose D 6 mm r 1 mm: the searched profile) finishing
+    raster of 1 mm moves over z = 45 + 2 sin(x/10) cos(y/10) on a 100 x 100 x 50 mm box at
+    h = 0.1 mm."""
     per_line = 100
     lines = n_moves // per_line
     stock = Dexels.box([0, 0, 0], [100, 100, 50], 0.1)
@@ -59,13 +60,16 @@ def raster(n_moves: int = 100_000) -> None:
         b.append(p[1:])
     a, b = np.concatenate(a), np.concatenate(b)
     axis = np.tile(Z, (len(a), 1))
-    ball = Cutter("ball", d=6.0, r=3.0, R=0.0, flute_length=20.0)
-    pieces = tool_pieces(ball, with_holder=False)
+    if kind == "ball":
+        cutter = Cutter("ball", d=6.0, r=3.0, R=0.0, flute_length=20.0)
+    else:
+        cutter = Cutter("bullnose", d=6.0, r=1.0, R=2.0, flute_length=20.0)
+    pieces = tool_pieces(cutter, with_holder=False)
     t, c = time.perf_counter(), time.process_time()
     rem = remove(stock, pieces, a, b, axis, np.arange(len(a)), len(a), step=0.1)
     dt = time.perf_counter() - t
     print(f"  cpu {time.process_time() - c:.2f} s over all threads")
-    _report("raster", len(a), dt, stock, int(rem.rays.sum()), float(rem.volume.sum()))
+    _report(f"raster {kind}", len(a), dt, stock, int(rem.rays.sum()), float(rem.volume.sum()))
 
 
 def _stl_bounds(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -116,6 +120,8 @@ def main(argv: list[str]) -> None:
     print(f"compile/load: {_warm():.1f} s")
     if which in ("raster", "all"):
         raster()
+    if which in ("bullnose", "all"):
+        raster(kind="bullnose")
     if which in ("amorim", "all"):
         amorim()
 

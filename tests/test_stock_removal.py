@@ -106,12 +106,15 @@ def _bull_low(d, R, r):
     return np.where(d <= R + r, r - np.sqrt(np.maximum(r * r - e * e, 0.0)), np.inf)
 
 
-@pytest.mark.parametrize("kind", ["bullnose", "ball"])
-def test_ramped_move_equals_brute_force_over_poses(kind):
+@pytest.mark.parametrize("kind, up", [("bullnose", False), ("bullnose", True),
+                                      ("ball", False)])
+def test_ramped_move_equals_brute_force_over_poses(kind, up):
     stock = Dexels.box([0, 0, 0], [30, 20, 10], 0.1)
     R, r = (3.0, 1.5) if kind == "bullnose" else (0.0, 3.0)
     cutter = Cutter(kind, d=2 * (R + r), r=r, R=R, flute_length=30.0)
     a, b = np.array([2.0, 8.0, 9.0]), np.array([27.0, 12.0, 5.5])
+    if up:
+        a, b = b, a
     _cut(stock, cutter, [a, b])
     x, y = _grid(stock)
     band = np.zeros(x.shape, bool)

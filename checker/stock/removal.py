@@ -116,6 +116,10 @@ def _prepared(pieces: ToolPieces, hmax: float):
               and np.any(at_rmax & (hh <= hh.min() + 1e-12))
               and np.any(at_rmax & (hh >= hh.max() - 1e-12))):
             ptype[p] = sw.CYLINDER
+        elif (rho > 0.0 and len(poly) == 4 and r.max() > 1e-12
+              and np.all((np.abs(hh - hh.min()) <= 1e-12) | (np.abs(hh - hh.max()) <= 1e-12))
+              and np.all((r <= 1e-12) | (r >= r.max() - 1e-12))):
+            ptype[p] = sw.BULL                 # the rectangle [0, R] x [h0, h1] grown by rho
     return (prof[:P], nprof[:P], np.array(rhos, np.float64), np.array(kinds, np.int64),
             ptype[:P], rmax[:P], geo[:P])
 

@@ -35,7 +35,7 @@ import numpy as np
 TILE = 64                       # rays per tile side
 BLOCK = 8                       # rays per side of a block skipped whole when out of reach
 VERTICAL = 1e-9                 # an axis whose x and y are within this of 0 (and z > 0) is +z
-GENERIC, CYLINDER, CAPSULE = 0, 1, 2
+GENERIC, CYLINDER, CAPSULE, BULL = 0, 1, 2, 3
 ENGAGE_COLS = 3
 # statistics columns of one tile-item row
 ST_LEN = 0          # 3: material length removed per kind, summed over rays (mm)
@@ -109,11 +109,20 @@ def prof_dist(prof, n, r, h):
 
 
 @nb.njit(cache=True)
-def _swept_end(t, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax):
-    """sign +1: z(t) + h_low(d(t)); sign -1: -(z(t) + h_high(d(t)))."""
+def _swept_end(t, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax, bull, g0, g1):
+    """sign +1: z(t) + h_low(d(t)); sign -1: -(z(t) + h_high(d(t))). A bull-nose (`bull`: the
+    core [0, R] x [g0, g1], R = rmax - rho) in closed form, any other profile by prof_span."""
     dx = ax + t * vx - px
     dy = ay + t * vy - py
     d = min(math.sqrt(dx * dx + dy * dy), rmax)
+    if bull:
+        e = d - (rmax - rho)
+        w = rho
+        if e > 0.0:
+            w = math.sqrt(max(rho * rho - e * e, 0.0))
+        if sign > 0.0:
+            return az + t * vz + g0 - w
+        return -(az + t * vz + g1 + w)
     lo, hi = prof_span(prof, n, rho, d)
     if sign > 0.0:
         return az + t * vz + lo
@@ -121,37 +130,74 @@ def _swept_end(t, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax):
 
 
 @nb.njit(cache=True)
-def _golden_swept(t0, t1, sign, stop, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax):
-    """Minimum over [t0, t1] of the convex _swept_end (sign as there); stops early once a value
-    <= stop is found (the answer is then only known to be <= stop)."""
-    best = min(_swept_end(t0, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax),
-               _swept_end(t1, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax))
+def _min_swept(t0, t1, sign, stop, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax, bull,
+               g0, g1):
+    """Minimum over [t0, t1] of the convex _swept_end (sign as there), by Brent's method
+    (parabolic steps, golden-section ones where they fail) to 1e-7 mm of travel, the two end
+    values taken exactly; stops early once a value <= stop is found (the answer is then only
+    known to be <= stop)."""
+    best = min(_swept_end(t0, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax, bull, g0,
+                           g1),
+               _swept_end(t1, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax, bull, g0,
+                           g1))
     if best <= stop or t1 - t0 <= 0.0:
         return best
     speed = math.sqrt(vx * vx + vy * vy + vz * vz)
     tol = _TOL * 0.1 / max(speed, 1e-12)
+    cg = 1.0 - _INVPHI
     a, b = t0, t1
-    c = b - _INVPHI * (b - a)
-    e = a + _INVPHI * (b - a)
-    fc = _swept_end(c, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax)
-    fe = _swept_end(e, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax)
+    x = w = v = a + cg * (b - a)
+    fx = fw = fv = _swept_end(x, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax, bull, g0,
+                           g1)
+    d = 0.0
+    e = 0.0
     for _ in range(100):
-        best = min(best, fc, fe)
-        if best <= stop or b - a <= tol:
+        best = min(best, fx)
+        if best <= stop:
             break
-        if fc < fe:
-            b = e
-            e = c
-            fe = fc
-            c = b - _INVPHI * (b - a)
-            fc = _swept_end(c, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax)
+        m = 0.5 * (a + b)
+        if abs(x - m) <= 2.0 * tol - 0.5 * (b - a):
+            break
+        golden = True
+        if abs(e) > tol:
+            r = (x - w) * (fx - fv)
+            q = (x - v) * (fx - fw)
+            p = (x - v) * q - (x - w) * r
+            q = 2.0 * (q - r)
+            if q > 0.0:
+                p = -p
+            q = abs(q)
+            if abs(p) < abs(0.5 * q * e) and p > q * (a - x) and p < q * (b - x):
+                e = d
+                d = p / q
+                golden = False
+                if (x + d) - a < 2.0 * tol or b - (x + d) < 2.0 * tol:
+                    d = tol if m >= x else -tol
+        if golden:
+            e = (a - x) if x >= m else (b - x)
+            d = cg * e
+        u = x + d if abs(d) >= tol else x + (tol if d >= 0.0 else -tol)
+        fu = _swept_end(u, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax, bull, g0,
+                           g1)
+        if fu <= fx:
+            if u >= x:
+                a = x
+            else:
+                b = x
+            v, fv = w, fw
+            w, fw = x, fx
+            x, fx = u, fu
         else:
-            a = c
-            c = e
-            fc = fe
-            e = a + _INVPHI * (b - a)
-            fe = _swept_end(e, sign, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax)
-    return best
+            if u < x:
+                a = u
+            else:
+                b = u
+            if fu <= fw or w == x:
+                v, fv = w, fw
+                w, fw = u, fu
+            elif fu <= fv or v in (x, w):
+                v, fv = u, fu
+    return min(best, fx)
 
 
 @nb.njit(cache=True)
@@ -252,15 +298,52 @@ def vertical_interval(q, ptypes, profs, nprofs, rhos, rmaxs, geos, ax, ay, az, v
         return max(c0, mbot), min(c1, mtop)
     prof = profs[q]
     n = nprofs[q]
-    hl, hh = prof_span(prof, n, rho, dmin)
+    bull = ptype == BULL
+    if bull:
+        hl = _swept_end(ts, 1.0, ax, ay, 0.0, vx, vy, 0.0, px, py, prof, n, rho, rmax, True,
+                        g0, g1)
+        hh = -_swept_end(ts, -1.0, ax, ay, 0.0, vx, vy, 0.0, px, py, prof, n, rho, rmax, True,
+                         g0, g1)
+    else:
+        hl, hh = prof_span(prof, n, rho, dmin)
     if zlo + hl >= mtop or zhi + hh <= mbot:
         return 0.0, -1.0
+    # the search's range: all of [t0, t1]; for a bull-nose only where the ray is under the
+    # torus on the side the move goes down (up, for the top) to, the flat part being linear
+    lo0, lo1, hi0, hi1 = t0, t1, t0, t1
+    c0 = np.inf
+    c1 = -np.inf
+    if bull:
+        rf = rmax - rho
+        qc = wx * wx + wy * wy - rf * rf
+        if qa < 1e-24:
+            if qc <= 0.0:                       # under the flat part the whole time
+                lo1, hi1 = lo0, hi0
+                c0 = zlo + g0 - rho
+                c1 = zhi + g1 + rho
+        else:
+            qb = wx * vx + wy * vy
+            disc = qb * qb - qa * qc
+            if disc >= 0.0:
+                sq = math.sqrt(disc)
+                f0 = max((-qb - sq) / qa, t0)
+                f1 = min((-qb + sq) / qa, t1)
+                if f0 <= f1:
+                    za, zb = az + f0 * vz, az + f1 * vz
+                    c0 = min(za, zb) + g0 - rho
+                    c1 = max(za, zb) + g1 + rho
+                    if vz < 0.0:
+                        lo0, hi1 = f1, f0
+                    else:
+                        lo1, hi0 = f0, f1
+    if c0 > mbot:
+        c0 = min(c0, _min_swept(lo0, lo1, 1.0, mbot, ax, ay, az, vx, vy, vz, px, py, prof, n,
+                                rho, rmax, bull, g0, g1))
     zs = az + ts * vz
-    c0 = _golden_swept(t0, t1, 1.0, mbot, ax, ay, az, vx, vy, vz, px, py, prof, n, rho, rmax)
-    c1 = zs + hh
+    c1 = max(c1, zs + hh)
     if c1 < mtop:
-        c1 = -_golden_swept(t0, t1, -1.0, -mtop, ax, ay, az, vx, vy, vz, px, py, prof, n,
-                            rho, rmax)
+        c1 = max(c1, -_min_swept(hi0, hi1, -1.0, -mtop, ax, ay, az, vx, vy, vz, px, py, prof,
+                                 n, rho, rmax, bull, g0, g1))
     return max(c0, mbot), min(c1, mtop)
 
 
