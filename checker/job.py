@@ -106,10 +106,20 @@ def _against_stock_only(toolpath, cutter, machine, config, stock: StockRequest, 
     motion = written.programmed_motion(job, classes, mach)
     checked = check_stock(job, motion, cutters, tol, stock, None)
     doc = stock_document(job, motion, checked, cutters, classes, tol, mach, t0)
+    doc.job.stated_stock = _stated(toolpath, None)
     program = written.Program(m.tip, m.axis, written.cam_b(job), None, None,
                               {o: "as-programmed" for o in classes}, stock=checked)
     counts = {v: int(getattr(doc.summary.counts, v)) for v in verdict.FINDINGS}
     return written.Checked(doc, job, program, mach, cutters, counts, t0)
+
+
+def _stated(toolpath, part_box: np.ndarray | None) -> str | None:
+    """The stock the CL file states, placed against `part_box (2, 3)` (or the origin without a
+    part) as `--stock cl` places it: one sentence (`checker.stock.stated.place`), or None."""
+    from checker.stock.stated import place, stated_stock
+
+    stated = stated_stock(toolpath)
+    return None if stated is None else place(stated, part_box)[1]
 
 
 def _machine_motion(mach, ops: set[int], cfg: Config):
@@ -244,5 +254,7 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
     with step("advice at the cutting poses"):
         doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
     doc.summary.time_s = time.perf_counter() - t0
+    v = tris.vertices
+    doc.job.stated_stock = _stated(toolpath, np.array([v.min(axis=0), v.max(axis=0)]))
     counts = written.written_counts(doc.summary.counts, program)
     return written.Checked(doc, job, program, mach, cutters, counts, t0)

@@ -105,6 +105,9 @@ class JobInfo(_Model):
     cutters: list[str] = Field(default_factory=list, description="every operation's cutter")
     machine: str | None = None
     axis_class: str
+    stated_stock: str | None = Field(
+        None, description="the stock the CL file states (`INSERT/Stock Size`) and how `--stock "
+        "cl` places it against the part (`checker.stock.stated.place`); None: it states none")
 
 
 class VerdictCounts(_Model):
@@ -324,12 +327,16 @@ class ResultsDocument(_Model):
                                       "fixtures (None: not asked)")
 
 
-def stock_line(stock: StockResult | None) -> str:
+def stock_line(stock: StockResult | None, stated: str | None = None) -> str:
     """One line on the stock and the fixtures: what was checked against them and what the
-    program does to the stock, or that rapids and holders were not checked against stock."""
+    program does to the stock, or that rapids and holders were not checked against stock (and,
+    when the CL file states a stock, `stated`: `JobInfo.stated_stock`, that `--stock cl`
+    checks against it)."""
     if stock is None:
-        return ("stock: not checked (no --stock): rapids and holders were checked against the "
+        line = ("stock: not checked (no --stock): rapids and holders were checked against the "
                 "part only")
+        return line if stated is None else (f"{line}; the CL file states a stock, --stock cl "
+                                            f"checks against it: {stated}")
     c = stock.counts
     found = f"crash {c.crash}  holder {c.holder}"
     fixtures = f"; fixtures {', '.join(stock.fixtures)}" if stock.fixtures else ""

@@ -53,7 +53,7 @@ def summary_view(doc):
         head += (f"\nrotary motion: chosen {o.dp_total_rotation:.1f} deg (shortest path), "
                  f"greedy {o.greedy_total_rotation:.1f} deg, CAM {o.original_total_rotation:.1f}"
                  f" deg; {o.infeasible_points} points with no feasible B")
-    head += "\n" + stock_line(doc.stock)
+    head += "\n" + stock_line(doc.stock, doc.job.stated_stock)
     if doc.gcode:
         head += f"\nG-code written: {doc.gcode}"
     out = [head]

@@ -135,21 +135,32 @@ def stock_options(command: Callable) -> Callable:
 
 def stock_request(stock_text: str | None, fixtures: tuple[str, ...],
                   stock_resolution: float | None, stock_out: Path | None):
-    """The `checker.stock.request.StockRequest` of the stock options; a resolution that is not
-    a positive number of mm is a usage error, and the `--stock-out` folder is made and must take
-    a file before any work."""
-    from checker.commands.outputs import probe_folder
+    """The `checker.stock.request.StockRequest` of the stock options, checked before the run:
+    the stock's text (`checker.stock.spec.parse_stock`), the fixtures' files and placements, a
+    resolution that is a positive number of mm and a `--stock-out` folder that can be made."""
     from checker.errors import PathcheckError
+    from checker.stock.fixtures import fixture_placement
     from checker.stock.request import StockRequest
+    from checker.stock.spec import parse_stock
+
+    if stock_text is not None:
+        parse_stock(stock_text)
+    for text in fixtures:
+        fixture_placement(text)
 
     if stock_resolution is not None and not (0.001 <= stock_resolution <= 100.0):
         raise PathcheckError(f"--stock-resolution {stock_resolution:g}: expected a ray spacing "
                              "between 0.001 and 100 mm", code="usage")
     if stock_out is not None:
+        from checker.atomic import check_writable
+
+        if stock_text is None:
+            raise PathcheckError("--stock-out writes the stock: expected --stock too",
+                                 code="usage")
         if stock_out.exists() and not stock_out.is_dir():
-            raise PathcheckError("--stock-out: expected a folder for the stock's STL files, "
-                                 "found a file", path=stock_out, code="usage")
-        probe_folder(stock_out / "stock_final.stl", "the stock's STL")
+            raise PathcheckError("--stock-out: expected a folder, found a file", path=stock_out,
+                                 code="usage")
+        check_writable(stock_out / "stock_final.stl", "stock STL")  # created when written
     return StockRequest(stock_text, tuple(fixtures), stock_resolution, stock_out)
 
 

@@ -146,11 +146,14 @@ def _stock(req: p.CheckRequest, files: _Files):
         return None
     from checker.stock.fixtures import parse_fixture
     from checker.stock.request import StockRequest
-    from checker.stock.spec import SolidPath, parse_stock
+    from checker.stock.spec import parse_stock, solid_name
 
     stock = req.stock
-    if stock is not None and isinstance(parse_stock(stock), SolidPath):
-        stock = str(files.get(stock, "stock", "a stock solid (STL, STEP, IGES)", "input"))
+    if stock is not None and solid_name(stock) is not None:  # through the roots, then parsed
+        stock = str(files.get(solid_name(stock), "stock", "a stock solid (STL, STEP, IGES)",
+                              "input"))
+    if stock is not None:
+        parse_stock(stock)
     fixtures = []
     for text in req.fixtures:
         path, placement = parse_fixture(text)

@@ -41,10 +41,9 @@ def parse_fixture(text: str) -> tuple[Path, str | None]:
     return Path(text), None
 
 
-def load_fixture(text: str, cfg) -> Fixture:
-    """The fixture `text` (`parse_fixture`) read (`checker.stock.solid.load_solid`) and placed."""
-    from checker.stock.solid import load_solid
-
+def fixture_placement(text: str) -> tuple[Path, tuple[np.ndarray, np.ndarray] | None]:
+    """The fixture `text` (`parse_fixture`) checked without reading it: (its existing file, its
+    placement (R (3, 3), t (3,)) or None); PathcheckError naming what is wrong."""
     path, placement = parse_fixture(text)
     if path.suffix.lower() not in _SOLIDS:
         raise PathcheckError(f"--fixture '{text}': expected an STL, STEP or IGES file, "
@@ -52,12 +51,23 @@ def load_fixture(text: str, cfg) -> Fixture:
     if not path.is_file():
         raise PathcheckError("fixture file not found: expected an existing STL, STEP or IGES "
                              "file", path=path)
+    if placement is None:
+        return path, None
+    try:
+        return path, parse_transform(placement)
+    except PathcheckError as err:
+        raise PathcheckError(f"--fixture '{text}': {err.message.partition(': ')[2]}",
+                             code="usage") from None
+
+
+def load_fixture(text: str, cfg) -> Fixture:
+    """The fixture `text` (`fixture_placement`) read (`checker.stock.solid.load_solid`) and
+    placed."""
+    from checker.stock.solid import load_solid
+
+    path, placed = fixture_placement(text)
     vertices, triangles = load_solid(path, cfg, what="fixture")
-    if placement is not None:
-        try:
-            R, t = parse_transform(placement)
-        except PathcheckError as err:
-            raise PathcheckError(f"--fixture '{text}': {err.message.partition(': ')[2]}",
-                                 code="usage") from None
+    if placed is not None:
+        R, t = placed
         vertices = vertices @ R.T + t
     return Fixture(path.name, vertices, triangles, MeshIndex.build(vertices, triangles))

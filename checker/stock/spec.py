@@ -164,6 +164,17 @@ def _margins(text: str, values: list[float], expected: str) -> list[float]:
     return values
 
 
+def solid_name(text: str) -> str | None:
+    """The file name when the stock text names a solid (an STL, STEP or IGES file, whether or
+    not it exists), else None: a caller that reads files through its own gate (the service's
+    roots) resolves it before `parse_stock` looks for it."""
+    body = text.strip()
+    kind, colon, _ = body.partition(":")
+    if body.lower() == "cl" or (colon and kind.strip().lower() in ("box", "cylinder")):
+        return None
+    return body if body.lower().endswith(SOLID_SUFFIXES) else None
+
+
 def parse_stock(text: str) -> StockSpec:
     """The stock the text names (grammar in the module docstring); PathcheckError(code="usage")
     naming the text and what was expected."""
@@ -176,7 +187,7 @@ def parse_stock(text: str) -> StockSpec:
         return _box(text, rest)
     if colon and kind == "cylinder":
         return _cylinder(text, rest)
-    if body.lower().endswith(SOLID_SUFFIXES):
+    if solid_name(body) is not None:
         path = Path(body)
         if not path.is_file():
             raise PathcheckError(f"--stock: the solid file '{printable(body)}' does not exist "
