@@ -52,14 +52,18 @@ def test_a_coordinate_beyond_any_machine_is_an_error_naming_the_line(job, tmp_pa
                   r"is beyond any machine's reach: expected coordinates within \+-100000 mm")
 
 
-def test_a_100_m_move_stays_small_in_time_and_memory(job, tmp_path):
+def test_a_100_m_move_stays_small_in_poses_and_memory(job, tmp_path):
+    """The move is checked by the bound between poses, not sampled along its 100 m: the poses
+    checked stay those of the small job, give or take the halvings near the part."""
     lines = SMALL_JOB.splitlines()
     lines[20] = "GOTO/100000,0,-3"  # 100 m out and back, across the part both ways
     job.write_text("\n".join(lines) + "\n")
-    run = run_pathcheck([job.name, "--no-store"], cwd=tmp_path)
+    run = run_pathcheck([job.name, "--no-store", "--json", "-"], cwd=tmp_path)
     assert run.code == 1, run.why()  # its path back through the part gouges
     assert_sane(run, job.name)
-    assert run.seconds < 30 and run.rss_mb < 1024, run.why()
+    summary = json.loads(run.stdout)["summary"]
+    assert summary["poses_checked"] < 20 * summary["cl_points"], summary["poses_checked"]
+    assert run.rss_mb < 1024, run.why()
 
 
 def test_an_nx_listing_read_in_inches_by_its_first_feed_stays_small(realdata, tmp_path):
@@ -71,7 +75,7 @@ def test_an_nx_listing_read_in_inches_by_its_first_feed_stays_small(realdata, tm
     assert info.code == 0 and json.loads(info.stdout)["units"] == "inch", info.why()
     run = run_pathcheck(["inch.txt", "--cutter", "CUTTER/10", "--no-store"], cwd=tmp_path)
     assert_sane(run, "inch.txt")  # 25.4 times larger, bounded all the same
-    assert run.seconds < 30 and run.rss_mb < 1024, run.why()
+    assert run.rss_mb < 1024, run.why()
 
 
 @pytest.mark.parametrize("arc, expected", [
@@ -156,7 +160,7 @@ def test_gcode_into_a_folder_that_cannot_exist_fails_before_the_check(job, tmp_p
     run = run_pathcheck([job.name, "-o", "afile/x.nc"], cwd=tmp_path)
     _one_line(run, r"pathcheck: afile/x\.nc: cannot write G-code: /.*/afile is a file, "
                    r"expected a folder")
-    assert run.seconds < 20, run.why()
+    assert _recorded(tmp_path) == []  # refused before the check: nothing was checked
 
 
 def _file_size_limit(size: int):
