@@ -8,9 +8,10 @@ An item translates the tool from tip `a` to tip `b` at a constant unit axis.
 - Vertical axis (+z): exact per ray. At radial distance d the piece spans h in
   [h_low(d), h_high(d)]; over the item the ray lies in the swept piece for z in
   [min_t z(t) + h_low(d(t)), max_t z(t) + h_high(d(t))] over the t with d(t) <= r_max
-  (closed-form t-range). The ends are closed forms for a cylinder (flat end, shank, holder)
-  and a capsule (ball end); otherwise a golden-section search of the convex (concave) function,
-  with the end values taken exactly.
+  (closed-form t-range). The ends are closed forms for a level move, a cylinder (flat end,
+  shank, holder) and a capsule (ball end); a bull-nose is closed-form under its flat part and
+  searched under its torus; other profiles by Brent's method on the convex (concave) function,
+  the end values taken exactly.
 - Any other axis: the translation sampled at spacing <= step; per pose the ray's interval in
   the piece, from the convex distance f(s) = dist2D((r, h), core) - rho along the ray
   (golden-section minimum, then bisected roots).
