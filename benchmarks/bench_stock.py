@@ -3,7 +3,7 @@ engaged rays/s on (1) a 100,000-move 3-axis ball-nose finishing raster over a 10
 box at h = 0.1 mm and (2) the amorim Interface-glue job on a box 3 mm around its STL at
 h = 0.05 mm. Peak memory: run under `/usr/bin/time -v`.
 
-    python -m benchmarks.bench_stock [raster|bullnose|amorim|all]
+    python -m benchmarks.bench_stock [raster|bullnose|poses|amorim|all]
 """
 
 from __future__ import annotations
@@ -72,6 +72,23 @@ def raster(n_moves: int = 100_000, kind: str = "ball") -> None:
     _report(f"raster {kind}", len(a), dt, stock, int(rem.rays.sum()), float(rem.volume.sum()))
 
 
+def poses(n: int = 20_000) -> None:
+    """A 5-axis-like chain of n poses of a ball D 10 mm tilting +-30 degrees about y along a
+    wave over a 100 x 100 x 50 mm box at h = 0.1 mm (the sampled path, 14.3)."""
+    stock = Dexels.box([0, 0, 0], [100, 100, 50], 0.1)
+    ball = Cutter("ball", d=10.0, r=5.0, R=0.0, flute_length=30.0)
+    x = np.linspace(10.0, 90.0, n)
+    tilt = np.radians(30.0) * np.sin(x / 7.0)
+    axis = np.stack([np.sin(tilt), np.zeros(n), np.cos(tilt)], axis=1)
+    tips = np.stack([x, 50.0 + 20.0 * np.sin(x / 10.0), np.full(n, 47.0)], axis=1)
+    t, c = time.perf_counter(), time.process_time()
+    rem = remove(stock, tool_pieces(ball, with_holder=False), tips, tips, axis,
+                 np.arange(n), n, step=0.05)
+    dt = time.perf_counter() - t
+    print(f"  cpu {time.process_time() - c:.2f} s over all threads")
+    _report("5-axis poses", n, dt, stock, int(rem.rays.sum()), float(rem.volume.sum()))
+
+
 def _stl_bounds(path: Path) -> tuple[np.ndarray, np.ndarray]:
     from stl import mesh
     m = mesh.Mesh.from_file(str(path))
@@ -122,6 +139,8 @@ def main(argv: list[str]) -> None:
         raster()
     if which in ("bullnose", "all"):
         raster(kind="bullnose")
+    if which in ("poses", "all"):
+        poses()
     if which in ("amorim", "all"):
         amorim()
 

@@ -247,35 +247,40 @@ def test_four_axis_turning_leaves_the_analytic_radius():
     assert rem.volume[0, 0] == pytest.approx(math.pi * (Rs ** 2 - rho ** 2) * 10, rel=0.01)
 
 
-def _membership_flat(px, pz, tip, u, R, L):
-    """Inside a flat end mill (radius R, length L) at tip, unit axis u: (n, m) for points
+def _membership(px, pz, tip, u, Rf, hb, ht, rho):
+    """Inside the solid of revolution {(r, h): dist((r, h), [0, Rf] x [hb, ht]) <= rho} at tip,
+    unit axis u (a flat end mill: rho = 0; a ball: Rf = 0; a bull-nose): (n, m) for points
     (px (n, 2), pz (m,))."""
     w = np.concatenate([np.broadcast_to(px[:, None, :], (len(px), len(pz), 2)),
                         np.broadcast_to(pz[None, :, None], (len(px), len(pz), 1))],
                        axis=2) - tip
     hh = w @ u
     rr = np.linalg.norm(w - hh[..., None] * u, axis=2)
-    return (hh >= 0) & (hh <= L) & (rr <= R)
+    dr = np.maximum(rr - Rf, 0.0)
+    dh = np.maximum(np.maximum(hb - hh, hh - ht), 0.0)
+    return dr * dr + dh * dh <= rho * rho + 1e-12
 
 
-def test_tilted_constant_axis_within_half_a_step_of_point_membership():
+@pytest.mark.parametrize("kind", ["flat", "ball", "bullnose"])
+def test_tilted_constant_axis_within_half_a_step_of_point_membership(kind):
     h, step = 0.25, 0.4
     stock = Dexels.box([0, 2, 0], [20, 10, 10], h)
-    R, L = 3.0, 30.0
-    flat = Cutter("flat", d=2 * R, r=0.0, R=R, flute_length=L)
+    L = 30.0
+    R, r = {"flat": (3.0, 0.0), "ball": (0.0, 3.0), "bullnose": (2.0, 1.0)}[kind]
+    cutter = Cutter(kind, d=2 * (R + r), r=r, R=R, flute_length=L)
     tilt = math.radians(30.0)
     u = np.array([math.sin(tilt), 0.0, math.cos(tilt)])
     a, b = np.array([3.0, 6.0, 8.0]), np.array([15.0, 6.0, 7.0])
-    rem = remove(stock, tool_pieces(flat, with_holder=False), a[None], b[None], u[None],
+    rem = remove(stock, tool_pieces(cutter, with_holder=False), a[None], b[None], u[None],
                  np.zeros(1, np.int64), 1, step=step)
     n_k = int(math.ceil(np.linalg.norm(b - a) / step)) + 1
     x, y = _grid(stock)
     px = np.stack([x.ravel(), y.ravel()], axis=1)
-    dz = 0.01
+    dz = 0.02
     pz = np.arange(5.0, 10.0, dz) + dz / 2           # the tool reaches down to 5.5
     hit = np.zeros((len(px), len(pz)), bool)
-    for t in np.linspace(0.0, 1.0, 4 * (n_k - 1) + 1):        # 4x finer, same poses too
-        hit |= _membership_flat(px, pz, a + t * (b - a), u, R, L)
+    for t in np.linspace(0.0, 1.0, 2 * (n_k - 1) + 1):        # 2x finer, same poses too
+        hit |= _membership(px, pz, a + t * (b - a), u, R, r, L, r)
     # the kernel's removed samples: not inside any of its ray's intervals
     slot = np.arange(stock.capacity)[None, None, :] < stock.count[:, :, None]
     lo = np.where(slot, stock.lo, np.inf).reshape(len(px), -1)

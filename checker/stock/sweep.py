@@ -8,9 +8,10 @@ An item translates the tool from tip `a` to tip `b` at a constant unit axis.
 - Vertical axis (+z): exact per ray. At radial distance d the piece spans h in
   [h_low(d), h_high(d)]; over the item the ray lies in the swept piece for z in
   [min_t z(t) + h_low(d(t)), max_t z(t) + h_high(d(t))] over the t with d(t) <= r_max
-  (closed-form t-range). The ends are closed forms for a cylinder (flat end, shank, holder)
-  and a capsule (ball end); otherwise a golden-section search of the convex (concave) function,
-  with the end values taken exactly.
+  (closed-form t-range). The ends are closed forms for a level move, a cylinder (flat end,
+  shank, holder) and a capsule (ball end); a bull-nose is closed-form under its flat part and
+  searched under its torus; other profiles by Brent's method on the convex (concave) function,
+  the end values taken exactly.
 - Any other axis: the translation sampled at spacing <= step; per pose the ray's interval in
   the piece, from the convex distance f(s) = dist2D((r, h), core) - rho along the ray
   (golden-section minimum, then bisected roots).
@@ -354,6 +355,33 @@ def _f_ray(s, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho):
     rx, ry, rz = wx - hh * ux, wy - hh * uy, wz - hh * uz
     r = math.sqrt(rx * rx + ry * ry + rz * rz)
     return prof_dist(prof, n, r, hh) - rho
+
+
+@nb.njit(cache=True, inline="always")
+def posed_range(tx, ty, tz, ux, uy, uz, px, py, hmin, hmax, rmax):
+    """(s0, s1): the z of the vertical ray (px, py) within the slab hmin <= h <= hmax along
+    the axis (tip t, unit axis u) and within rmax of the axis line; s0 > s1 when none."""
+    wx, wy = px - tx, py - ty
+    k = wx * ux + wy * uy
+    s0, s1 = -np.inf, np.inf
+    if abs(uz) > 1e-12:
+        a0, a1 = (hmin - k) / uz, (hmax - k) / uz
+        s0, s1 = min(a0, a1), max(a0, a1)
+    elif k < hmin or k > hmax:
+        return 1.0, 0.0
+    qa = 1.0 - uz * uz
+    qb = -k * uz
+    qc = wx * wx + wy * wy - k * k - rmax * rmax
+    if qa > 1e-12:
+        disc = qb * qb - qa * qc
+        if disc < 0.0:
+            return 1.0, 0.0
+        sq = math.sqrt(disc)
+        s0 = max(s0, (-qb - sq) / qa)
+        s1 = min(s1, (-qb + sq) / qa)
+    elif qc > 0.0:
+        return 1.0, 0.0
+    return tz + s0, tz + s1
 
 
 @nb.njit(cache=True)
@@ -727,12 +755,26 @@ def _run_item(lo, hi, count, x0, y0, h, prof, nprof, rho, kind, ptype, rmax, geo
                                 if (px < tx + bx[0] or px > tx + bx[1] or py < ty + bx[2]
                                         or py > ty + bx[3]):
                                     continue
-                                s0 = max(tz + bx[4], mbot)
-                                s1 = min(tz + bx[5], mtop)
+                                r0, r1 = posed_range(tx, ty, tz, u[0], u[1], u[2], px, py,
+                                                     geo[p, 0] - rho[p], geo[p, 1] + rho[p],
+                                                     rmax[p])
+                                s0 = max(r0, mbot)
+                                s1 = min(r1, mtop)
                                 if s0 >= s1:
                                     continue
-                                c0, c1 = posed_interval(prof[p], nprof[p], rho[p], tx, ty, tz,
-                                                        u[0], u[1], u[2], px, py, s0, s1)
+                                if ptype[p] == CYLINDER:        # the slab and cylinder: exact
+                                    c0, c1 = s0, s1
+                                elif ptype[p] == CAPSULE:
+                                    g0, g1 = geo[p, 0], geo[p, 1]
+                                    c0, c1 = capsule_line(tx + g0 * u[0], ty + g0 * u[1],
+                                                          tz + g0 * u[2], (g1 - g0) * u[0],
+                                                          (g1 - g0) * u[1], (g1 - g0) * u[2],
+                                                          rho[p], px, py)
+                                    c0, c1 = max(c0, s0), min(c1, s1)
+                                else:
+                                    c0, c1 = posed_interval(prof[p], nprof[p], rho[p], tx, ty,
+                                                            tz, u[0], u[1], u[2], px, py, s0,
+                                                            s1)
                             if c0 >= c1:
                                 continue
                             got = subtract(lo, hi, count, j, i, c0, c1, out, nlo, nhi)
