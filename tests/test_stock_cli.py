@@ -227,3 +227,50 @@ def test_without_a_part_against_the_stock_and_the_vise_alone(folder, tmp_path):
                           "-o", "out.nc"], cwd=tmp_path)
     assert_sane(post, "a check without a part does not post")
     assert post.code == 2 and not (tmp_path / "out.nc").exists()
+
+
+def _gcode_positions(program: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(lines, tips (N, 3)) of the blocks of a G-code program that move X, Y or Z (modal
+    words carried over; blocks before every axis is known left out)."""
+    at = {"X": np.nan, "Y": np.nan, "Z": np.nan}
+    lines, tips = [], []
+    for number, text in enumerate(program.read_text().splitlines(), start=1):
+        words = dict(re.findall(r"([XYZ])(-?[\d.]+)", text.split("(")[0]))
+        if not words or "G28" in text:
+            continue
+        at.update({k: float(v) for k, v in words.items()})
+        if not np.isnan(list(at.values())).any():
+            lines.append(number)
+            tips.append([at["X"], at["Y"], at["Z"]])
+    return np.array(lines), np.array(tips)
+
+
+def test_check_gcode_without_a_part_against_the_stock_and_the_vise(folder, tmp_path):
+    """The mould job posted for a vertical machine, then read back by check-gcode with the
+    cutter, a box stock and the vise and no part: clean in the vise, a crash at the blocks the
+    geometry gives with the jaw moved into the path."""
+    for name in ("vise.stl", "vise_in.stl"):
+        shutil.copy(folder / name, tmp_path / name)
+    machine = ["--machine", "fanuc-vmc-a"]
+    posted = run_pathcheck([str(APT), "--no-store", "-o", "prog.nc", *machine], cwd=tmp_path)
+    assert posted.code == 0, posted.why()
+    check = ["check-gcode", "prog.nc", *machine, "--cutter", "CUTTER/10,5", "--no-store",
+             "--stock", "box:-82,-57,-25,82,57,2", "--stock-resolution", "0.5"]
+    clean = run_pathcheck([*check, "--fixture", "vise.stl", "--json", "clean.json"],
+                          cwd=tmp_path)
+    assert clean.code == 0, clean.why()
+    doc = json.loads((tmp_path / "clean.json").read_text())
+    s = doc["stock"]
+    assert s["fixtures"] == ["vise.stl"] and s["counts"]["crash"] == s["counts"]["holder"] == 0
+    assert s["volume_final"] < s["volume_initial"] and doc["job"]["part"] is None
+    assert sum(op["air_cuts"] for op in s["operations"]) == 1  # the plunge above the stock
+    hit = run_pathcheck([*check, "--fixture", "vise_in.stl", "--json", "hit.json"],
+                        cwd=tmp_path)
+    assert hit.code == 1, hit.why()
+    findings = json.loads((tmp_path / "hit.json").read_text())["stock"]["findings"]
+    lines, tips = _gcode_positions(tmp_path / "prog.nc")
+    must, never = into_jaw(lines, tips, TOLERANCE)
+    reported = {f["line"] for f in findings}
+    assert must and must <= reported and not reported & never
+    assert {(f["verdict"], f["against"]) for f in findings} == {("crash", "vise_in.stl")}
+    assert max(f["depth"] for f in findings) == pytest.approx(3.0, abs=1e-3)  # words in 0.001
