@@ -274,3 +274,18 @@ def test_check_gcode_without_a_part_against_the_stock_and_the_vise(folder, tmp_p
     assert must and must <= reported and not reported & never
     assert {(f["verdict"], f["against"]) for f in findings} == {("crash", "vise_in.stl")}
     assert max(f["depth"] for f in findings) == pytest.approx(3.0, abs=1e-3)  # words in 0.001
+
+
+def test_the_stated_stock_of_a_real_solidworks_cam_job_is_offered(realdata, tmp_path):
+    """Teste-Metrologia (amorim): `INSERT/Stock Size X85. Y38. Z48.` on line 9; its part (a
+    float32 STL) spans X 0..85 and Y 0..38 to 4e-7 mm, so the stock centred on it in X and Y
+    with its top at Z 0 is X 0..85, Y 0..38, Z -48..0, said to 0.1 um."""
+    src = realdata / "amorim-solidworkscam-apt"
+    apt, part = src / "Teste-Metrologia.apt", src / "Teste-Metrologia.STL"
+    assert apt.read_text().splitlines()[8] == "INSERT/Stock Size X85. Y38. Z48."
+    run = run_pathcheck([str(apt), "--part", str(part), "--no-store"], cwd=tmp_path)
+    assert run.code in (0, 1), run.why()
+    (said,) = [line for line in run.stdout.splitlines() if line.startswith("stock")]
+    assert said.endswith("the CL file states a stock, --stock cl checks against it: stated "
+                         "stock 85 x 38 x 48 mm (line 9), centred on the part in X and Y, top "
+                         "at Z 0 (the CL frame's origin): X 0..85, Y 0..38, Z -48..0"), said

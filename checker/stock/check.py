@@ -128,6 +128,10 @@ def check_stock(job, motion: ProgramMotion, cutters: dict, tol, request: StockRe
         width = np.zeros(n)
         ops = []
         out_dir = request.stock_out
+        if out_dir is not None:  # the folder asked for, made once the stock is known
+            from checker.atomic import make_parent
+
+            make_parent(Path(out_dir) / "stock_final.stl", "stock STL")
         with step("remove the stock", len(np.unique(motion.op_of))) as advance:
             for o in _ops_in_order(motion.op_of):
                 P = np.flatnonzero(motion.op_of == o)
