@@ -181,7 +181,7 @@ def test_the_stock_the_cl_file_states_is_offered_and_checked_with_stock_cl(tmp_p
     (["--stock", "box:+x"], "--stock 'box:+x': expected box:+M"),
     (["--stock", "cylinder:q:+2"], "--stock 'cylinder:q:+2': expected cylinder:AXIS"),
     (["--stock", "missing.stl"], "--stock: the solid file 'missing.stl' does not exist"),
-    (["--stock", "cl"], "--stock cl: the CL file states no stock"),
+    (["--stock", "cl"], f"{APT}: --stock cl: the CL file states no stock"),
     (["--stock", "box:+2", "--fixture", "missing.stl"], "missing.stl: fixture file not found"),
     (["--stock", "box:+2", "--fixture", "vise.stl@1,2"], "--fixture 'vise.stl@1,2': expected"),
     (["--stock", "box:+2", "--stock-resolution", "0"], "--stock-resolution 0: expected"),

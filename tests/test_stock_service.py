@@ -97,10 +97,11 @@ def test_files_outside_the_roots_are_forbidden(client, root, fields):
     ("box:+x", "--stock 'box:+x': expected box:+M"),
     ("cylinder:q:+2", "--stock 'cylinder:q:+2': expected cylinder:AXIS"),
     ("pyramid:3", "--stock 'pyramid:3': expected box:+M"),
-    ("cl", "--stock cl: the CL file states no stock"),
+    ("cl", "{apt}: --stock cl: the CL file states no stock"),
 ])
 def test_a_bad_stock_is_a_one_line_usage_error(client, root, stock, said):
     reply = _check(client, root, stock=stock)
+    said = said.format(apt=root / "mould.apt")
     assert reply["ok"] is False, reply
     error = reply["error"]
     assert error["code"] == "usage" and error["message"].startswith(said)
