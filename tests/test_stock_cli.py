@@ -274,6 +274,12 @@ def test_check_gcode_without_a_part_against_the_stock_and_the_vise(folder, tmp_p
     assert must and must <= reported and not reported & never
     assert {(f["verdict"], f["against"]) for f in findings} == {("crash", "vise_in.stl")}
     assert max(f["depth"] for f in findings) == pytest.approx(3.0, abs=1e-3)  # words in 0.001
+    # a stock without the cutter cannot be checked: said, not skipped
+    uncut = [c for c in check if c not in ("--cutter", "CUTTER/10,5")]
+    refused = run_pathcheck([*uncut, "--fixture", "vise.stl", "--json", "no.json"],
+                            cwd=tmp_path)
+    assert_sane(refused, "--stock and --fixture check the program's tool")
+    assert refused.code == 2 and not (tmp_path / "no.json").exists()
 
 
 def test_the_stated_stock_of_a_real_solidworks_cam_job_is_offered(realdata, tmp_path):
