@@ -78,7 +78,7 @@ def test_clean_vise_exit_0_and_the_stock_line_agrees_with_the_oracle(clean, orac
     volume = np.prod(np.subtract(STOCK[1], STOCK[0]))
     assert float(initial) == pytest.approx(volume, rel=2e-3)  # the dexels' ray cells
     want, cut = oracle
-    assert float(removed) == pytest.approx(want, rel=5e-3)
+    assert float(removed) == pytest.approx(want, rel=1e-3)  # measured: 4 mm^3 of 99,615
     s = doc["stock"]
     assert s["volume_initial"] - s["volume_final"] == pytest.approx(float(removed), abs=0.5)
     # air cuts: the feed moves that cut nothing (the oracle's depth within the tolerance): the
