@@ -97,7 +97,7 @@ def test_clean_vise_exit_0_and_the_stock_line_agrees_with_the_oracle(clean, orac
 def test_stock_out_writes_closed_stls_with_the_documents_volume(folder):
     trimesh = require_extra("trimesh", "test")
     run = run_pathcheck([str(APT), "--no-store", "--stock", "box:+2", "--stock-resolution",
-                         "0.5", "--stock-out", "stock", "--json", "out.json"], cwd=folder)
+                         "1", "--stock-out", "stock", "--json", "out.json"], cwd=folder)
     assert run.code == 0, run.why()
     doc = json.loads((folder / "out.json").read_text())
     written = sorted(p.name for p in (folder / "stock").iterdir())
@@ -142,14 +142,6 @@ def test_a_jaw_moved_into_the_path_is_a_crash_at_its_lines(moved):
     assert cells[1:4] == ["fixture", "crash", "3.0000"] and int(cells[0]) in widest
     assert doc["summary"]["status"] == "findings"
     assert doc["summary"]["counts"]["crash"] == len(findings)
-
-
-def test_without_stock_the_summary_says_so_in_one_line(folder):
-    run = run_pathcheck([str(APT), "--no-store"], cwd=folder)
-    assert run.code == 0, run.why()
-    said = [line for line in run.stdout.splitlines() if "stock" in line]
-    assert said == ["stock: not checked (no --stock): rapids and holders were checked against "
-                    "the part only"]
 
 
 def test_the_stock_the_cl_file_states_is_offered_and_checked_with_stock_cl(tmp_path):
@@ -246,14 +238,19 @@ def _gcode_positions(program: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def test_check_gcode_without_a_part_against_the_stock_and_the_vise(folder, tmp_path):
-    """The mould job posted for a vertical machine, then read back by check-gcode with the
-    cutter, a box stock and the vise and no part: clean in the vise, a crash at the blocks the
-    geometry gives with the jaw moved into the path."""
+    """The mould job checked without a stock (the summary says so) and posted for a vertical
+    machine, then read back by check-gcode with the cutter, a box stock and the vise and no
+    part: clean in the vise, a crash at the blocks the geometry gives with the jaw moved into
+    the path; a stock without the cutter refused."""
     for name in ("vise.stl", "vise_in.stl"):
         shutil.copy(folder / name, tmp_path / name)
     machine = ["--machine", "fanuc-vmc-a"]
     posted = run_pathcheck([str(APT), "--no-store", "-o", "prog.nc", *machine], cwd=tmp_path)
     assert posted.code == 0, posted.why()
+    # without --stock the summary says in one line what was not checked
+    said = [line for line in posted.stdout.splitlines() if "stock" in line]
+    assert said == ["stock: not checked (no --stock): rapids and holders were checked against "
+                    "the part only"]
     check = ["check-gcode", "prog.nc", *machine, "--cutter", "CUTTER/10,5", "--no-store",
              "--stock", "box:-82,-57,-25,82,57,2", "--stock-resolution", "0.5"]
     clean = run_pathcheck([*check, "--fixture", "vise.stl", "--json", "clean.json"],
