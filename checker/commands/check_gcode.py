@@ -85,6 +85,10 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
         raise PathcheckError(
             "part file not found: expected an existing file", path=part_path, code="part"
         )
+    if stock.asked and cutter is None:
+        raise PathcheckError("--stock and --fixture check the program's tool against them: "
+                             "expected --cutter or --tool (a G-code program does not say its "
+                             "cutter)", code="usage")
     checking = cutter is not None and (part_path is not None or stock.asked)
     store = opt.store_of(store_path, config_path) if checking and not no_store else None
     prepare_outputs([("--json", json_out, "results JSON")],

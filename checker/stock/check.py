@@ -47,11 +47,16 @@ def build_stock(request: StockRequest, part_box: np.ndarray | None, part_points,
     beyond `input_limits.MAX_STOCK_RAYS` rays is refused."""
     from checker.stock.removal import default_resolution
     from checker.stock.solid import load_solid, require_closed, solid_dexels
-    from checker.stock.spec import Box, Cylinder, parse_stock, resolve
+    from checker.stock.spec import Box, Cylinder, FromCL, parse_stock, resolve
     from checker.stock.stated import stated_stock
 
-    shape = resolve(parse_stock(request.stock), part_box, stated_stock(toolpath),
-                    part_points=part_points)
+    spec = parse_stock(request.stock)
+    try:
+        shape = resolve(spec, part_box, stated_stock(toolpath), part_points=part_points)
+    except PathcheckError as err:
+        if not isinstance(spec, FromCL):
+            raise
+        raise PathcheckError(err.message, path=toolpath.path, code=err.code) from None
     if isinstance(shape, Box):
         lo, hi = np.asarray(shape.lo, float), np.asarray(shape.hi, float)
         h = _resolution(request, hi - lo, default_resolution)
@@ -128,6 +133,10 @@ def check_stock(job, motion: ProgramMotion, cutters: dict, tol, request: StockRe
         width = np.zeros(n)
         ops = []
         out_dir = request.stock_out
+        if out_dir is not None:  # the folder asked for, made once the stock is known
+            from checker.atomic import make_parent
+
+            make_parent(Path(out_dir) / "stock_final.stl", "stock STL")
         with step("remove the stock", len(np.unique(motion.op_of))) as advance:
             for o in _ops_in_order(motion.op_of):
                 P = np.flatnonzero(motion.op_of == o)

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from checker.atomic import make_parent, write_file
+from checker.atomic import write_file
 from checker.stock.dexels import Dexels
 
 _HEADER = 84  # binary STL: 80 bytes of text, the triangle count as uint32
@@ -193,5 +193,4 @@ def write_stl(dexels: Dexels, path: str | Path) -> Path:
         at += len(tri) * record
     out[:80] = np.frombuffer(b"pathcheck dexel stock".ljust(80), np.uint8)
     out[80:84] = np.frombuffer(np.uint32((at - _HEADER) // record).tobytes(), np.uint8)
-    make_parent(path, "stock STL")
     return write_file(path, memoryview(out[:at]), what="stock STL")

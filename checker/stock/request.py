@@ -8,6 +8,7 @@ from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from checker.errors import PathcheckError
 from checker.toml_load import read_toml, validated
 
 FOLDER_FILE = "pathcheck-stock.toml"  # a batch folder's stock and fixtures
@@ -58,4 +59,20 @@ def folder_stock(job: Path) -> StockRequest | None:
     stock = got.stock
     if stock is not None and (here / stock).is_file():
         stock = str(here / stock)
-    return StockRequest(stock, tuple(local(f) for f in got.fixtures), got.resolution)
+    request = StockRequest(stock, tuple(local(f) for f in got.fixtures), got.resolution)
+    try:
+        _check_texts(request)
+    except PathcheckError as err:  # named by the folder's file, where the text was written
+        raise PathcheckError(str(err), path=path, code="config") from None
+    return request
+
+
+def _check_texts(request: StockRequest) -> None:
+    """The stock's text and the fixtures' files and placements, checked before the run."""
+    from checker.stock.fixtures import fixture_placement
+    from checker.stock.spec import parse_stock
+
+    if request.stock is not None:
+        parse_stock(request.stock)
+    for text in request.fixtures:
+        fixture_placement(text)

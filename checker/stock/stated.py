@@ -61,7 +61,7 @@ def stated_stock(toolpath: ToolPath) -> StatedStock | None:
 
 
 def _mm(v: float) -> str:
-    return f"{v + 0.0:.6g}"  # + 0.0: no "-0"
+    return f"{round(float(v), 4) + 0.0:.6g}"  # to 0.1 um (a float32 part's 4e-7 is 0); no "-0"
 
 
 def _extent(box: np.ndarray) -> str:
