@@ -222,3 +222,11 @@ def build_view(doc: ResultsDocument, *, toolpath=None, part: Mesh | None = None,
         "stock": [_mesh(label, v, t, share) for label, v, t in stock_meshes],
         "fixtures": [_mesh(label, v, t, FIXTURE_TRIANGLES) for label, v, t in fixtures],
     }
+
+
+def stl_mesh(label: str, path: str | Path) -> Mesh:
+    """An STL file (the stock the check wrote, a fixture) as `(label, vertices, triangles)`."""
+    from stl import mesh as stl_mesh_
+
+    tri = np.asarray(stl_mesh_.Mesh.from_file(str(path)).vectors, float).reshape(-1, 3)
+    return label, tri, np.arange(len(tri)).reshape(-1, 3)
