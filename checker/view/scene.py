@@ -135,6 +135,25 @@ def _findings(doc: ResultsDocument, m) -> list[dict]:
     return out
 
 
+def _markers(findings: list[dict]) -> dict:
+    """Every finding's marker and pose as arrays (`at`, `tip`, `axis` float32 (F, 3); `verdict`
+    uint8 index into FINDINGS; `line` int32, -1 unknown; `op` uint16; `index` uint32 in its
+    list) and the table's rows: the TABLE_ROWS deepest findings, each with its `marker`."""
+    rank = {v: k for k, v in enumerate(FINDINGS)}
+    depth = np.array([np.nan if f["depth"] is None else f["depth"] for f in findings], float)
+    order = np.argsort(-np.nan_to_num(depth, nan=-np.inf), kind="stable")[:TABLE_ROWS]
+    rows = [dict(findings[i], marker=int(i)) for i in order]
+    col = (lambda key: np.array([f[key] for f in findings], float).reshape(-1, 3))
+    return {"count": len(findings), "at": b64(col("at"), "f4"), "tip": b64(col("tip"), "f4"),
+            "axis": b64(col("axis"), "f4"),
+            "verdict": b64(np.array([rank[f["verdict"]] for f in findings], np.uint8), "u1"),
+            "line": b64(np.array([-1 if f["line"] is None else f["line"] for f in findings],
+                                 np.int64), "i4"),
+            "op": b64(np.array([f["op"] for f in findings], np.int64), "u2"),
+            "index": b64(np.array([f["index"] for f in findings], np.int64), "u4"),
+            "rows": rows}
+
+
 def _segment_kinds(m, findings: list[dict]) -> np.ndarray:
     """(N - 1,) uint8: the kind of the segment from row i to row i + 1 (module constants); a
     segment that ends at a finding's move takes the worst verdict there."""
@@ -210,10 +229,8 @@ def build_view(doc: ResultsDocument, *, toolpath=None, part: Mesh | None = None,
         "kinds": list(KINDS),
         "part": None if part is None else _mesh(*part, PART_TRIANGLES),
         "path": {"positions": b64(tip, "f4"), "points": len(tip),
-                 "kinds": b64(_segment_kinds(m, findings), "u1"),
-                 "lines": b64(np.asarray(m.line, np.int64), "u4")},
-        "findings": findings,
-        "table_rows": TABLE_ROWS,
+                 "kinds": b64(_segment_kinds(m, findings), "u1")},
+        "findings": _markers(findings),
         "reoriented": _reoriented(doc, m)[:REORIENTED_ROWS],
         "axes": _axes(m, reach),
         "axis_reach": reach,

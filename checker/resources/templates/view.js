@@ -12,9 +12,9 @@ const S = JSON.parse(document.getElementById('scene').textContent);
 const COLOURS = {
   rapid: '#e0a800', feed: '#1f5fa8', gouge: '#d62728', interference: '#ff7f0e',
   holder: '#9467bd', crash: '#8b0000', part: '#b4bcc6', stock: '#c9a27a', fixture: '#6b8e6b',
-  axis: '#2f6fd0', cam: '#f08c00', body: '#d4a017', shank: '#9aa0a6', holderPiece: '#4b525a',
+  axis: '#2f6fd0', cam: '#c2185b', body: '#d4a017', shank: '#9aa0a6', holderPiece: '#4b525a',
 };
-const MARKER_PX = 10;
+const MARKER_PX = S.findings.count > 1000 ? 7 : 10;
 
 const bytes = (b64) => {
   const s = atob(b64);
@@ -115,17 +115,22 @@ if (S.axes) {
 
 // the findings: a marker each, drawn over everything at a fixed size on screen
 const F = S.findings;
+const FINDINGS = S.kinds.slice(2);
+const M = F.count ? {
+  at: f32(F.at), tip: f32(F.tip), axis: f32(F.axis), verdict: bytes(F.verdict),
+  line: new Int32Array(bytes(F.line).buffer), op: new Uint16Array(bytes(F.op).buffer),
+  index: u32(F.index),
+} : null;
 let markers = null;
-if (F.length) {
-  const pos = new Float32Array(F.length * 3);
-  const col = new Float32Array(F.length * 3);
-  F.forEach((f, i) => {
-    pos.set(f.at, 3 * i);
-    const c = new THREE.Color(COLOURS[f.verdict]);
-    col.set([c.r, c.g, c.b], 3 * i);
-  });
+if (M) {
+  const col = new Float32Array(F.count * 3);
+  const palette = FINDINGS.map((v) => new THREE.Color(COLOURS[v]));
+  for (let i = 0; i < F.count; i++) {
+    const c = palette[M.verdict[i]];
+    col[3 * i] = c.r; col[3 * i + 1] = c.g; col[3 * i + 2] = c.b;
+  }
   const g = new THREE.BufferGeometry();
-  g.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+  g.setAttribute('position', new THREE.BufferAttribute(M.at, 3));
   g.setAttribute('color', new THREE.BufferAttribute(col, 3));
   markers = new THREE.Points(g, new THREE.PointsMaterial({
     size: MARKER_PX, sizeAttenuation: false, vertexColors: true, depthTest: false,
@@ -243,17 +248,24 @@ function showPose(sel) {
 }
 
 function pose(table, row) {
-  const f = table === 'findings' ? F[row] : S.reoriented[row];
+  if (table === 'markers') {
+    const v = (a, i) => [a[3 * i], a[3 * i + 1], a[3 * i + 2]];
+    const k = F.rows.findIndex((r) => r.marker === row);
+    return { table: k >= 0 ? 'findings' : 'markers', row: k >= 0 ? k : row, index: M.index[row],
+      line: M.line[row] < 0 ? null : M.line[row], op: M.op[row], verdict: FINDINGS[M.verdict[row]],
+      tip: v(M.tip, row), axis: v(M.axis, row), cam: null };
+  }
+  const f = table === 'findings' ? F.rows[row] : S.reoriented[row];
   return { table, row, index: f.index, kind: f.kind ?? 'cl', line: f.line, op: f.op,
     verdict: f.verdict, tip: f.tip, axis: f.axis, cam: f.cam ?? null };
 }
 
 function fillTables() {
   const body = $('findings').tBodies[0];
-  const rows = Math.min(F.length, S.table_rows);
-  $('findings-title').textContent = F.length > rows ? `Findings (${rows} of ${F.length} listed)` : `Findings (${F.length})`;
+  const rows = F.rows.length;
+  $('findings-title').textContent = F.count > rows ? `Findings (the ${rows} deepest of ${F.count})` : `Findings (${F.count})`;
   for (let i = 0; i < rows; i++) {
-    const f = F[i];
+    const f = F.rows[i];
     const tr = body.insertRow();
     tr.dataset.row = i;
     tr.innerHTML = `<td class="n">${i + 1}</td><td class="n">${f.line ?? '–'}</td>` +
@@ -336,7 +348,7 @@ function controlsUi() {
     const dist = camera.position.distanceTo(controls.target);
     ray.params.Points.threshold = (2 * dist * Math.tan(THREE.MathUtils.degToRad(camera.fov / 2)) / r.height) * MARKER_PX;
     const hit = ray.intersectObject(markers)[0];
-    if (hit && hit.index < S.table_rows) showPose(pose('findings', hit.index));
+    if (hit) showPose(pose('markers', hit.index));
   });
 }
 
