@@ -12,7 +12,7 @@ const S = JSON.parse(document.getElementById('scene').textContent);
 const COLOURS = {
   rapid: '#e0a800', feed: '#1f5fa8', gouge: '#d62728', interference: '#ff7f0e',
   holder: '#9467bd', crash: '#8b0000', part: '#b4bcc6', stock: '#c9a27a', fixture: '#6b8e6b',
-  axis: '#2f6fd0', cam: '#c2185b', body: '#d4a017', shank: '#9aa0a6', holderPiece: '#4b525a',
+  axis: '#2f6fd0', cam: '#c2185b', body: '#00a5a5', shank: '#9aa0a6', holderPiece: '#4b525a',
 };
 const MARKER_PX = S.findings.count > 1000 ? 7 : 10;
 
@@ -134,6 +134,7 @@ if (M) {
   g.setAttribute('color', new THREE.BufferAttribute(col, 3));
   markers = new THREE.Points(g, new THREE.PointsMaterial({
     size: MARKER_PX, sizeAttenuation: false, vertexColors: true, depthTest: false,
+    transparent: true, // drawn with the transparent objects, after them (renderOrder)
   }));
   markers.renderOrder = 10;
   scene.add(markers);
@@ -165,7 +166,10 @@ const poseAxes = new THREE.Group();
 scene.add(poseAxes);
 
 const state = { selected: null };
-window.pathcheckView = { THREE, scene, camera, renderer, controls, state, tools };
+window.pathcheckView = {
+  THREE, scene, camera, renderer, controls, state, tools, poseAxes, markerPx: MARKER_PX,
+  firstRow: S.findings.rows[0] ?? null,
+};
 
 function fit() {
   const centre = lo.clone().add(hi).multiplyScalar(0.5);
@@ -220,7 +224,7 @@ function axisLine(from, dir, length, colour) {
   const a = new THREE.Vector3(...from);
   const b = a.clone().addScaledVector(new THREE.Vector3(...dir).normalize(), length);
   const g = new THREE.BufferGeometry().setFromPoints([a, b]);
-  return new THREE.Line(g, new THREE.LineBasicMaterial({ color: colour, depthTest: false }));
+  return new THREE.Line(g, new THREE.LineBasicMaterial({ color: colour }));
 }
 
 // show the tool of operation `op` at `tip` along `axis`; `cam` the CAM's axis when re-oriented
@@ -232,6 +236,12 @@ function showPose(sel) {
     tool.position.set(...sel.tip);
     tool.quaternion.setFromUnitVectors(Z, new THREE.Vector3(...sel.axis).normalize());
     tool.visible = true;
+  }
+  if (part) { // the tool is often inside the material: the part seen through
+    part.material.transparent = true;
+    part.material.opacity = 0.3;
+    part.material.depthWrite = false;
+    part.material.needsUpdate = true;
   }
   const reach = S.axis_reach * 2;
   poseAxes.add(axisLine(sel.tip, sel.axis, reach, COLOURS.axis));
