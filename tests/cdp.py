@@ -5,6 +5,7 @@ dependency beyond the standard library. For the browser tests of the pages pathc
 from __future__ import annotations
 
 import base64
+import contextlib
 import io
 import json
 import os
@@ -141,10 +142,8 @@ class Browser:
                       button="left" if kind != "mouseMoved" else "none", clickCount=1)
 
     def close(self) -> None:
-        try:
+        with contextlib.suppress(RuntimeError, TimeoutError, OSError):
             self.call("Browser.close")
-        except (RuntimeError, TimeoutError, OSError):
-            pass
         try:
             self.proc.wait(timeout=10)
         except subprocess.TimeoutExpired:

@@ -143,7 +143,10 @@ def _markers(findings: list[dict]) -> dict:
     depth = np.array([np.nan if f["depth"] is None else f["depth"] for f in findings], float)
     order = np.argsort(-np.nan_to_num(depth, nan=-np.inf), kind="stable")[:TABLE_ROWS]
     rows = [dict(findings[i], marker=int(i)) for i in order]
-    col = (lambda key: np.array([f[key] for f in findings], float).reshape(-1, 3))
+
+    def col(key: str) -> np.ndarray:
+        return np.array([f[key] for f in findings], float).reshape(-1, 3)
+
     return {"count": len(findings), "at": b64(col("at"), "f4"), "tip": b64(col("tip"), "f4"),
             "axis": b64(col("axis"), "f4"),
             "verdict": b64(np.array([rank[f["verdict"]] for f in findings], np.uint8), "u1"),
