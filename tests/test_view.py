@@ -186,3 +186,50 @@ def test_view_command_refuses_bad_input(tmp_path):
     assert "Traceback" not in run.stderr and len(run.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "v.html").exists()
 
+
+
+@pytest.mark.slow
+def test_check_and_check_gcode_write_their_views(tmp_path):
+    """`--view` on `check` (with a stock written per operation and a fixture: both in the view)
+    and on `check-gcode` (the program's own motions as the path)."""
+    from checker.results import ResultsDocument
+
+    job, part = REPO / "samples/mould/mould.apt", REPO / "samples/mould/mould.json"
+    view, results, program = tmp_path / "v.html", tmp_path / "r.json", tmp_path / "m.nc"
+    run = subprocess.run(
+        [sys.executable, "-m", "checker.cli", str(job), "--stock", "box:+2", "--fixture",
+         str(REPO / "samples/fixtures/vise.stl"), "--stock-resolution", "2", "--stock-out",
+         str(tmp_path / "stock"), "--json", str(results), "-o", str(program), "--machine",
+         "fanuc-hmc", "--no-store", "-q", "--view", str(view)],
+        capture_output=True, text=True, cwd=REPO, timeout=600)
+    assert run.returncode == 0, run.stderr
+    doc = ResultsDocument.model_validate_json(results.read_text())
+    scene = scene_of(view.read_text())
+    assert [s["label"] for s in scene["stock"]] == ["op 1 OP1"] == \
+        [f"op {o.op + 1} OP1" for o in doc.stock.operations]
+    assert [f["label"] for f in scene["fixtures"]] == ["vise.stl"]
+    from checker.view.scene import stl_mesh
+
+    _, v, _ = stl_mesh("stock", doc.stock.operations[0].stl)
+    stock = arr(scene["stock"][0]["positions"], "f4").reshape(-1, 3)
+    np.testing.assert_allclose([stock.min(axis=0), stock.max(axis=0)],
+                               [v.min(axis=0), v.max(axis=0)], atol=1e-3)
+    gview = tmp_path / "g.html"
+    run = subprocess.run(
+        [sys.executable, "-m", "checker.cli", "check-gcode", str(program), "--machine",
+         "fanuc-hmc", "--part", str(part), "--cutter", "CUTTER/10,5", "--no-store", "-q",
+         "--view", str(gview)], capture_output=True, text=True, cwd=REPO, timeout=600)
+    assert run.returncode == 0, run.stderr
+    from postproc.machine import load_machine
+    from postproc.reader import read_gcode
+    from postproc.replay import part_motions, toolpath_of
+
+    mach = load_machine("fanuc-hmc")
+    motions = part_motions(read_gcode(program, mach.dialect, units=mach.units), mach)
+    from checker.config import default_config
+
+    m = toolpath_of(motions, path=program, units="mm", cutter=None).motion_arrays(
+        arc_chord_tol=default_config().check.arc_chord_tolerance)
+    tip = arr(scene_of(gview.read_text())["path"]["positions"], "f4").reshape(-1, 3)
+    assert len(tip) == len(m) > 1000
+    np.testing.assert_allclose(tip, m.tip, atol=1e-3)

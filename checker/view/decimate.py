@@ -28,13 +28,19 @@ def cluster(vertices: np.ndarray, triangles: np.ndarray, cell: float
     return merged[used], compact.reshape(-1, 3)
 
 
+def weld(vertices: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh with its equal vertices merged (an STL's triangle soup shares its corners):
+    (vertices (V', 3), triangles (T, 3)); nothing moves."""
+    v, inverse = np.unique(np.asarray(vertices, float), axis=0, return_inverse=True)
+    return v, inverse.ravel()[np.asarray(triangles, np.int64)]
+
+
 def decimate(vertices: np.ndarray, triangles: np.ndarray, max_triangles: int
              ) -> tuple[np.ndarray, np.ndarray, float]:
     """At most `max_triangles` triangles by `cluster` with the finest cell that gets there (the
     cell grown by 1.5x from the one such a count needs on a flat sheet): (vertices, triangles,
-    cell mm; 0.0 when the mesh was small enough already)."""
-    v = np.asarray(vertices, float)
-    t = np.asarray(triangles, np.int64)
+    cell mm; 0.0 when the mesh, welded, was small enough already)."""
+    v, t = weld(vertices, triangles)
     if len(t) <= max_triangles:
         return v, t, 0.0
     extent = np.ptp(v, axis=0)
