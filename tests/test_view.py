@@ -233,3 +233,22 @@ def test_check_and_check_gcode_write_their_views(tmp_path):
     tip = arr(scene_of(gview.read_text())["path"]["positions"], "f4").reshape(-1, 3)
     assert len(tip) == len(m) > 1000
     np.testing.assert_allclose(tip, m.tip, atol=1e-3)
+
+
+def test_report_links_the_views_written_beside_it(tmp_path):
+    """A job whose `JOB.view.html` is beside the report gets a link to it; the others none."""
+    from checker.report import build_report
+    from checker.report.synthetic import synthetic_document
+    from checker.store import ResultsStore
+
+    now = 1_790_000_000.0
+    with ResultsStore(tmp_path / "s.sqlite") as store:
+        for k, name in enumerate(("jobs/mould.apt", "jobs/blade.apt")):
+            store.record_job(synthetic_document(k, n=11, path=name), elapsed_s=1.0,
+                             recorded_at=now - 100 + k)
+        (tmp_path / "mould.view.html").write_text("<!DOCTYPE html>")
+        files = build_report(store, tmp_path / "report.html", now=now)
+    html = files.html.read_text()
+    assert html.count('<a class="view" href="mould.view.html">3-D view</a>') == 2  # row, section
+    assert "blade.view.html" not in html and html.count('class="view"') == 2
+    assert "view" not in files.csv.read_text().splitlines()[0].split(",")
