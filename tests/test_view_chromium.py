@@ -218,8 +218,26 @@ def test_impeller_shows_the_reoriented_axis(browser, impeller):
     m = read_cl(doc.job.path).motion_arrays(
         arc_chord_tol=default_config().check.arc_chord_tolerance)
     np.testing.assert_allclose(selected["cam"], m.axis[p.move], atol=1e-6)
+    np.testing.assert_allclose(selected["cam_tip"], m.tip[p.move], atol=1e-6)
     turned = np.degrees(np.arccos(np.clip(np.dot(selected["cam"], p.axis), -1, 1)))
     assert turned > 1.0
     # both axes drawn at the pose: the written and the CAM's
     assert browser.evaluate("window.pathcheckView.poseAxes.children.length") == 2
     _clean(browser, html)
+    # along the path: the written axes, and the CAM's at every re-oriented CL pose
+    from test_view import arr, scene_of
+
+    axes = scene_of(html.read_text())["axes"]
+    cl = [q for q in doc.points if q.kind == "cl"]
+    turned = [q for q in cl if np.degrees(np.arccos(np.clip(np.dot(q.axis, m.axis[q.move]),
+                                                             -1, 1))) > 0.1]
+    assert axes["cam_count"] == len(turned) > 10
+    seg = arr(axes["cam"], "f4").reshape(-1, 2, 3)
+    reach = scene_of(html.read_text())["axis_reach"]
+    want = np.array([m.axis[q.move] for q in turned])
+    np.testing.assert_allclose(seg[:, 0], [m.tip[q.move] for q in turned], atol=1e-4)
+    np.testing.assert_allclose((seg[:, 1] - seg[:, 0]) / reach, want, atol=1e-4)
+    # the path is the written program's: its CL records at the written tips
+    path = arr(scene_of(html.read_text())["path"]["positions"], "f4").reshape(-1, 3)
+    np.testing.assert_allclose(path[[q.move for q in cl]], [q.tip for q in cl], atol=1e-4)
+    assert max(np.linalg.norm(np.subtract(q.tip, m.tip[q.move])) for q in turned) > 1.0

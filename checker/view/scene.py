@@ -181,18 +181,40 @@ def _reoriented(doc: ResultsDocument, m) -> list[dict]:
     order = order[ang[order] > REORIENTED_DEG]
     return [{"index": pts[i].index, "line": pts[i].line, "op": pts[i].op,
              "verdict": pts[i].verdict, "tip": list(pts[i].tip), "axis": list(pts[i].axis),
-             "cam": cam[i].tolist(), "angle": round(float(ang[i]), 3)} for i in order]
+             "cam": cam[i].tolist(), "cam_tip": m.tip[pts[i].move].tolist(),
+             "angle": round(float(ang[i]), 3)} for i in order]
 
 
-def _axes(m, reach: float) -> dict | None:
-    """Tool axes sampled along a path whose axis varies: (tip, tip + reach * axis) segments."""
-    axis = np.asarray(m.axis, float)
-    if len(axis) == 0 or np.ptp(axis, axis=0).max() < 1e-6:
+def written_path(doc: ResultsDocument, m) -> tuple[np.ndarray, np.ndarray]:
+    """(tip (N, 3), axis (N, 3)) of each motion row as the program is written: the document's
+    pose at its CL records (a re-oriented pose moves the tip too), the CL file's (the CAM's)
+    elsewhere."""
+    tip, axis = np.array(m.tip, float), np.array(m.axis, float)
+    rows = [p for p in doc.points if p.kind == "cl" and 0 <= p.move < len(m)]
+    if rows:
+        at = [p.move for p in rows]
+        tip[at] = [p.tip for p in rows]
+        axis[at] = [p.axis for p in rows]
+    return tip, axis
+
+
+def _axes(m, tip: np.ndarray, written: np.ndarray, reach: float) -> dict | None:
+    """Tool axes along a path whose axis varies, as (tip, tip + reach * axis) segments: the
+    written poses `tip`, `written` sampled along the feed moves (at most AXIS_SAMPLES), and the
+    CAM's (the CL file's `m`) at every re-oriented pose (at most AXIS_SAMPLES)."""
+    cam = np.asarray(m.axis, float)
+    if len(cam) == 0 or max(np.ptp(cam, axis=0).max(), np.ptp(written, axis=0).max()) < 1e-6:
         return None
     rows = np.flatnonzero(~np.asarray(m.rapid, bool))
     rows = rows[np.linspace(0, len(rows) - 1, min(len(rows), AXIS_SAMPLES)).astype(int)]
-    seg = np.stack([m.tip[rows], m.tip[rows] + reach * axis[rows]], axis=1)
-    return {"segments": b64(seg.reshape(-1, 3), "f4"), "count": len(rows)}
+    turned = np.flatnonzero(_angle_deg(written, cam) > REORIENTED_DEG)
+    turned = turned[np.linspace(0, len(turned) - 1, min(len(turned), AXIS_SAMPLES)).astype(int)]
+
+    def segments(r: np.ndarray, at: np.ndarray, axis: np.ndarray) -> str:
+        return b64(np.stack([at[r], at[r] + reach * axis[r]], axis=1).reshape(-1, 3), "f4")
+
+    return {"segments": segments(rows, tip, written), "count": len(rows),
+            "cam": segments(turned, np.asarray(m.tip, float), cam), "cam_count": len(turned)}
 
 
 def build_view(doc: ResultsDocument, *, toolpath=None, part: Mesh | None = None,
@@ -217,7 +239,7 @@ def build_view(doc: ResultsDocument, *, toolpath=None, part: Mesh | None = None,
     ops = np.unique(np.asarray(m.op))
     cutters = _cutters(doc, toolpath, ops, cutter)
     reach = 2.0 * max(float(c.d) for c in cutters.values())
-    tip = np.asarray(m.tip, float)
+    tip, written = written_path(doc, m)
     boxes = [tip]
     if part is not None:
         boxes.append(np.asarray(part[1], float))
@@ -235,7 +257,7 @@ def build_view(doc: ResultsDocument, *, toolpath=None, part: Mesh | None = None,
                  "kinds": b64(_segment_kinds(m, findings), "u1")},
         "findings": _markers(findings),
         "reoriented": _reoriented(doc, m)[:REORIENTED_ROWS],
-        "axes": _axes(m, reach),
+        "axes": _axes(m, tip, written, reach),
         "axis_reach": reach,
         "tools": {str(o): {"cutter": c.to_apt(), "pieces": tool_outlines(c)}
                   for o, c in cutters.items()},

@@ -104,14 +104,21 @@ rapidGeom.setIndex(rapidIdx);
 const rapidLines = new THREE.LineSegments(rapidGeom, new THREE.LineBasicMaterial({ vertexColors: true, clippingPlanes: clipped, transparent: true, opacity: 0.6 }));
 scene.add(pathLines, rapidLines);
 
-// the tool axes along a multi-axis path
-let axes = null;
+// the tool axes along a multi-axis path: as written, and the CAM's where re-oriented
+const axes = new THREE.Group();
 if (S.axes) {
-  axes = segments(f32(S.axes.segments), null, COLOURS.axis);
-  axes.material.transparent = true;
-  axes.material.opacity = 0.35;
-  scene.add(axes);
+  const written = segments(f32(S.axes.segments), null, COLOURS.axis);
+  written.material.transparent = true;
+  written.material.opacity = 0.35;
+  axes.add(written);
+  if (S.axes.cam_count) {
+    const cam = segments(f32(S.axes.cam), null, COLOURS.cam);
+    cam.material.transparent = true;
+    cam.material.opacity = 0.5;
+    axes.add(cam);
+  }
 }
+scene.add(axes);
 
 // the findings: a marker each, drawn over everything at a fixed size on screen
 const F = S.findings;
@@ -245,7 +252,7 @@ function showPose(sel) {
   }
   const reach = S.axis_reach * 2;
   poseAxes.add(axisLine(sel.tip, sel.axis, reach, COLOURS.axis));
-  if (sel.cam) poseAxes.add(axisLine(sel.tip, sel.cam, reach, COLOURS.cam));
+  if (sel.cam) poseAxes.add(axisLine(sel.cam_tip ?? sel.tip, sel.cam, reach, COLOURS.cam));
   state.selected = sel;
   document.body.dataset.selected = JSON.stringify(sel);
   $('pose').textContent = `line ${sel.line ?? '–'}  ${sel.verdict ?? ''}  op ${sel.op}\n` +
@@ -267,7 +274,7 @@ function pose(table, row) {
   }
   const f = table === 'findings' ? F.rows[row] : S.reoriented[row];
   return { table, row, index: f.index, kind: f.kind ?? 'cl', line: f.line, op: f.op,
-    verdict: f.verdict, tip: f.tip, axis: f.axis, cam: f.cam ?? null };
+    verdict: f.verdict, tip: f.tip, axis: f.axis, cam: f.cam ?? null, cam_tip: f.cam_tip ?? null };
 }
 
 function fillTables() {
