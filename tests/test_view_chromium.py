@@ -192,6 +192,28 @@ def test_demo_job(browser, demo):
     _clean(browser, html)
 
 
+def test_clicking_a_marker_selects_its_finding(browser, demo):
+    """A real click on an isolated marker shows the tool at that finding's pose."""
+    doc, html = demo
+    camera = _open(browser, html)
+    found = [p for p in doc.points if p.verdict in FINDINGS]
+    xy = project(camera, np.array([p.point if p.point is not None else p.tip for p in found]))
+    size = browser.evaluate("window.pathcheckView.markerPx")
+    gap = np.abs(xy[:, None] - xy[None]).max(axis=2) + np.eye(len(xy)) * 1e9
+    alone = np.flatnonzero((gap.min(axis=1) > 3 * size) & _inside(camera, xy, 40))
+    assert len(alone) > 0
+    i = alone[0]
+    browser.click(*xy[i])
+    end = time.monotonic() + 10
+    while not browser.evaluate("Boolean(document.body.dataset.selected)"):
+        assert time.monotonic() < end, "no pose selected by the click"
+        time.sleep(0.05)
+    selected = json.loads(browser.evaluate("document.body.dataset.selected"))
+    assert selected["index"] == found[i].index
+    np.testing.assert_allclose(selected["tip"], found[i].tip, atol=1e-4)  # float32 markers
+    _clean(browser, html)
+
+
 def test_real_amorim_job(browser, amorim):
     doc, html = amorim
     camera, before = _shows_findings_and_part(browser, doc, html)

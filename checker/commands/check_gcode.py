@@ -88,6 +88,9 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
             "part file not found: expected an existing file", path=part_path, code="part"
         )
     checking = cutter is not None and (part_path is not None or stock.asked)
+    if view_out is not None and not checking:
+        raise PathcheckError("--view shows a check: give --cutter with --part or --stock",
+                             code="usage")
     store = opt.store_of(store_path, config_path) if checking and not no_store else None
     prepare_outputs([("--json", json_out, "results JSON"), ("--view", view_out, "3-D view")],
                     job_inputs(program, part_path, config_path, tool_library, machine, store,
