@@ -252,3 +252,13 @@ def test_report_links_the_views_written_beside_it(tmp_path):
     assert html.count('<a class="view" href="mould.view.html">3-D view</a>') == 2  # row, section
     assert "blade.view.html" not in html and html.count('class="view"') == 2
     assert "view" not in files.csv.read_text().splitlines()[0].split(",")
+
+
+def test_check_gcode_view_needs_a_check(tmp_path):
+    program = tmp_path / "p.nc"
+    program.write_text("%\nO1\nG21 G90 G17\nG0 X0 Y0 Z10\nG1 Z0 F100\nM30\n%\n")
+    run = subprocess.run([sys.executable, "-m", "checker.cli", "check-gcode", str(program),
+                          "--machine", "fanuc-vmc-a", "--view", str(tmp_path / "v.html")],
+                         capture_output=True, text=True, cwd=REPO, timeout=120)
+    assert run.returncode == 2 and "--view shows a check" in run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1 and not (tmp_path / "v.html").exists()
