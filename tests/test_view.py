@@ -218,7 +218,8 @@ def test_check_and_check_gcode_write_their_views(tmp_path):
     run = subprocess.run(
         [sys.executable, "-m", "checker.cli", "check-gcode", str(program), "--machine",
          "fanuc-hmc", "--part", str(part), "--cutter", "CUTTER/10,5", "--no-store", "-q",
-         "--view", str(gview)], capture_output=True, text=True, cwd=REPO, timeout=600)
+         "--view", str(gview), "--json", str(tmp_path / "g.json")], capture_output=True,
+        text=True, cwd=REPO, timeout=600)
     assert run.returncode == 0, run.stderr
     from postproc.machine import load_machine
     from postproc.reader import read_gcode
@@ -233,6 +234,13 @@ def test_check_and_check_gcode_write_their_views(tmp_path):
     tip = arr(scene_of(gview.read_text())["path"]["positions"], "f4").reshape(-1, 3)
     assert len(tip) == len(m) > 1000
     np.testing.assert_allclose(tip, m.tip, atol=1e-3)
+    # `pathcheck view` of the G-code check's results reads the program again: the same path
+    again = tmp_path / "g2.html"
+    run = subprocess.run([sys.executable, "-m", "checker.cli", "view", str(tmp_path / "g.json"),
+                          "-o", str(again), "--machine", "fanuc-hmc"], capture_output=True,
+                         text=True, cwd=REPO, timeout=600)
+    assert run.returncode == 0, run.stderr
+    assert scene_of(again.read_text())["path"] == scene_of(gview.read_text())["path"]
 
 
 def test_report_links_the_views_written_beside_it(tmp_path):

@@ -61,15 +61,19 @@ def write_after_check(view_out: Path | None, doc, *, toolpath=None, cutter=None,
 
 @click.command()
 @click.argument("results", type=click.Path(dir_okay=False, path_type=Path))
-@opt.output_option("the HTML page", default=None)
+@opt.output_option("the HTML page [default: RESULTS with .html]", default=None)
+@opt.machine_option(help="a G-code program's machine (name or TOML file), when its results "
+                    "name none")
 @opt.config_option()
-def view(results: Path, output: Path | None, config_path: Path | None) -> None:
+def view(results: Path, output: Path | None, machine: str | None,
+         config_path: Path | None) -> None:
     """Write the interactive 3-D view of the checked job RESULTS (a results JSON of `pathcheck
     JOB --json`): one HTML file that opens offline in a browser. The job's CL file and part
     are read again from the paths the document names (or beside it).
 
     \b
     pathcheck view out/mould.json -o out/mould.html
+    pathcheck view out/prog.json --machine fanuc-hmc   # a check-gcode result
     """
     from pydantic import ValidationError
 
@@ -94,5 +98,5 @@ def view(results: Path, output: Path | None, config_path: Path | None) -> None:
                              path=results, code="parse") from None
     with step("write the 3-D view"):
         path = write_view(output, doc, config=config_path, beside=results.parent,
-                          stock_meshes=stock_meshes(doc, results.parent))
+                          stock_meshes=stock_meshes(doc, results.parent), machine=machine)
     click.echo(f"3-D view: {path} ({path.stat().st_size / 1e6:.1f} MB)")

@@ -78,17 +78,30 @@ def part_mesh(doc: ResultsDocument, beside: Path | None = None, config=None) -> 
     return path.name, v, np.asarray(tris.triangles)
 
 
-def read_toolpath(doc: ResultsDocument, beside: Path | None = None):
-    """The CL file the document was checked from (`job.path`)."""
+def read_toolpath(doc: ResultsDocument, beside: Path | None = None,
+                  machine: str | None = None):
+    """The program the document was checked from (`job.path`): a CL file, or a G-code program
+    (`job.dialect` "gcode") brought back into the part frame on `machine` (default the
+    document's `job.machine`) as `pathcheck check-gcode` reads it by default (block delete on,
+    the machine's units until G20/G21)."""
     from checker.apt import read_cl
     from checker.errors import PathcheckError
 
-    if doc.job.dialect.lower() in ("gcode", "g-code") or \
-            Path(doc.job.path).suffix.lower() in (".nc", ".ngc", ".gcode", ".tap", ".h", ".mpf"):
-        raise PathcheckError("a G-code program's view is written by `pathcheck check-gcode "
-                             "--view FILE.html`: expected the results of a CL file",
-                             path=doc.job.path, code="usage")
-    return read_cl(_resolve(doc.job.path, beside))
+    path = _resolve(doc.job.path, beside)
+    if doc.job.dialect != "gcode":
+        return read_cl(path)
+    machine = machine or doc.job.machine
+    if machine is None:
+        raise PathcheckError("a G-code program's results name no machine: expected --machine "
+                             "NAME|FILE, the machine it was checked for", path=doc.job.path,
+                             code="usage")
+    from postproc.machine import load_machine
+    from postproc.reader import read_gcode
+    from postproc.replay import part_motions, toolpath_of
+
+    mach = load_machine(machine)
+    moves = read_gcode(path, mach.dialect, units=mach.units, block_delete=True)
+    return toolpath_of(part_motions(moves, mach), path=path, units=moves.units, cutter=None)
 
 
 def _cutters(doc: ResultsDocument, toolpath, ops: np.ndarray, cutter) -> dict:
@@ -220,18 +233,19 @@ def _axes(m, tip: np.ndarray, written: np.ndarray, reach: float) -> dict | None:
 def build_view(doc: ResultsDocument, *, toolpath=None, part: Mesh | None = None,
                stock_meshes: Sequence[Mesh] = (), fixtures: Sequence[Mesh] = (),
                cutter=None, config=None, beside: Path | None = None,
-               load_part: bool = True) -> dict:
+               load_part: bool = True, machine: str | None = None) -> dict:
     """The scene (a JSON-able dict) of the checked job `doc`: `toolpath` the program checked
     (default: the CL file `job.path`, read again), `part` its triangles (default: `job.part`
     loaded when `load_part`), `stock_meshes` the stock after each operation in program order
     and `fixtures`, each `(label, vertices (V, 3), triangles (T, 3))` in the part frame (mm);
     `cutter` the cutter the check was given (default: the CL file's); relative paths of the
-    document are also looked for in the folder `beside`."""
+    document are also looked for in the folder `beside`; `machine` that of a G-code program
+    (`read_toolpath`)."""
     from checker.job_inputs import job_config
 
     cfg = job_config(config)
     if toolpath is None:
-        toolpath = read_toolpath(doc, beside)
+        toolpath = read_toolpath(doc, beside, machine)
     m = toolpath.motion_arrays(arc_chord_tol=cfg.check.arc_chord_tolerance)
     if part is None and load_part:
         part = part_mesh(doc, beside, config)
