@@ -38,7 +38,8 @@ $(STAMP): pyproject.toml
 demo: setup
 	mkdir -p out
 	PATHCHECK_STORE=out/results.sqlite $(BIN)/pathcheck samples/compressor/compressor_small_d12.apt \
-		--json out/compressor_d12.json -o out/compressor_d12.nc --on-findings stop; test $$? -le 1
+		--json out/compressor_d12.json -o out/compressor_d12.nc --on-findings stop \
+		--view out/compressor_small_d12.view.html; test $$? -le 1
 	PATHCHECK_STORE=out/results.sqlite $(BIN)/pathcheck report -o out/report.html
 
 # two processes (the CI machines have two cores; much of the suite is single-threaded:

@@ -270,3 +270,18 @@ def test_check_gcode_view_needs_a_check(tmp_path):
                          capture_output=True, text=True, cwd=REPO, timeout=120)
     assert run.returncode == 2 and "--view shows a check" in run.stderr
     assert len(run.stderr.strip().splitlines()) == 1 and not (tmp_path / "v.html").exists()
+
+
+@pytest.mark.slow
+def test_view_is_written_when_posting_is_refused(tmp_path):
+    """Findings refuse the program (-o without --on-findings): no G-code, but the view, which
+    is what shows them."""
+    job = AMORIM / "RotateThin.apt"
+    if not job.is_file():
+        pytest.skip(f"{job} not present")
+    program, view = tmp_path / "p.nc", tmp_path / "RotateThin.view.html"
+    run = subprocess.run([sys.executable, "-m", "checker.cli", str(job), "-o", str(program),
+                          "--view", str(view), "--no-store", "-q"], capture_output=True,
+                         text=True, cwd=REPO, timeout=600)
+    assert run.returncode == 1 and "not written" in run.stderr
+    assert not program.exists() and scene_of(view.read_text())["findings"]["count"] > 100

@@ -205,6 +205,8 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
                         reorient=reorient, strategy=strategy, part_transform=part_transform,
                         cutter_units=units, on_findings=on_findings, stock=stock)
     except PostRefusedError as refused:
+        write_after_check(view_out, refused.document, cutter=cutter, stock=stock,
+                          config=config_path)
         try:
             finish(refused.document, json_out, store=not no_store, store_path=store)
         finally:
