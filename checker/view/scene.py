@@ -175,10 +175,12 @@ def _segment_kinds(m, findings: list[dict]) -> np.ndarray:
     segment that ends at a finding's move takes the worst verdict there."""
     kinds = np.where(np.asarray(m.rapid[1:], bool), RAPID, FEED).astype(np.uint8)
     rank = {v: k for k, v in enumerate(FINDINGS)}
-    for f in sorted(findings, key=lambda f: rank[f["verdict"]]):
-        if 1 <= f["move"] < len(m):
-            kinds[f["move"] - 1] = 2 + rank[f["verdict"]]
-    return kinds
+    move = np.array([f["move"] for f in findings], np.int64)
+    code = np.array([2 + rank[f["verdict"]] for f in findings], np.uint8)
+    keep = (move >= 1) & (move < len(m))
+    worst = np.zeros(len(kinds), np.uint8)
+    np.maximum.at(worst, move[keep] - 1, code[keep])
+    return np.where(worst > 0, worst, kinds).astype(np.uint8)
 
 
 def _reoriented(doc: ResultsDocument, m) -> list[dict]:
