@@ -177,6 +177,17 @@ def _tool_on_screen(browser, doc, camera, before, selected) -> None:
 def test_demo_job(browser, demo):
     doc, html = demo
     camera, before = _shows_findings_and_part(browser, doc, html)
+    # the path is one LineSegments of one geometry: two vertices a segment, every segment
+    from test_view import scene_of
+
+    lines = json.loads(browser.evaluate(
+        "JSON.stringify((() => { const out = []; window.pathcheckView.scene.traverse((o) => {"
+        " if (o.isLine) out.push([o.name, o.geometry.getAttribute('position').count,"
+        " o.geometry.index ? o.geometry.index.count : 0]); }); return out; })())"))
+    points = scene_of(html.read_text())["path"]["points"]
+    assert [x for x in lines if x[0] == "path"] == [["path", 2 * (points - 1),
+                                                       2 * (points - 1)]]
+    assert len(lines) <= 3  # the path, the axes as written and the CAM's: not one per move
     scene_row = browser.evaluate("JSON.stringify(window.pathcheckView.firstRow)")
     selected = _click_first_row(browser, "findings")
     first = json.loads(scene_row)

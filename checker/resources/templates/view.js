@@ -87,22 +87,23 @@ function segments(pos, col, colour) {
     : { color: colour, clippingPlanes: clipped });
   return new THREE.LineSegments(g, mat);
 }
-// rapids drawn separately so that they can be hidden: the same buffer, two draw ranges would
-// need sorting; the kinds are split into two index lists instead
-const rapidIdx = [];
-const otherIdx = [];
-for (let i = 0; i < nseg; i++) (kinds[i] === 0 ? rapidIdx : otherIdx).push(2 * i, 2 * i + 1);
+// one geometry, one draw: the feeds' segments first, then the rapids', so that hiding the
+// rapids is a shorter draw range
+const order = new Uint32Array(2 * nseg);
+let at = 0;
+for (const rapid of [false, true]) {
+  for (let i = 0; i < nseg; i++) {
+    if ((kinds[i] === 0) === rapid) { order[at++] = 2 * i; order[at++] = 2 * i + 1; }
+  }
+}
+const feedVertices = 2 * kinds.reduce((n, k) => n + (k !== 0), 0);
 const pathGeom = new THREE.BufferGeometry();
 pathGeom.setAttribute('position', new THREE.BufferAttribute(segPos, 3));
 pathGeom.setAttribute('color', new THREE.BufferAttribute(segCol, 3));
-pathGeom.setIndex(otherIdx);
+pathGeom.setIndex(new THREE.BufferAttribute(order, 1));
 const pathLines = new THREE.LineSegments(pathGeom, new THREE.LineBasicMaterial({ vertexColors: true, clippingPlanes: clipped }));
-const rapidGeom = new THREE.BufferGeometry();
-rapidGeom.setAttribute('position', pathGeom.getAttribute('position'));
-rapidGeom.setAttribute('color', pathGeom.getAttribute('color'));
-rapidGeom.setIndex(rapidIdx);
-const rapidLines = new THREE.LineSegments(rapidGeom, new THREE.LineBasicMaterial({ vertexColors: true, clippingPlanes: clipped, transparent: true, opacity: 0.6 }));
-scene.add(pathLines, rapidLines);
+pathLines.name = 'path';
+scene.add(pathLines);
 
 // the tool axes along a multi-axis path: as written, and the CAM's where re-oriented
 const axes = new THREE.Group();
@@ -319,7 +320,10 @@ function controlsUi() {
   });
   toggle('show-part', [part]);
   toggle('show-path', [pathLines]);
-  toggle('show-rapids', [rapidLines]);
+  $('show-rapids').addEventListener('change', (e) => {
+    pathGeom.setDrawRange(0, e.target.checked ? Infinity : feedVertices);
+    draw();
+  });
   toggle('show-findings', [markers]);
   toggle('show-axes', [axes, poseAxes]);
   toggle('show-fixtures', fixtures);
