@@ -141,6 +141,18 @@ class Browser:
             self.call("Input.dispatchMouseEvent", session=True, type=kind, x=x, y=y,
                       button="left" if kind != "mouseMoved" else "none", clickCount=1)
 
+    def drag(self, start: tuple[float, float], end: tuple[float, float], steps: int = 8) -> None:
+        """A left-button drag from `start` to `end` (CSS px of the viewport)."""
+        self.call("Input.dispatchMouseEvent", session=True, type="mousePressed", x=start[0],
+                  y=start[1], button="left", buttons=1, clickCount=1)
+        for k in range(1, steps + 1):
+            x = start[0] + (end[0] - start[0]) * k / steps
+            y = start[1] + (end[1] - start[1]) * k / steps
+            self.call("Input.dispatchMouseEvent", session=True, type="mouseMoved", x=x, y=y,
+                      button="left", buttons=1)
+        self.call("Input.dispatchMouseEvent", session=True, type="mouseReleased", x=end[0],
+                  y=end[1], button="left", buttons=0, clickCount=1)
+
     def close(self) -> None:
         with contextlib.suppress(RuntimeError, TimeoutError, OSError):
             self.call("Browser.close")

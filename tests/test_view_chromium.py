@@ -225,6 +225,48 @@ def test_clicking_a_marker_selects_its_finding(browser, demo):
     _clean(browser, html)
 
 
+def test_orbit_fit_and_section(browser, demo):
+    """A drag orbits the camera, `fit` brings it back, the section plane at the part's median
+    height leaves fewer of its pixels (those above it are cut away)."""
+    doc, html = demo
+    camera = _open(browser, html)
+    shot = browser.screenshot().astype(int)
+    cx, cy = camera["left"] + camera["width"] / 2, camera["top"] + camera["height"] / 2
+    browser.drag((cx, cy), (cx + 150, cy + 40))
+    time.sleep(0.3)
+    moved = json.loads(browser.evaluate("document.body.dataset.camera"))
+    assert np.abs(np.subtract(moved["view"], camera["view"])).max() > 0.1
+
+    def click(selector: str) -> None:
+        r = json.loads(browser.evaluate(
+            f"JSON.stringify(document.querySelector('{selector}').getBoundingClientRect())"))
+        browser.click(r["x"] + r["width"] / 2, r["y"] + r["height"] / 2)
+
+    click("#fit")
+    time.sleep(0.3)
+    back = json.loads(browser.evaluate("document.body.dataset.camera"))
+    np.testing.assert_allclose(back["view"], camera["view"], atol=1e-6)
+
+    def shaded(img: np.ndarray) -> int:
+        box = img[int(camera["top"]):int(camera["top"] + camera["height"]),
+                  int(camera["left"]):int(camera["left"] + camera["width"])]
+        return int((np.abs(box - BACKGROUND).max(axis=2) > 12).sum())
+
+    # the plane at the height of the part's median vertex
+    from test_view import arr, scene_of
+
+    scene = scene_of(html.read_text())
+    z = np.median(arr(scene["part"]["positions"], "f4").reshape(-1, 3)[:, 2])
+    lo, hi = scene["box"][0][2], scene["box"][1][2]
+    value = int(round(1000 * (z - lo) / (hi - lo)))
+    browser.evaluate("(() => { const s = document.getElementById('section');"
+                     f" s.value = {value}; s.dispatchEvent(new Event('input')); }})()")
+    time.sleep(0.3)
+    cut = browser.screenshot().astype(int)
+    assert shaded(cut) < 0.85 * shaded(shot), (shaded(cut), shaded(shot), value)
+    _clean(browser, html)
+
+
 def test_real_amorim_job(browser, amorim):
     doc, html = amorim
     camera, before = _shows_findings_and_part(browser, doc, html)
