@@ -4,6 +4,8 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+THREE := checker/resources/vendor/three
+THREE_NPM := tools/three/node_modules/three
 
 .PHONY: setup demo test lint bench wheel clean
 
@@ -12,7 +14,16 @@ STAMP := $(VENV)/.installed
 # tree while pip re-links the package). --no-compile, then byte-compiled on two cores at the end:
 # Python does not write its own .pyc where PYTHONDONTWRITEBYTECODE is set (some CI machines), and
 # every command would compile numpy, scipy and numba from source again (~1.7 s of start-up).
-setup: $(STAMP)
+setup: $(STAMP) $(THREE)/VERSION
+
+# three.js for the 3-D view (`pathcheck view`): the version pinned by tools/three/package-lock.json,
+# from the npm registry (no install scripts run), copied with its licence into the package
+$(THREE)/VERSION: tools/three/package-lock.json
+	cd tools/three && npm ci --ignore-scripts --no-audit --no-fund --silent
+	mkdir -p $(THREE)
+	cp $(THREE_NPM)/build/three.core.js $(THREE_NPM)/build/three.module.js \
+		$(THREE_NPM)/examples/jsm/controls/OrbitControls.js $(THREE_NPM)/LICENSE $(THREE)/
+	node -p "require('./$(THREE_NPM)/package.json').version" > $@
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -27,7 +38,8 @@ $(STAMP): pyproject.toml
 demo: setup
 	mkdir -p out
 	PATHCHECK_STORE=out/results.sqlite $(BIN)/pathcheck samples/compressor/compressor_small_d12.apt \
-		--json out/compressor_d12.json -o out/compressor_d12.nc --on-findings stop; test $$? -le 1
+		--json out/compressor_d12.json -o out/compressor_d12.nc --on-findings stop \
+		--view out/compressor_small_d12.view.html; test $$? -le 1
 	PATHCHECK_STORE=out/results.sqlite $(BIN)/pathcheck report -o out/report.html
 
 # two processes (the CI machines have two cores; much of the suite is single-threaded:
@@ -57,4 +69,5 @@ wheel: setup
 	$(BIN)/python -m build --wheel --outdir dist .
 
 clean:
-	rm -rf $(VENV) out dist build .pytest_cache checker/resources/kernels
+	rm -rf $(VENV) out dist build .pytest_cache checker/resources/kernels \
+		checker/resources/vendor tools/three/node_modules

@@ -27,6 +27,7 @@ SUBCOMMANDS: dict[str, str] = {
     "report": "checker.commands.report:report",
     "warm": "checker.commands.warm:warm",
     "store": "checker.commands.store:store",
+    "view": "checker.commands.view:view",
 }
 
 

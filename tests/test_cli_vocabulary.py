@@ -26,9 +26,9 @@ TAKES_PART = {"check", "check-gcode", "allowable", "map", "flank"}
 TAKES_CUTTER = {"check", "check-gcode", "allowable", "map", "flank"}
 USES_STORE = {"check", "check-gcode", "batch", "report", "serve", "store prune"}
 READS_CONFIG = {"check", "check-gcode", "allowable", "batch", "call", "report", "serve",
-                "store prune", "flank"}
+                "store prune", "flank", "view"}
 HAS_JSON = {"check", "check-gcode", "allowable", "info", "flank"}
-HAS_OUTPUT = {"check", "map", "report", "call", "flank"}
+HAS_OUTPUT = {"check", "map", "report", "call", "flank", "view"}
 # spellings that another name replaced: none may be shown in any help
 RETIRED = {"--out", "--tools", "--json-out", "--part-file", "--gcode", "--cutters"}
 
@@ -63,7 +63,7 @@ def _shown(cmd: click.Command) -> dict[str, click.Option]:
 
 def test_the_tree_has_every_command():
     assert set(COMMANDS) == {"allowable", "batch", "call", "check", "check-gcode", "flank",
-                             "info", "map", "report", "serve", "store prune", "warm"}
+                             "info", "map", "report", "serve", "store prune", "view", "warm"}
 
 
 @pytest.mark.parametrize("name", sorted(COMMANDS))

@@ -10,6 +10,7 @@ from pathlib import Path
 import click
 
 from checker.commands import options as opt
+from checker.commands.view import view_option, write_after_check
 
 
 def _counts_line(c) -> str:
@@ -159,9 +160,11 @@ def record(doc, store_path: Path | None = None) -> None:
               help="post -o without checking (no part read); the program's header says NOT "
                    "CHECKED")
 @opt.stock_options
+@view_option
 def check(job, part_path, cutter_text, units, tool_name, tool_library, config_path, json_out,
           output, machine, b_range, reorient, strategy, part_transform, store_path, no_store,
-          on_findings, no_check, stock_text, fixtures, stock_resolution, stock_out) -> None:
+          on_findings, no_check, stock_text, fixtures, stock_resolution, stock_out,
+          view_out) -> None:
     """Check JOB (APT-CL or NX CLSF) against its part: allowable cutter, verdict and margin at
     every CC point.
 
@@ -182,7 +185,8 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     store = None if no_store else opt.store_of(store_path, config_path)
     from checker.geometry import find_part_beside
 
-    prepare_outputs([("-o", output, "G-code"), ("--json", json_out, "results JSON")],
+    prepare_outputs([("-o", output, "G-code"), ("--json", json_out, "results JSON"),
+                     ("--view", view_out, "3-D view")],
                     job_inputs(job, part_path or find_part_beside(job), config_path,
                                tool_library, machine, store, no_check or no_store))
     cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
@@ -201,6 +205,8 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
                         reorient=reorient, strategy=strategy, part_transform=part_transform,
                         cutter_units=units, on_findings=on_findings, stock=stock)
     except PostRefusedError as refused:
+        write_after_check(view_out, refused.document, cutter=cutter, stock=stock,
+                          config=config_path)
         try:
             finish(refused.document, json_out, store=not no_store, store_path=store)
         finally:
@@ -213,6 +219,7 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
         if checked is not None and not no_store:
             record(checked, store)
         raise
+    write_after_check(view_out, doc, cutter=cutter, stock=stock, config=config_path)
     finish(doc, json_out, store=not no_store, store_path=store)
 
 

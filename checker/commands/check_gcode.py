@@ -13,6 +13,7 @@ import click
 import numpy as np
 
 from checker.commands import options as opt
+from checker.commands.view import view_option, write_after_check
 from checker.progress import step
 
 
@@ -58,9 +59,10 @@ def assumed_units(moves, given: str | None, machine) -> None:
 @opt.store_option()
 @click.option("--no-store", is_flag=True, help="do not record this check in the results store")
 @opt.stock_options
+@view_option
 def check_gcode(program: Path, machine, dialect, units, block_delete, part_path, cutter_text,
                 tool_name, tool_library, config_path, json_out, store_path, no_store,
-                stock_text, fixtures, stock_resolution, stock_out) -> None:
+                stock_text, fixtures, stock_resolution, stock_out, view_out) -> None:
     """Read PROGRAM (G-code) for a machine, bring its moves back into the part frame and, with
     --part and --cutter, check them like `pathcheck JOB.apt` (exit 1 on findings).
 
@@ -90,8 +92,11 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
                              "expected --cutter or --tool (a G-code program does not say its "
                              "cutter)", code="usage")
     checking = cutter is not None and (part_path is not None or stock.asked)
+    if view_out is not None and not checking:
+        raise PathcheckError("--view shows a check: give --cutter with --part or --stock",
+                             code="usage")
     store = opt.store_of(store_path, config_path) if checking and not no_store else None
-    prepare_outputs([("--json", json_out, "results JSON")],
+    prepare_outputs([("--json", json_out, "results JSON"), ("--view", view_out, "3-D view")],
                     job_inputs(program, part_path, config_path, tool_library, machine, store,
                                not checking or no_store))
     if checking and not no_store:
@@ -125,6 +130,8 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
     toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)
     result = check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=mach,
                             config=config_path, stock=stock)
+    write_after_check(view_out, result, toolpath=toolpath, cutter=cutter, stock=stock,
+                      config=config_path)
     finish(result, json_out, store=not no_store, store_path=store)
     if doc["machine_checks"]:
         sys.exit(1)

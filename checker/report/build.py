@@ -113,6 +113,15 @@ def job_summary(row: JobRow, previous: JobRow | None) -> dict:
     }
 
 
+def view_beside(report: Path, job_path: str | None) -> str | None:
+    """The job's 3-D view when one was written beside the report as `JOB.view.html` (JOB the
+    job file's stem; `pathcheck check JOB.apt --view DIR/JOB.view.html`): its name, to link."""
+    if not job_path:
+        return None
+    name = f"{Path(job_path).stem}.view.html"
+    return name if (report.parent / name).is_file() else None
+
+
 def parse_since(text: str) -> float:
     """'24h', '90m', '7d', '3600s' or a bare number of hours -> seconds."""
     units = {"s": 1.0, "m": 60.0, "h": 3600.0, "d": DAY_S}
@@ -149,6 +158,7 @@ def build_report(
     jobs = [job_summary(r, store.previous(r.job_path, r.recorded_at)) for r in rows]
     for j in jobs:
         j["pictures"], j["facts"], j["regions"] = drawn.get(j["id"], ([], None, []))
+        j["view"] = view_beside(out, j["job_path"])
     per_night = nights(history, until, cfg.report.trend_nights)
     trend_png = trend_picture(per_night, cfg.report.picture_dpi) if history else None
     html = render_page(jobs, since, until, trend_png, compare(per_night))
@@ -189,6 +199,7 @@ def _write_csv(path: Path, jobs: list[dict]) -> None:
     writer.writeheader()
     for j in jobs:
         row = _plain(j)
+        row.pop("view", None)
         row["regions"] = " ".join(f"S{s}:{n}" for s, n in j["regions"])
         writer.writerow(row)
     write_file(path, text.getvalue(), what="report CSV")
