@@ -1,0 +1,159 @@
+"""The machined part against the design, hooked into the stock's removal: the deviation after
+each operation and at the end, the over-cut beyond the tolerance (a `gouge` as the machine
+leaves it), the material left beyond tolerance + leave as rest-machining regions with the
+largest cutter that finishes each (docs/MATH.md §15). Part frame, mm."""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from checker import verdict as vd
+from checker.machined.deviation import covered, error_bound, signed_deviation
+from checker.machined.points import SurfaceMesh, surface_mesh
+from checker.machined.regions import Region, regions
+from checker.results import MachinedOperation, MachinedRegion, MachinedResult
+
+MOST_POINTS = 400_000   # measuring points at most: the spacing grows to keep within
+REACH_CUT = 5.0         # mm: over-cuts are searched this deep along the inward normal
+ADVISED = 20            # regions given a cutter at most (the largest)
+PROBES = 200            # points per region the allowable size is found at
+
+
+def measuring_spacing(triangles, h: float) -> float:
+    """mm: 2 h, or coarser so the part's area holds at most MOST_POINTS points."""
+    V, T = triangles.vertices, triangles.triangles
+    area = 0.5 * float(np.linalg.norm(np.cross(V[T[:, 1]] - V[T[:, 0]],
+                                               V[T[:, 2]] - V[T[:, 0]]), axis=1).sum())
+    return max(2.0 * h, math.sqrt(2.0 * area / MOST_POINTS))
+
+
+class Comparison:
+    """The deviation of the stock from the part (`triangles`: `PartTriangles`, `index` its
+    `MeshIndex`) as the operations cut it; `cutters` and `tolerance` (K,) and `leave` (K,) per
+    operation (mm), `along` the removal's bound along a ray (mm)."""
+
+    def __init__(self, triangles, index, stock, cutters: dict, tolerance: np.ndarray,
+                 leave: np.ndarray, along: float, *, out: Path | None = None,
+                 spacing: float | None = None) -> None:
+        t0 = time.perf_counter()
+        self.index, self.cutters, self.out = index, cutters, out
+        self.tolerance, self.leave = np.asarray(tolerance, float), np.asarray(leave, float)
+        self.h, self.along = float(stock.h), float(along)
+        self.spacing = float(spacing or measuring_spacing(triangles, stock.h))
+        self.mesh: SurfaceMesh = surface_mesh(triangles.vertices, triangles.triangles,
+                                              triangles.surface, self.spacing)
+        m = self.mesh
+        self.bound = error_bound(self.along, self.h, m.normals)
+        top = stock.top()
+        bottom = stock.bottom()
+        self.reach_left = float(max(np.nanmax(top, initial=0.0) - np.nanmin(bottom, initial=0.0),
+                                    stock.h) + stock.h * (stock.nx + stock.ny))
+        self.covered = covered(stock, m.vertices, m.normals, 2.0 * self.h)
+        self.dev = signed_deviation(stock, m.vertices, m.normals, self.reach_left, REACH_CUT)
+        self.last_op = np.full(len(m.vertices), -1)
+        self.ops: list[MachinedOperation] = []
+        self.time = time.perf_counter() - t0
+
+    def after(self, o: int, stock) -> None:
+        """The deviation once operation `o` has cut `stock`."""
+        t0 = time.perf_counter()
+        m = self.mesh
+        dev = signed_deviation(stock, m.vertices, m.normals, self.reach_left, REACH_CUT)
+        cut = self.covered & (self.dev - dev > self.bound)
+        self.last_op[cut] = o
+        left = np.maximum(dev[cut], 0.0)
+        over = -dev[self.covered]
+        self.ops.append(MachinedOperation(
+            op=o, points_cut=int(cut.sum()), left_max=float(left.max(initial=0.0)),
+            left_mean=float(left.mean()) if left.size else 0.0, leave=float(self.leave[o]),
+            overcut_max=float(max(over.max(initial=0.0), 0.0))))
+        self.dev = dev
+        self.time += time.perf_counter() - t0
+
+    def result(self, library=None) -> MachinedResult:
+        """The summary, the regions and the advice at the end; the deviation file written
+        when asked (`out`)."""
+        t0 = time.perf_counter()
+        m, dev, cov = self.mesh, self.dev, self.covered
+        done = self.last_op >= 0
+        op = np.where(done, self.last_op, 0)
+        tol = np.where(done, self.tolerance[op], self.tolerance.min(initial=0.0))
+        leave = np.where(done, self.leave[op], 0.0)
+        verdict = vd.decide_machined(-dev, tol, self.bound)
+        gouge = cov & (verdict == "gouge")
+        left = cov & (dev > tol + leave + self.bound)
+        over_regions = [self._region(i, r, "overcut", -dev) for i, r in
+                        enumerate(regions(m, gouge, -dev))]
+        left_found = regions(m, left, dev)
+        left_regions = [self._region(i, r, "left", dev, library if i < ADVISED else None)
+                        for i, r in enumerate(left_found)]
+        res = MachinedResult(
+            points=len(m.vertices), spacing=self.spacing, uncovered=int((~cov).sum()),
+            bound_along=self.along, bound_max=float(self.bound.max(initial=self.along)),
+            reach=REACH_CUT, left_max=float(max(dev[cov].max(initial=0.0), 0.0)),
+            overcut_max=float(max((-dev[cov]).max(initial=0.0), 0.0)),
+            gouge_points=int(gouge.sum()), left_points=int(left.sum()),
+            overcut=over_regions, left=left_regions, advice=_advice(left_regions),
+            operations=self.ops)
+        if self.out is not None:
+            from checker.machined.output import write_deviation
+
+            written, picture = write_deviation(self.out, m, np.where(cov, dev, np.nan))
+            res.deviation_file, res.picture = str(written), str(picture)
+        self.time += time.perf_counter() - t0
+        res.time_s = self.time
+        return res
+
+    def _region(self, i: int, r: Region, kind: str, value: np.ndarray,
+                library=None) -> MachinedRegion:
+        ops = self.last_op[r.vertices]
+        ops = ops[ops >= 0]
+        op = int(np.bincount(ops).argmax()) if ops.size else None
+        out = MachinedRegion(index=i, kind=kind, area=r.area, max=r.max, mean=r.mean,
+                             point=tuple(map(float, self.mesh.vertices[r.at])),
+                             vertices=int(r.vertices.size), op=op)
+        if kind == "left" and library is not None and self.cutters:
+            cutter = self.cutters[op if op is not None else max(self.cutters)]
+            out.allowable, out.tool = _finishing_tool(self, r, cutter, library,
+                                                      float(self.tolerance[op or 0]))
+        return out
+
+
+def _finishing_tool(c: Comparison, r: Region, cutter, library, tol: float):
+    """(allowable size, tool name) for region `r`: the least over up to PROBES of its points
+    facing +Z of the largest size of `cutter`'s family touching there gouge-free
+    (`checker.mesh.depth.allowable_on_mesh`), and the library's largest cutter not above it."""
+    from checker.mesh.depth import allowable_on_mesh
+
+    v = r.vertices[c.mesh.normals[r.vertices, 2] > 1e-9]
+    if v.size == 0:
+        return None, None
+    pick = v[np.unique(np.linspace(0, v.size - 1, min(PROBES, v.size)).round().astype(int))]
+    family = library.family(cutter.kind, None if cutter.ball_family else cutter.r)
+    s_max = max([t.size for t in family] + [float(cutter.size)])
+    size = allowable_on_mesh(c.index, cutter, c.mesh.vertices[pick], c.mesh.normals[pick],
+                             np.array([0.0, 0.0, 1.0]), tol=max(tol, 1e-4), s_max=s_max,
+                             s_tol=1e-3)
+    least = float(np.min(size))
+    tool = library.largest_not_exceeding(cutter.kind, least,
+                                         None if cutter.ball_family else cutter.r)
+    return (least if math.isfinite(least) else s_max), (None if tool is None else tool.name)
+
+
+def _advice(left: list[MachinedRegion]) -> str | None:
+    """"rest machining: 3 regions, 41 mm^2, up to 0.62 mm thick; largest safe tool BALL-D4"."""
+    if not left:
+        return None
+    area = sum(r.area for r in left)
+    text = (f"rest machining: {len(left)} region{'s' if len(left) > 1 else ''}, "
+            f"{area:.3g} mm^2, up to {max(r.max for r in left):.3g} mm thick")
+    sized = [r for r in left if r.allowable is not None]
+    if sized:
+        least = min(sized, key=lambda r: r.allowable)
+        text += (f"; largest safe tool {least.tool}" if least.tool is not None else
+                 f"; no tool of the library fits (allowable {least.allowable:.3g} mm)")
+    return text
