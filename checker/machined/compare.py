@@ -17,28 +17,42 @@ from checker.machined.points import SurfaceMesh, surface_mesh
 from checker.machined.regions import Region, regions
 from checker.results import MachinedOperation, MachinedRegion, MachinedResult
 
-MOST_POINTS = 400_000   # measuring points at most: the spacing grows to keep within
+MOST_POINTS = 250_000   # measuring points about at most: the spacing grows to keep within
 REACH_CUT = 5.0         # mm: over-cuts are searched this deep along the inward normal
+REACH_LEFT = 10.0       # mm: material left is followed this far along the outward normal
 ADVISED = 20            # regions given a cutter at most (the largest)
 PROBES = 200            # points per region the allowable size is found at
 
 
 def measuring_spacing(triangles, h: float) -> float:
-    """mm: 2 h, or coarser so the part's area holds at most MOST_POINTS points."""
+    """mm: 2 h, or coarser so the part's area holds about MOST_POINTS points at most (the
+    longest-edge split leaves about 6 points per spacing^2 of area)."""
     V, T = triangles.vertices, triangles.triangles
     area = 0.5 * float(np.linalg.norm(np.cross(V[T[:, 1]] - V[T[:, 0]],
                                                V[T[:, 2]] - V[T[:, 0]]), axis=1).sum())
-    return max(2.0 * h, math.sqrt(2.0 * area / MOST_POINTS))
+    return max(2.0 * h, math.sqrt(6.0 * area / MOST_POINTS))
+
+
+def facing(normals: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """(V,) bool: the normal is turned toward some tool axis of the job (or across it, a
+    wall: n . a > -0.01); the others (the part's underside in a 3-axis job) no tool of it
+    can finish, so they get no rest-machining advice."""
+    a = np.unique(np.round(np.asarray(axes, float).reshape(-1, 3), 3), axis=0)[:1000]
+    out = np.zeros(len(normals), bool)
+    for row in a:
+        out |= normals @ row > -0.01
+    return out
 
 
 class Comparison:
     """The deviation of the stock from the part (`triangles`: `PartTriangles`, `index` its
     `MeshIndex`) as the operations cut it; `cutters` and `tolerance` (K,) and `leave` (K,) per
-    operation (mm), `along` the removal's bound along a ray (mm)."""
+    operation (mm), `along` the removal's bound along a ray (mm), `axes (A, 3)` the job's tool
+    axes (default +Z), `out` the deviation file to write (`checker.machined.output`)."""
 
     def __init__(self, triangles, index, stock, cutters: dict, tolerance: np.ndarray,
-                 leave: np.ndarray, along: float, *, out: Path | None = None,
-                 spacing: float | None = None) -> None:
+                 leave: np.ndarray, along: float, *, axes: np.ndarray | None = None,
+                 out: Path | None = None, spacing: float | None = None) -> None:
         t0 = time.perf_counter()
         self.index, self.cutters, self.out = index, cutters, out
         self.tolerance, self.leave = np.asarray(tolerance, float), np.asarray(leave, float)
@@ -48,10 +62,9 @@ class Comparison:
                                               triangles.surface, self.spacing)
         m = self.mesh
         self.bound = error_bound(self.along, self.h, m.normals)
-        top = stock.top()
-        bottom = stock.bottom()
-        self.reach_left = float(max(np.nanmax(top, initial=0.0) - np.nanmin(bottom, initial=0.0),
-                                    stock.h) + stock.h * (stock.nx + stock.ny))
+        self.reachable = facing(m.normals, np.array([[0.0, 0.0, 1.0]]) if axes is None
+                                else axes)
+        self.reach_left = REACH_LEFT
         self.covered = covered(stock, m.vertices, m.normals, 2.0 * self.h)
         self.dev = signed_deviation(stock, m.vertices, m.normals, self.reach_left, REACH_CUT)
         self.last_op = np.full(len(m.vertices), -1)
@@ -85,7 +98,7 @@ class Comparison:
         leave = np.where(done, self.leave[op], 0.0)
         verdict = vd.decide_machined(-dev, tol, self.bound)
         gouge = cov & (verdict == "gouge")
-        left = cov & (dev > tol + leave + self.bound)
+        left = cov & self.reachable & (dev > tol + leave + self.bound)
         over_regions = [self._region(i, r, "overcut", -dev) for i, r in
                         enumerate(regions(m, gouge, -dev))]
         left_found = regions(m, left, dev)

@@ -34,7 +34,7 @@ def _inside(lo, hi, count, x0, y0, h, x, y, z) -> bool:
     i, j = _cell(x, x0, h), _cell(y, y0, h)
     if i < 0 or j < 0 or i >= nx or j >= ny:
         return False
-    for k in range(count[j, i]):
+    for k in range(count[j, i]):  # noqa: SIM110  (numba: no generator in any())
         if lo[j, i, k] <= z <= hi[j, i, k]:
             return True
     return False
