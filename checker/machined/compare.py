@@ -24,13 +24,26 @@ ADVISED = 20            # regions given a cutter at most (the largest)
 PROBES = 200            # points per region the allowable size is found at
 
 
-def measuring_spacing(triangles, h: float) -> float:
-    """mm: 2 h, or coarser so the part's area holds about MOST_POINTS points at most (the
+def stock_box(stock) -> np.ndarray:
+    """(2, 2) mm: the x, y box of the stock's grid."""
+    return np.array([[stock.x0, stock.y0],
+                     [stock.x0 + stock.nx * stock.h, stock.y0 + stock.ny * stock.h]])
+
+
+def measuring_spacing(V: np.ndarray, T: np.ndarray, h: float,
+                      box: np.ndarray | None = None) -> float:
+    """mm: 2 h, or coarser so the triangles' area within the x, y `box` (each triangle's area
+    times the part of its bounding box inside) holds about MOST_POINTS points at most (the
     longest-edge split leaves about 6 points per spacing^2 of area)."""
-    V, T = triangles.vertices, triangles.triangles
-    area = 0.5 * float(np.linalg.norm(np.cross(V[T[:, 1]] - V[T[:, 0]],
-                                               V[T[:, 2]] - V[T[:, 0]]), axis=1).sum())
-    return max(2.0 * h, math.sqrt(6.0 * area / MOST_POINTS))
+    c = V[T]
+    area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1)
+    if box is not None:
+        lo, hi = c.min(axis=1)[:, :2], c.max(axis=1)[:, :2]
+        span = np.maximum(hi - lo, 1e-9)
+        inside = np.clip(np.minimum(hi, box[1]) - np.maximum(lo, box[0]), 0.0, None)
+        area = area * np.prod(np.where(hi - lo > 1e-9, inside / span,
+                                       (lo >= box[0]) & (lo <= box[1])), axis=1)
+    return max(2.0 * h, math.sqrt(6.0 * float(area.sum()) / MOST_POINTS))
 
 
 def facing(normals: np.ndarray, axes: np.ndarray) -> np.ndarray:
@@ -57,16 +70,18 @@ class Comparison:
         self.index, self.cutters, self.out = index, cutters, out
         self.tolerance, self.leave = np.asarray(tolerance, float), np.asarray(leave, float)
         self.h, self.along = float(stock.h), float(along)
-        self.spacing = float(spacing or measuring_spacing(triangles, stock.h))
-        self.mesh: SurfaceMesh = surface_mesh(triangles.vertices, triangles.triangles,
-                                              triangles.surface, self.spacing)
+        box = stock_box(stock)
+        V, T = triangles.vertices, triangles.triangles
+        self.spacing = float(spacing or measuring_spacing(V, T, stock.h, box))
+        self.mesh: SurfaceMesh = surface_mesh(V, T, triangles.surface, self.spacing, box)
         m = self.mesh
         self.bound = error_bound(self.along, self.h, m.normals)
         self.reachable = facing(m.normals, np.array([[0.0, 0.0, 1.0]]) if axes is None
                                 else axes)
         self.reach_left = REACH_LEFT
         self.covered = covered(stock, m.vertices, m.normals, 2.0 * self.h)
-        self.dev = signed_deviation(stock, m.vertices, m.normals, self.reach_left, REACH_CUT)
+        self.dev = np.full(len(m.vertices), np.nan)
+        self.dev[self.covered] = self._deviation(stock)
         self.last_op = np.full(len(m.vertices), -1)
         self.ops: list[MachinedOperation] = []
         self.time = time.perf_counter() - t0
@@ -74,8 +89,8 @@ class Comparison:
     def after(self, o: int, stock) -> None:
         """The deviation once operation `o` has cut `stock`."""
         t0 = time.perf_counter()
-        m = self.mesh
-        dev = signed_deviation(stock, m.vertices, m.normals, self.reach_left, REACH_CUT)
+        dev = np.full(len(self.mesh.vertices), np.nan)
+        dev[self.covered] = self._deviation(stock)
         cut = self.covered & (self.dev - dev > self.bound)
         self.last_op[cut] = o
         left = np.maximum(dev[cut], 0.0)
@@ -87,6 +102,11 @@ class Comparison:
         self.dev = dev
         self.time += time.perf_counter() - t0
 
+    def _deviation(self, stock) -> np.ndarray:
+        c = self.covered
+        return signed_deviation(stock, self.mesh.vertices[c], self.mesh.normals[c],
+                                self.reach_left, REACH_CUT)
+
     def result(self, library=None) -> MachinedResult:
         """The summary, the regions and the advice at the end; the deviation file written
         when asked (`out`)."""
@@ -96,9 +116,10 @@ class Comparison:
         op = np.where(done, self.last_op, 0)
         tol = np.where(done, self.tolerance[op], self.tolerance.min(initial=0.0))
         leave = np.where(done, self.leave[op], 0.0)
-        verdict = vd.decide_machined(-dev, tol, self.bound)
+        bound = error_bound(self.along, self.h, m.normals, dev)
+        verdict = vd.decide_machined(-dev, tol, bound)
         gouge = cov & (verdict == "gouge")
-        left = cov & self.reachable & (dev > tol + leave + self.bound)
+        left = cov & self.reachable & (dev > tol + leave + bound)
         over_regions = [self._region(i, r, "overcut", -dev) for i, r in
                         enumerate(regions(m, gouge, -dev))]
         left_found = regions(m, left, dev)
@@ -106,7 +127,7 @@ class Comparison:
                         for i, r in enumerate(left_found)]
         res = MachinedResult(
             points=len(m.vertices), spacing=self.spacing, uncovered=int((~cov).sum()),
-            bound_along=self.along, bound_max=float(self.bound.max(initial=self.along)),
+            bound_along=self.along, bound_max=float(bound.max(initial=self.along)),
             reach=REACH_CUT, left_max=float(max(dev[cov].max(initial=0.0), 0.0)),
             overcut_max=float(max((-dev[cov]).max(initial=0.0), 0.0)),
             gouge_points=int(gouge.sum()), left_points=int(left.sum()),

@@ -10,8 +10,11 @@ intervals in closed form, so along the line the model is exact.
 At a point p with unit outward normal n:
 - p in the model's material: material is left above the design; the deviation is +t, t the
   first exit of the line p + t n (t >= 0) from the material (capped at `reach_left`);
-- p outside it: the design was cut into; the deviation is -t, t the first entry of the line
-  p - t n into the material (capped at `reach_cut`: an over-cut at least that deep)."""
+- p outside it: the design was cut into; the deviation is -d, d the Euclidean distance from p
+  to the model's material (capped at `reach_cut`: an over-cut at least that deep), found within
+  the first entry of the line p - t n into it. An over-cut is a depth below the design like the
+  check's penetration; along the normal it would run down a wall cut back beside a face's
+  edge."""
 
 from __future__ import annotations
 
@@ -110,6 +113,37 @@ def _walk(lo, hi, count, x0, y0, h, px, py, pz, dx, dy, dz, tmax, enter) -> floa
     return _NONE
 
 
+@nb.njit(cache=True)
+def _nearest(lo, hi, count, x0, y0, h, px, py, pz, rmax) -> float:
+    """The Euclidean distance from p to the model's material (its rays' h x h columns) when
+    below `rmax`, else rmax: columns visited in square rings about p's, until a ring's least
+    lateral distance passes the best found."""
+    ny, nx = count.shape
+    i0, j0 = _cell(px, x0, h), _cell(py, y0, h)
+    best = rmax
+    k = 0
+    while (k - 1) * h < best:
+        for j in range(j0 - k, j0 + k + 1):
+            if j < 0 or j >= ny:
+                continue
+            step = 1 if (j == j0 - k or j == j0 + k) else 2 * k
+            for i in range(i0 - k, i0 + k + 1, max(step, 1)):
+                if i < 0 or i >= nx or count[j, i] == 0:
+                    continue
+                gx = max(x0 + i * h - px, 0.0, px - (x0 + (i + 1) * h))
+                gy = max(y0 + j * h - py, 0.0, py - (y0 + (j + 1) * h))
+                g2 = gx * gx + gy * gy
+                if g2 >= best * best:
+                    continue
+                for q in range(count[j, i]):
+                    gz = max(lo[j, i, q] - pz, 0.0, pz - hi[j, i, q])
+                    d = math.sqrt(g2 + gz * gz)
+                    if d < best:
+                        best = d
+        k += 1
+    return best
+
+
 @nb.njit(cache=True, parallel=True)
 def _deviation(lo, hi, count, x0, y0, h, points, normals, reach_left, reach_cut):
     n = len(points)
@@ -122,7 +156,8 @@ def _deviation(lo, hi, count, x0, y0, h, points, normals, reach_left, reach_cut)
             out[p] = reach_left if t < 0.0 else t
         else:
             t = _walk(lo, hi, count, x0, y0, h, px, py, pz, -nx_, -ny_, -nz_, reach_cut, True)
-            out[p] = -reach_cut if t < 0.0 else -t
+            out[p] = -_nearest(lo, hi, count, x0, y0, h, px, py, pz,
+                               reach_cut if t < 0.0 else t)
     return out
 
 
@@ -159,11 +194,15 @@ def covered(stock, points: np.ndarray, normals: np.ndarray, depth: float) -> np.
     return _covered(*_arrays(stock), p, n, float(depth))
 
 
-def error_bound(along: float, h: float, normals: np.ndarray) -> np.ndarray:
+def error_bound(along: float, h: float, normals: np.ndarray,
+                deviation: np.ndarray | None = None) -> np.ndarray:
     """(N,) mm: the bound on each point's deviation. Along the line the model is exact, so
     what the removal is short by along a ray (`along`, `checker.stock.removal.error_bound`)
-    carries over; laterally each ray stands for its h x h column, which places a stock surface
-    parallel to the design within h/sqrt(2) horizontally, that is h/sqrt(2) |n_xy| along the
-    normal (docs/MATH.md §15.2)."""
+    carries over; laterally each ray stands for its h x h column, which places the stock's
+    surface within h/sqrt(2) horizontally: a layer left parallel to the design within
+    h/sqrt(2) |n_xy| along the normal, an over-cut's Euclidean depth (`deviation` < 0) within
+    h/sqrt(2) (docs/MATH.md §15.2)."""
     nxy = np.hypot(normals[:, 0], normals[:, 1])
+    if deviation is not None:
+        nxy = np.where(np.asarray(deviation) < 0.0, 1.0, nxy)
     return along + h / math.sqrt(2.0) * nxy

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 _WELD = 1e-6  # mm: vertices this close are one
+CREASE_DEG = 20.0  # faces meeting at a larger angle do not share a vertex normal
 
 
 @dataclass(frozen=True)
@@ -30,12 +31,23 @@ class SurfaceMesh:
 _KEY = np.int64(1) << 31  # edge key: lo * _KEY + hi (vertex indices below 2^31)
 
 
-def _subdivided(V: np.ndarray, T: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray,
-                                                                       np.ndarray]:
+def _meets(P: np.ndarray, tri: np.ndarray, box: np.ndarray | None) -> np.ndarray:
+    """(T,) bool: the triangles whose bounding box meets the x, y `box (2, 2)` (None: all)."""
+    if box is None:
+        return np.ones(len(tri), bool)
+    c = P[tri]
+    lo, hi = c.min(axis=1), c.max(axis=1)
+    return ((hi[:, 0] >= box[0, 0]) & (lo[:, 0] <= box[1, 0]) & (hi[:, 1] >= box[0, 1])
+            & (lo[:, 1] <= box[1, 1]))
+
+
+def _subdivided(V: np.ndarray, T: np.ndarray, spacing: float,
+                box: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(points, triangles, parent triangle of each triangle) of every triangle split at the
     midpoint of its longest edge until no edge is longer than `spacing` (a thin triangle gets
-    points along its length only). An edge's midpoint is made once, whichever triangle
-    splits it first, and found again by the others."""
+    points along its length only), keeping only the pieces that meet the x, y `box`. An
+    edge's midpoint is made once, whichever triangle splits it first, and found again by the
+    others."""
     pts = [V]
     n_pts = len(V)
     tri = T.copy()
@@ -46,6 +58,8 @@ def _subdivided(V: np.ndarray, T: np.ndarray, spacing: float) -> tuple[np.ndarra
     while True:
         P = np.concatenate(pts) if len(pts) > 1 else pts[0]
         pts = [P]
+        inside = _meets(P, tri, box)
+        tri, parent = tri[inside], parent[inside]
         e = np.stack([P[tri[:, 1]] - P[tri[:, 0]], P[tri[:, 2]] - P[tri[:, 1]],
                       P[tri[:, 0]] - P[tri[:, 2]]], axis=1)
         length = np.einsum("tkc,tkc->tk", e, e)
@@ -93,16 +107,55 @@ def _same_place(points: np.ndarray) -> np.ndarray:
     return out
 
 
+def _creases_split(V: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(vertices, triangles, original vertex of each) with every vertex split per smoothing
+    group: a triangle's corner takes the normal of the faces around its vertex within
+    CREASE_DEG of its own face, and corners of one vertex with the same normal share a new
+    vertex. A point on a sharp edge is then measured along each face's normal, not along
+    their mean (which would cut across the corner)."""
+    face = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
+    norm = np.linalg.norm(face, axis=1)
+    unit = face / np.where(norm > 0, norm, 1.0)[:, None]
+    corner_v = T.reshape(-1)
+    corner_t = np.repeat(np.arange(len(T)), 3)
+    order = np.argsort(corner_v, kind="stable")
+    sv = corner_v[order]
+    start = np.flatnonzero(np.r_[True, sv[1:] != sv[:-1]])
+    size = np.diff(np.r_[start, len(sv)])
+    group_size = np.repeat(size, size)                   # per sorted corner
+    group_start = np.repeat(start, size)
+    i = np.repeat(np.arange(len(sv)), group_size)        # every pair of corners of a vertex
+    offset = np.arange(len(i)) - np.repeat(np.cumsum(group_size) - group_size, group_size)
+    j = group_start[i] + offset
+    ti, tj = corner_t[order[i]], corner_t[order[j]]
+    near = np.einsum("ij,ij->i", unit[ti], unit[tj]) >= np.cos(np.radians(CREASE_DEG))
+    normal = np.column_stack([np.bincount(i[near], face[tj[near], k], len(sv))
+                              for k in range(3)])
+    length = np.linalg.norm(normal, axis=1)
+    normal = normal / np.where(length > 0, length, 1.0)[:, None]
+    key = np.column_stack([sv, np.round(normal * 1e6).astype(np.int64)])
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    new_of_corner = np.empty(len(corner_v), np.int64)
+    new_of_corner[order] = inv.reshape(-1)
+    original = sv[first]
+    return V[original], new_of_corner.reshape(-1, 3), original
+
+
 def surface_mesh(vertices: np.ndarray, triangles: np.ndarray, surface: np.ndarray,
-                 spacing: float) -> SurfaceMesh:
+                 spacing: float, box: np.ndarray | None = None) -> SurfaceMesh:
     """The measuring mesh of a part's triangles `vertices (V, 3)`, `triangles (T, 3)`,
     `surface (T,)` (`checker.geometry.tessellate.PartTriangles`; -1: a mesh part) with edges
-    at most `spacing` mm."""
+    at most `spacing` mm, cropped to the triangles that meet the x, y `box (2, 2)` (mm)."""
     V = np.asarray(vertices, np.float64)
     T = np.asarray(triangles, np.int64)
     if not (spacing > 0.0 and math.isfinite(spacing)):
         raise ValueError(f"spacing must be a positive number of mm, found {spacing}")
-    verts, tris, parent = _subdivided(V, T, spacing)
+    V, T, _ = _creases_split(V, T)
+    verts, tris, parent = _subdivided(V, T, spacing, box)
+    used = np.zeros(len(verts), bool)
+    used[tris.reshape(-1)] = True
+    renum = np.cumsum(used) - 1
+    verts, tris = verts[used], renum[tris]
     surf = np.full(len(verts), -1, np.int64)
     surf[tris.reshape(-1)] = np.repeat(np.asarray(surface, np.int64)[parent], 3)
     face = np.cross(verts[tris[:, 1]] - verts[tris[:, 0]], verts[tris[:, 2]] - verts[tris[:, 0]])
