@@ -417,7 +417,17 @@ def stock_line(stock: StockResult | None, stated: str | None = None) -> str:
     air_t = sum(o.air_time_s or 0.0 for o in stock.operations)
     return (f"stock {stock.stock} at {stock.resolution:g} mm{fixtures}: {found}; removed "
             f"{stock.volume_initial - stock.volume_final:.0f} of {stock.volume_initial:.0f} mm^3;"
-            f" air cuts {air} ({air_t:.0f} s)")
+            f" air cuts {air} ({air_t:.0f} s){machined_text(stock.machined)}")
+
+
+def machined_text(m: MachinedResult | None) -> str:
+    """'; as cut: over-cut 0.79 mm (475 points beyond the tolerance), left up to 0.62 mm;
+    rest machining: ...' (docs/MATH.md §15), or '' without a part."""
+    if m is None:
+        return ""
+    text = (f"; as cut: over-cut {m.overcut_max:.3g} mm ({m.gouge_points} points gouged), "
+            f"left up to {m.left_max:.3g} mm")
+    return text + (f"; {m.advice}" if m.advice else "")
 
 
 def json_schema() -> dict:

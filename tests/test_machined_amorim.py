@@ -76,3 +76,26 @@ def test_deviation_ply_reads_back_with_the_documents_numbers(rotatethin):
     assert dev[covered].max() == pytest.approx(m.left_max, abs=1e-5)
     n = np.column_stack([data["nx"], data["ny"], data["nz"]])
     assert np.allclose(np.linalg.norm(n, axis=1), 1.0, atol=1e-5)
+
+
+def test_report_shows_the_deviation_picture_and_the_rest_machining_advice(rotatethin,
+                                                                        tmp_path):
+    import json
+    import re
+
+    from checker.report import build_report
+    from checker.store import ResultsStore
+
+    doc, _ = rotatethin
+    m = doc.stock.machined
+    with ResultsStore(tmp_path / "s.sqlite") as store:
+        store.record_job(doc, elapsed_s=1.0)
+        files = build_report(store, tmp_path / "report.html")
+    html = files.html.read_text()
+    assert "The machined part against the design (top view): over-cut up to 0.79 mm" in html
+    assert len(re.findall(r'<img [^>]*src="data:image/png;base64,', html)) >= 5
+    assert m.advice and m.advice.startswith("rest machining:") and m.advice in html
+    row = json.loads(files.json.read_text())["jobs"][0]
+    assert row["rest_machining"] == m.advice
+    assert f"as cut: over-cut {m.overcut_max:.3g} mm ({m.gouge_points} points gouged)" in row[
+        "stock"]

@@ -21,7 +21,8 @@ MOST_POINTS = 250_000   # measuring points about at most: the spacing grows to k
 REACH_CUT = 5.0         # mm: over-cuts are searched this deep along the inward normal
 REACH_LEFT = 10.0       # mm: material left is followed this far along the outward normal
 ADVISED = 20            # regions given a cutter at most (the largest)
-PROBES = 200            # points per region the allowable size is found at
+PROBES = 64             # points per region the allowable size is found at
+SIZE_TOL = 0.01         # mm: the allowable size's bisection (library sizes differ by more)
 
 
 def stock_box(stock) -> np.ndarray:
@@ -123,8 +124,9 @@ class Comparison:
         over_regions = [self._region(i, r, "overcut", -dev) for i, r in
                         enumerate(regions(m, gouge, -dev))]
         left_found = regions(m, left, dev)
-        left_regions = [self._region(i, r, "left", dev, library if i < ADVISED else None)
-                        for i, r in enumerate(left_found)]
+        left_regions = [self._region(i, r, "left", dev) for i, r in enumerate(left_found)]
+        if library is not None and self.cutters:
+            _finishing_tools(self, left_found[:ADVISED], left_regions[:ADVISED], library)
         res = MachinedResult(
             points=len(m.vertices), spacing=self.spacing, uncovered=int((~cov).sum()),
             bound_along=self.along, bound_max=float(bound.max(initial=self.along)),
@@ -142,40 +144,56 @@ class Comparison:
         res.time_s = self.time
         return res
 
-    def _region(self, i: int, r: Region, kind: str, value: np.ndarray,
-                library=None) -> MachinedRegion:
+    def _region(self, i: int, r: Region, kind: str, value: np.ndarray) -> MachinedRegion:
         ops = self.last_op[r.vertices]
         ops = ops[ops >= 0]
         op = int(np.bincount(ops).argmax()) if ops.size else None
-        out = MachinedRegion(index=i, kind=kind, area=r.area, max=r.max, mean=r.mean,
-                             point=tuple(map(float, self.mesh.vertices[r.at])),
-                             vertices=int(r.vertices.size), op=op)
-        if kind == "left" and library is not None and self.cutters:
-            cutter = self.cutters[op if op is not None else max(self.cutters)]
-            out.allowable, out.tool = _finishing_tool(self, r, cutter, library,
-                                                      float(self.tolerance[op or 0]))
-        return out
+        return MachinedRegion(index=i, kind=kind, area=r.area, max=r.max, mean=r.mean,
+                              point=tuple(map(float, self.mesh.vertices[r.at])),
+                              vertices=int(r.vertices.size), op=op)
 
 
-def _finishing_tool(c: Comparison, r: Region, cutter, library, tol: float):
-    """(allowable size, tool name) for region `r`: the least over up to PROBES of its points
-    facing +Z of the largest size of `cutter`'s family touching there gouge-free
-    (`checker.mesh.depth.allowable_on_mesh`), and the library's largest cutter not above it."""
+def _probes(c: Comparison, r: Region) -> np.ndarray:
+    """Up to PROBES vertices of region `r` facing +Z: half its thickest, half spread over it."""
+    v = r.vertices[c.mesh.normals[r.vertices, 2] > 1e-9]
+    if v.size <= PROBES:
+        return v
+    thick = v[np.argsort(-c.dev[v], kind="stable")[: PROBES // 2]]
+    spread = v[np.linspace(0, v.size - 1, PROBES - PROBES // 2).round().astype(int)]
+    return np.unique(np.concatenate([thick, spread]))
+
+
+def _finishing_tools(c: Comparison, found: list[Region], out: list[MachinedRegion],
+                     library) -> None:
+    """Per region: the least over its probes (`_probes`) of the largest size of its cutter's
+    family touching there gouge-free with the axis +Z (`checker.mesh.depth.allowable_on_mesh`,
+    all regions of a cutter in one bisection), and the library's largest cutter not above
+    it (`allowable`, `tool` of `out`)."""
     from checker.mesh.depth import allowable_on_mesh
 
-    v = r.vertices[c.mesh.normals[r.vertices, 2] > 1e-9]
-    if v.size == 0:
-        return None, None
-    pick = v[np.unique(np.linspace(0, v.size - 1, min(PROBES, v.size)).round().astype(int))]
-    family = library.family(cutter.kind, None if cutter.ball_family else cutter.r)
-    s_max = max([t.size for t in family] + [float(cutter.size)])
-    size = allowable_on_mesh(c.index, cutter, c.mesh.vertices[pick], c.mesh.normals[pick],
-                             np.array([0.0, 0.0, 1.0]), tol=max(tol, 1e-4), s_max=s_max,
-                             s_tol=1e-3)
-    least = float(np.min(size))
-    tool = library.largest_not_exceeding(cutter.kind, least,
-                                         None if cutter.ball_family else cutter.r)
-    return (least if math.isfinite(least) else s_max), (None if tool is None else tool.name)
+    cutter_of = [c.cutters[o.op if o.op is not None else max(c.cutters)] for o in out]
+    for cutter in {id(k): k for k in cutter_of}.values():
+        mine = [i for i, k in enumerate(cutter_of) if k is cutter]
+        probes = [_probes(c, found[i]) for i in mine]
+        rows = np.concatenate(probes) if probes else np.zeros(0, int)
+        if rows.size == 0:
+            continue
+        r = None if cutter.ball_family else cutter.r
+        family = library.family(cutter.kind, r)
+        s_max = max([t.size for t in family] + [float(cutter.size)])
+        o = out[mine[0]].op
+        size = allowable_on_mesh(c.index, cutter, c.mesh.vertices[rows], c.mesh.normals[rows],
+                                 np.array([0.0, 0.0, 1.0]),
+                                 tol=max(float(c.tolerance[o or 0]), 1e-4), s_max=s_max,
+                                 s_tol=SIZE_TOL)
+        at = np.cumsum([0] + [len(p) for p in probes])
+        for k, i in enumerate(mine):
+            if at[k + 1] == at[k]:
+                continue
+            least = float(np.min(size[at[k]:at[k + 1]]))
+            least = least if math.isfinite(least) else s_max
+            tool = library.largest_not_exceeding(cutter.kind, least, r)
+            out[i].allowable, out[i].tool = least, None if tool is None else tool.name
 
 
 def _advice(left: list[MachinedRegion]) -> str | None:
