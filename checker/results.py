@@ -324,8 +324,13 @@ class MachinedResult(_Model):
                               "only, apart from the check's verdicts")
     left_points: int = Field(description="points left beyond tolerance + leave by more than "
                              "the bound")
-    overcut: list[MachinedRegion] = Field(default_factory=list)
-    left: list[MachinedRegion] = Field(default_factory=list)
+    overcut_regions: int = Field(0, description="over-cut regions in all")
+    left_regions: int = Field(0, description="left-material regions in all (of at least "
+                              "spacing^2)")
+    overcut: list[MachinedRegion] = Field(default_factory=list, description="the largest "
+                                          "over-cut regions by area (at most 100)")
+    left: list[MachinedRegion] = Field(default_factory=list, description="the largest "
+                                       "left-material regions by area (at most 100)")
     advice: str | None = Field(None, description='e.g. "rest machining: 3 regions, 41 mm^2, '
                                'up to 0.62 mm thick; largest safe tool BALL-D4"')
     operations: list[MachinedOperation] = Field(default_factory=list)

@@ -21,6 +21,7 @@ MOST_POINTS = 250_000   # measuring points about at most: the spacing grows to k
 REACH_CUT = 5.0         # mm: over-cuts are searched this deep along the inward normal
 REACH_LEFT = 10.0       # mm: material left is followed this far along the outward normal
 ADVISED = 20            # regions given a cutter at most (the largest)
+LISTED = 100            # regions of each kind listed in the document at most (the largest)
 PROBES = 64             # points per region the allowable size is found at
 SIZE_TOL = 0.01         # mm: the allowable size's bisection (library sizes differ by more)
 
@@ -121,9 +122,10 @@ class Comparison:
         verdict = vd.decide_machined(-dev, tol, bound)
         gouge = cov & (verdict == "gouge")
         left = cov & self.reachable & (dev > tol + leave + bound)
-        over_regions = [self._region(i, r, "overcut", -dev) for i, r in
-                        enumerate(regions(m, gouge, -dev))]
-        left_found = regions(m, left, dev)
+        over_found = regions(m, gouge, -dev)
+        over_regions = [self._region(i, r, "overcut", -dev)
+                        for i, r in enumerate(over_found[:LISTED])]
+        left_found = [r for r in regions(m, left, dev) if r.area >= self.spacing ** 2]
         left_regions = [self._region(i, r, "left", dev) for i, r in enumerate(left_found)]
         if library is not None and self.cutters:
             _finishing_tools(self, left_found[:ADVISED], left_regions[:ADVISED], library)
@@ -133,7 +135,8 @@ class Comparison:
             reach=REACH_CUT, left_max=float(max(dev[cov].max(initial=0.0), 0.0)),
             overcut_max=float(max((-dev[cov]).max(initial=0.0), 0.0)),
             gouge_points=int(gouge.sum()), left_points=int(left.sum()),
-            overcut=over_regions, left=left_regions, advice=_advice(left_regions),
+            overcut_regions=len(over_found), left_regions=len(left_found),
+            overcut=over_regions, left=left_regions[:LISTED], advice=_advice(left_regions),
             operations=self.ops)
         if self.out is not None:
             from checker.machined.output import write_deviation

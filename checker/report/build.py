@@ -186,7 +186,7 @@ def _machined(store: ResultsStore, job: dict) -> tuple[str | None, tuple[str, st
     if picture is None or not picture.is_file():
         return m.advice, None
     caption = (f"The machined part against the design (top view): over-cut up to "
-               f"{m.overcut_max:.3g} mm ({len(m.overcut)} regions beyond the tolerance), "
+               f"{m.overcut_max:.3g} mm ({m.overcut_regions} regions beyond the tolerance), "
                f"material left up to {m.left_max:.3g} mm; {m.advice or 'no rest machining'}")
     return m.advice, (base64.b64encode(picture.read_bytes()).decode("ascii"), caption)
 
