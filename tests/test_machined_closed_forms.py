@@ -129,3 +129,13 @@ def test_oblique_walk_and_nearest_material_agree_with_brute_force():
     want = np.array([_brute(stock, p[k], n[k], 3.0) for k in range(40)])
     assert (want < 0).sum() > 5 and (want > 0).sum() > 5
     assert np.allclose(got, want, atol=2e-3)              # the brute force's step
+
+
+def test_an_overcut_is_a_gouge_beyond_tolerance_and_bound_only():
+    from checker.verdict import decide_machined, is_finding
+
+    depth = np.array([-0.5, 0.0, 0.01, 0.05, 0.0701, 0.2])
+    v = decide_machined(depth, 0.02, np.array([0.05, 0.05, 0.05, 0.05, 0.05, 0.3]))
+    assert list(v) == ["ok", "ok", "within_tolerance", "within_tolerance", "gouge",
+                       "within_tolerance"]
+    assert list(is_finding(v)) == [False, False, False, False, True, False]
