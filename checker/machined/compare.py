@@ -204,8 +204,10 @@ def _advice(left: list[MachinedRegion]) -> str | None:
     if not left:
         return None
     area = sum(r.area for r in left)
+    thick = max(r.max for r in left)
+    more = "+" if thick >= REACH_LEFT else ""         # followed no farther than REACH_LEFT
     text = (f"rest machining: {len(left)} region{'s' if len(left) > 1 else ''}, "
-            f"{area:.3g} mm^2, up to {max(r.max for r in left):.3g} mm thick")
+            f"{area:.3g} mm^2, up to {thick:.3g}{more} mm thick")
     sized = [r for r in left if r.allowable is not None]
     if sized:
         least = min(sized, key=lambda r: r.allowable)
