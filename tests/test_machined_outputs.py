@@ -1,5 +1,5 @@
 """The deviation file (checker/machined/output.py): PLY read back by trimesh (an independent
-reader), legacy VTK read back by a plain parser here, the PNG map, THICK read as the stock to
+reader), binary legacy VTK read back by a plain parser here, the PNG map, THICK read as the stock to
 leave, and the `--deviation-out`/`--leave` usage errors (one line, exit 2, before any work)."""
 
 from __future__ import annotations
@@ -29,15 +29,20 @@ def _mesh_and_values():
 
 
 def _read_vtk(path: Path):
-    words = path.read_text().split()
-    at = words.index("POINTS")
-    n = int(words[at + 1])
-    pts = np.array(words[at + 3: at + 3 + 3 * n], float).reshape(n, 3)
-    at = words.index("POLYGONS")
-    m = int(words[at + 1])
-    faces = np.array(words[at + 3: at + 3 + 4 * m], int).reshape(m, 4)
-    at = words.index("LOOKUP_TABLE")
-    vals = np.array(words[at + 2: at + 2 + n], float)
+    """Binary legacy VTK polydata: points, polygons, the point scalars (big-endian)."""
+    raw = path.read_bytes()
+
+    def after(header: bytes) -> int:
+        start = raw.index(header)
+        return raw.index(b"\n", start) + 1
+
+    words = raw[raw.index(b"POINTS"):].split(b"\n", 1)[0].split()
+    n = int(words[1])
+    at = after(b"POINTS")
+    pts = np.frombuffer(raw, ">f8", 3 * n, at).reshape(n, 3)
+    m = int(raw[raw.index(b"POLYGONS"):].split(b"\n", 1)[0].split()[1])
+    faces = np.frombuffer(raw, ">i4", 4 * m, after(b"POLYGONS")).reshape(m, 4)
+    vals = np.frombuffer(raw, ">f8", n, after(b"LOOKUP_TABLE"))
     return pts, faces, vals
 
 

@@ -1,6 +1,7 @@
 """The deviation file: the measuring mesh with its per-vertex signed deviation (mm; + material
 left, - over-cut, nan where the stock never covered the part), as binary PLY (a vertex property
-`deviation`: MeshLab, ParaView) or legacy VTK (POINT_DATA scalars `deviation`: ParaView), and a
+`deviation`: MeshLab, ParaView) or binary legacy VTK (POINT_DATA scalars `deviation`:
+ParaView), and a
 PNG map beside it (a top view coloured by the deviation). Part frame, mm."""
 
 from __future__ import annotations
@@ -30,15 +31,17 @@ def _ply(mesh: SurfaceMesh, dev: np.ndarray) -> bytes:
 
 
 def _vtk(mesh: SurfaceMesh, dev: np.ndarray) -> bytes:
+    """Legacy VTK, binary (big-endian, as the format wants)."""
     V, T = mesh.vertices, mesh.triangles
-    lines = ["# vtk DataFile Version 3.0", "pathcheck: signed deviation, mm", "ASCII",
-             "DATASET POLYDATA", f"POINTS {len(V)} double"]
-    lines += [" ".join(f"{x:.9g}" for x in p) for p in V]
-    lines.append(f"POLYGONS {len(T)} {4 * len(T)}")
-    lines += [f"3 {a} {b} {c}" for a, b, c in T]
-    lines += [f"POINT_DATA {len(V)}", "SCALARS deviation double 1", "LOOKUP_TABLE default"]
-    lines += [("nan" if not np.isfinite(d) else f"{d:.9g}") for d in dev]
-    return ("\n".join(lines) + "\n").encode("ascii")
+    cells = np.column_stack([np.full(len(T), 3), T]).astype(">i4")
+    return b"".join([
+        (f"# vtk DataFile Version 3.0\npathcheck: signed deviation, mm\nBINARY\n"
+         f"DATASET POLYDATA\nPOINTS {len(V)} double\n").encode("ascii"),
+        np.ascontiguousarray(V, ">f8").tobytes(),
+        f"\nPOLYGONS {len(T)} {4 * len(T)}\n".encode("ascii"), cells.tobytes(),
+        (f"\nPOINT_DATA {len(V)}\nSCALARS deviation double 1\nLOOKUP_TABLE default\n"
+         ).encode("ascii"),
+        np.ascontiguousarray(dev, ">f8").tobytes(), b"\n"])
 
 
 def _picture(path: Path, mesh: SurfaceMesh, dev: np.ndarray) -> None:
