@@ -5,11 +5,13 @@ deviation kernel against a brute-force point-membership walk."""
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from checker.cutter import Cutter
+from checker.machined.compare import Comparison
 from checker.machined.deviation import error_bound, signed_deviation
 from checker.machined.points import surface_mesh
 from checker.mesh.tool import tool_pieces
@@ -41,10 +43,20 @@ def test_ball_raster_leaves_the_analytic_scallop():
     for k, y in enumerate(ys):
         xa, xb = (-5.0, 25.0) if k % 2 == 0 else (25.0, -5.0)
         path += [[xa, y, 0.0], [xb, y, 0.0]]     # ball tip on the design plane z = 0
+    V = np.array([[2, 2, 0], [18, 2, 0], [18, 10, 0], [2, 10, 0]], float)
+    part = SimpleNamespace(vertices=V, triangles=np.array([[0, 1, 2], [0, 2, 3]]),
+                           surface=np.full(2, -1))
+    cmp = Comparison(part, None, stock, {}, np.array([0.001]), np.zeros(1), 1e-6, spacing=h)
     _cut(stock, ball, path)
+    cmp.after(0, stock)
     mesh = _plane(2, 2, 18, 10, 0.0, h)
     dev = signed_deviation(stock, mesh.vertices, mesh.normals, 5.0, 5.0)
     scallop = R - math.sqrt(R * R - (s / 2) ** 2)
+    # the operation's record: every point cut, the scallop its step-over leaves
+    op = cmp.ops[0]
+    assert op.points_cut == len(cmp.mesh.vertices)
+    assert op.left_max == pytest.approx(scallop, abs=1e-4)
+    assert op.overcut_max <= 1e-5
     bound = error_bound(1e-6, h, mesh.normals)
     assert np.all(dev >= -1e-5)                  # a tangent raster never cuts below
     assert dev.max() == pytest.approx(scallop, abs=1e-4 + bound.max())
