@@ -99,3 +99,17 @@ def test_report_shows_the_deviation_picture_and_the_rest_machining_advice(rotate
     assert row["rest_machining"] == m.advice
     assert f"as cut: over-cut {m.overcut_max:.3g} mm ({m.gouge_points} points gouged)" in row[
         "stock"]
+
+
+def test_rotatethin_on_the_whole_box_at_its_default_resolution(realdata):
+    """`box:+2` around the whole part (h = 0.5 mm by default: the bound is 0.60 mm on a wall):
+    the over-cut is the bore's alone, as deep as the check's gouges within that bound."""
+    apt = realdata / "amorim-solidworkscam-apt" / "RotateThin.apt"
+    doc = check_job(apt, stock=StockRequest("box:+2"))
+    m = doc.stock.machined
+    depth = max(p.depth for p in doc.points if p.verdict == "gouge")
+    assert doc.stock.resolution == 0.5 and m.gouge_points > 0
+    assert {r.op for r in m.overcut} == {5}
+    assert m.overcut_max == pytest.approx(depth, abs=m.bound_max)
+    for r in m.overcut:                       # on the bore: 11 mm about (146.85, 50)
+        assert abs(np.hypot(r.point[0] - 146.85, r.point[1] - 50.0) - 11.0) < 1.0 + m.bound_max
