@@ -11,7 +11,8 @@ Prints, on this machine, in this run (so the ratios hold on a noisy machine):
 - the full 4-axis compressor job (best B over -180..180, the program written and checked) and
   the largest amorim mesh job (Interface-glue), each in a fresh process: wall time, peak memory;
   Interface-glue again against a box stock 3 mm around its part at 0.05 mm (`--stock box:+3`):
-  the stock simulation's own time beside the check's;
+  the stock simulation's own time beside the check's, and the machined part's comparison with
+  the design beside the simulation (`benchmarks.bench_deviation` alone);
 - the stock's material removal alone (`benchmarks.bench_stock`): moves/s and engaged rays/s on a
   100,000-move 3-axis raster and on Interface-glue.
 The kernels come from the warm per-user cache (`pathcheck warm`)."""
@@ -148,6 +149,9 @@ def jobs() -> None:
                   f"{doc['summary']['time_s']:.1f} s), peak {peak:.0f} MB; removed "
                   f"{st['volume_initial'] - st['volume_final']:,.0f} mm^3, air cuts "
                   f"{sum(o['air_cuts'] for o in st['operations'])}")
+            m = st["machined"]                        # inside the stock's time_s above
+            print(f"  the machined part against the design: {m['time_s']:.1f} s beside the "
+                  f"simulation's {st['time_s'] - m['time_s']:.1f} s, {m['points']:,} points")
 
 
 def stock_removal() -> None:

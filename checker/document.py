@@ -391,8 +391,8 @@ def _with_stock(summary: Summary, stock) -> None:
     worst findings."""
     for f in stock.findings:
         setattr(summary.counts, f.verdict, getattr(summary.counts, f.verdict) + 1)
-    if stock.findings:
-        summary.status = "findings"
+    if stock.findings or (stock.machined is not None and stock.machined.gouge_points):
+        summary.status = "findings"  # the as-cut gouges: counted in stock.machined only
     extra = [Finding(index=f.index, kind="stock" if f.against == "stock" else "fixture",
                      verdict=f.verdict, line=f.line, op=f.op, tip=f.tip, point=f.point,
                      depth=f.depth) for f in stock.findings]

@@ -88,6 +88,9 @@ def _against_stock_only(toolpath, cutter, machine, config, stock: StockRequest, 
     if to_post:
         raise PathcheckError("a check without a part does not post: the corrected program needs "
                              "the part (give --part, or drop -o)", code="usage")
+    if stock.deviation_out is not None:
+        raise PathcheckError("--deviation-out compares the machined part with the part: "
+                             "expected a part (give --part)", code="usage")
     cfg = job_config(config)
     m = toolpath.motion_arrays(arc_chord_tol=cfg.check.arc_chord_tolerance)
     input_limits.refuse_beyond(len(m), input_limits.MAX_CHECK_POSES, "poses to check",

@@ -266,6 +266,80 @@ class MoveEngagement(_Model):
     width: list[float] = Field(description="engaged width, mm")
 
 
+class MachinedRegion(_Model):
+    """A connected area of the machined part (on the part's triangles) whose deviation from
+    the design is beyond its threshold by more than the model's bound (docs/MATH.md §15)."""
+
+    index: int
+    kind: Literal["left", "overcut"] = Field(description="left: material above the design "
+                                             "(advice, rest machining); overcut: material "
+                                             "removed below it (a gouge as the machine leaves it)")
+    area: float = Field(description="mm^2")
+    max: float = Field(description="largest thickness (left) or depth (over-cut), mm")
+    mean: float = Field(description="area-weighted mean thickness or depth, mm")
+    point: Vec3 = Field(description="where the largest is, part frame, mm")
+    vertices: int = Field(description="measuring points in the region")
+    op: int | None = Field(None, description="the operation that last cut the region (None: "
+                           "none did)")
+    allowable: float | None = Field(None, description="left: the largest size (R, or r for a "
+                                    "ball) of the job's cutter family that reaches every "
+                                    "point of the region gouge-free, mm (None: no point faces "
+                                    "the tool axis)")
+    tool: str | None = Field(None, description="left: the largest cutter of the tool library "
+                             "of that family not above it")
+
+
+class MachinedOperation(_Model):
+    """The deviation after one operation."""
+
+    op: int
+    points_cut: int = Field(description="measuring points whose deviation this operation "
+                            "lowered by more than the bound")
+    left_max: float = Field(description="largest material left above the design at those "
+                            "points after it (the scallop its step-over and step-down leave "
+                            "beyond `leave`), mm")
+    left_mean: float = Field(description="mean of that, mm")
+    leave: float = Field(description="stock the operation leaves on purpose (THICK, "
+                         "--leave), mm")
+    overcut_max: float = Field(description="deepest over-cut anywhere after it, mm")
+
+
+class MachinedResult(_Model):
+    """The machined part (the simulated stock at the end) against the design: the signed
+    deviation at the part's measuring points along their outward normals (docs/MATH.md §15)."""
+
+    points: int = Field(description="measuring points (the part's triangles subdivided to "
+                        "`spacing`)")
+    spacing: float = Field(description="largest edge of the measuring mesh, mm")
+    uncovered: int = Field(description="points the stock never covered (left out)")
+    bound_along: float = Field(description="error bound along a normal for a vertical one, mm")
+    bound_max: float = Field(description="largest bound of any point (horizontal normals: + "
+                             "h / sqrt(2)), mm")
+    reach: float = Field(description="the search's reach along the normal: deviations are "
+                         "capped at +-reach, mm")
+    left_max: float = Field(description="largest material left above the design, mm")
+    overcut_max: float = Field(description="deepest over-cut, mm (0: none)")
+    gouge_points: int = Field(description="points over-cut beyond the tolerance by more than "
+                              "the bound (`checker.verdict.decide_machined`); counted here "
+                              "only, apart from the check's verdicts")
+    left_points: int = Field(description="points left beyond tolerance + leave by more than "
+                             "the bound")
+    overcut_regions: int = Field(0, description="over-cut regions in all")
+    left_regions: int = Field(0, description="left-material regions in all (of at least "
+                              "spacing^2)")
+    overcut: list[MachinedRegion] = Field(default_factory=list, description="the largest "
+                                          "over-cut regions by area (at most 100)")
+    left: list[MachinedRegion] = Field(default_factory=list, description="the largest "
+                                       "left-material regions by area (at most 100)")
+    advice: str | None = Field(None, description='e.g. "rest machining: 3 regions, 41 mm^2, '
+                               'up to 0.62 mm thick; largest safe tool BALL-D4"')
+    operations: list[MachinedOperation] = Field(default_factory=list)
+    deviation_file: str | None = Field(None, description="the part with per-vertex deviation "
+                                       "(--deviation-out, PLY or VTK)")
+    picture: str | None = Field(None, description="the deviation map (PNG) beside it")
+    time_s: float = 0.0
+
+
 class StockResult(_Model):
     """The program against the stock and the fixtures (docs/MATH.md §14)."""
 
@@ -283,6 +357,8 @@ class StockResult(_Model):
     overflow: int = Field(0, description="rays whose cut needed more intervals than the model "
                           "holds (their material kept)")
     final_stl: str | None = None
+    machined: MachinedResult | None = Field(None, description="the machined part against the "
+                                            "design (with a part)")
     time_s: float = 0.0
 
 
@@ -346,7 +422,17 @@ def stock_line(stock: StockResult | None, stated: str | None = None) -> str:
     air_t = sum(o.air_time_s or 0.0 for o in stock.operations)
     return (f"stock {stock.stock} at {stock.resolution:g} mm{fixtures}: {found}; removed "
             f"{stock.volume_initial - stock.volume_final:.0f} of {stock.volume_initial:.0f} mm^3;"
-            f" air cuts {air} ({air_t:.0f} s)")
+            f" air cuts {air} ({air_t:.0f} s){machined_text(stock.machined)}")
+
+
+def machined_text(m: MachinedResult | None) -> str:
+    """'; as cut: over-cut 0.79 mm (475 points beyond the tolerance), left up to 0.62 mm;
+    rest machining: ...' (docs/MATH.md §15), or '' without a part."""
+    if m is None:
+        return ""
+    text = (f"; as cut: over-cut {m.overcut_max:.3g} mm ({m.gouge_points} points gouged), "
+            f"left up to {m.left_max:.3g} mm")
+    return text + (f"; {m.advice}" if m.advice else "")
 
 
 def json_schema() -> dict:

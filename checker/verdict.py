@@ -16,7 +16,10 @@ rule with what may be touched: the cutter's body cuts stock at feed (that is mac
 finding); a rapid that removes stock beyond the tolerance is a `crash`, the shank or the holder
 removing stock at feed a `holder` finding; any piece of the tool in a fixture beyond the
 tolerance is a `crash` (`decide_stock`, `decide_fixture`).
-(docs/MATH.md §8, §14)"""
+Against the design, the machined part (the stock at the end) is a `gouge` where it is cut below
+the part's surface beyond the tolerance by more than the simulation's error bound there
+(`decide_machined`): a gouge as the machine leaves it, counted apart from the poses' verdicts.
+(docs/MATH.md §8, §14, §15)"""
 
 from __future__ import annotations
 
@@ -81,6 +84,21 @@ def decide_fixture(depth: np.ndarray, tolerance: np.ndarray | float) -> np.ndarr
     out = np.full(depth.shape, "ok", dtype=object)
     out[depth > 0.0] = "within_tolerance"
     out[depth > tol] = "crash"
+    return out
+
+
+def decide_machined(overcut: np.ndarray, tolerance: np.ndarray | float,
+                    bound: np.ndarray | float) -> np.ndarray:
+    """Verdicts (N,) of the machined part at its measuring points from the depth each is
+    over-cut `overcut` (mm, <= 0: not cut below the design), the `tolerance` (mm) and the
+    simulation's error `bound` there (mm): a `gouge` beyond tolerance + bound, a smaller cut
+    `within_tolerance`."""
+    overcut = np.asarray(overcut, dtype=float)
+    limit = np.broadcast_to(np.asarray(tolerance, dtype=float) + np.asarray(bound, dtype=float),
+                            overcut.shape)
+    out = np.full(overcut.shape, "ok", dtype=object)
+    out[overcut > 0.0] = "within_tolerance"
+    out[overcut > limit] = "gouge"
     return out
 
 

@@ -163,8 +163,8 @@ def record(doc, store_path: Path | None = None) -> None:
 @view_option
 def check(job, part_path, cutter_text, units, tool_name, tool_library, config_path, json_out,
           output, machine, b_range, reorient, strategy, part_transform, store_path, no_store,
-          on_findings, no_check, stock_text, fixtures, stock_resolution, stock_out,
-          view_out) -> None:
+          on_findings, no_check, stock_text, fixtures, stock_resolution, stock_out, deviation_out,
+          leave, view_out) -> None:
     """Check JOB (APT-CL or NX CLSF) against its part: allowable cutter, verdict and margin at
     every CC point.
 
@@ -190,7 +190,8 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
                     job_inputs(job, part_path or find_part_beside(job), config_path,
                                tool_library, machine, store, no_check or no_store))
     cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
-    stock = opt.stock_request(stock_text, fixtures, stock_resolution, stock_out)
+    stock = opt.stock_request(stock_text, fixtures, stock_resolution, stock_out,
+                               deviation_out, leave)
     if no_check:
         post_without_check(job, output, cutter, machine, config_path, part_path, json_out, units)
         return

@@ -62,7 +62,8 @@ def assumed_units(moves, given: str | None, machine) -> None:
 @view_option
 def check_gcode(program: Path, machine, dialect, units, block_delete, part_path, cutter_text,
                 tool_name, tool_library, config_path, json_out, store_path, no_store,
-                stock_text, fixtures, stock_resolution, stock_out, view_out) -> None:
+                stock_text, fixtures, stock_resolution, stock_out, deviation_out, leave,
+                view_out) -> None:
     """Read PROGRAM (G-code) for a machine, bring its moves back into the part frame and, with
     --part and --cutter, check them like `pathcheck JOB.apt` (exit 1 on findings).
 
@@ -82,7 +83,8 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
 
     mach = load_machine(machine)
     cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
-    stock = opt.stock_request(stock_text, fixtures, stock_resolution, stock_out)
+    stock = opt.stock_request(stock_text, fixtures, stock_resolution, stock_out,
+                               deviation_out, leave)
     if part_path is not None and not part_path.is_file():
         raise PathcheckError(
             "part file not found: expected an existing file", path=part_path, code="part"

@@ -109,8 +109,9 @@ def json_option(what: str = "the results document") -> Callable:
 
 
 def stock_options(command: Callable) -> Callable:
-    """`--stock`, `--fixture` (repeatable), `--stock-resolution`, `--stock-out` ->
-    `stock_text, fixtures, stock_resolution, stock_out` (`stock_request` makes the request)."""
+    """`--stock`, `--fixture` (repeatable), `--stock-resolution`, `--stock-out`,
+    `--deviation-out`, `--leave` -> `stock_text, fixtures, stock_resolution, stock_out,
+    deviation_out, leave` (`stock_request` makes the request)."""
     for option in reversed((
             click.option("--stock", "stock_text", default=None, metavar="SPEC",
                          help="check against the stock, part frame, mm: box:+M (a margin "
@@ -128,16 +129,25 @@ def stock_options(command: Callable) -> Callable:
             click.option("--stock-out", "stock_out",
                          type=click.Path(file_okay=False, path_type=Path), default=None,
                          metavar="DIR", help="write the stock after each operation and at the "
-                                             "end here (STL)"))):
+                                             "end here (STL)"),
+            click.option("--deviation-out", "deviation_out",
+                         type=click.Path(dir_okay=False, path_type=Path), default=None,
+                         metavar="FILE", help="write the part with the machined part's "
+                         "deviation per vertex (.ply or .vtk; a .png map beside it)"),
+            click.option("--leave", "leave", type=float, default=0.0, metavar="MM",
+                         help="stock left on the part on purpose, mm (with THICK in the CL "
+                              "file, the larger per operation) [default: 0]"))):
         command = option(command)
     return command
 
 
 def stock_request(stock_text: str | None, fixtures: tuple[str, ...],
-                  stock_resolution: float | None, stock_out: Path | None):
+                  stock_resolution: float | None, stock_out: Path | None,
+                  deviation_out: Path | None = None, leave: float = 0.0):
     """The `checker.stock.request.StockRequest` of the stock options, checked before the run:
     the stock's text (`checker.stock.spec.parse_stock`), the fixtures' files and placements, a
-    resolution that is a positive number of mm and a `--stock-out` folder that can be made."""
+    resolution that is a positive number of mm, a `--stock-out` folder that can be made, a
+    `--deviation-out` file (.ply, .vtk) that can be written and a `--leave` of 0 to 100 mm."""
     from checker.errors import PathcheckError
     from checker.stock.fixtures import fixture_placement
     from checker.stock.request import StockRequest
@@ -161,7 +171,22 @@ def stock_request(stock_text: str | None, fixtures: tuple[str, ...],
             raise PathcheckError("--stock-out: expected a folder, found a file", path=stock_out,
                                  code="usage")
         check_writable(stock_out / "stock_final.stl", "stock STL")  # created when written
-    return StockRequest(stock_text, tuple(fixtures), stock_resolution, stock_out)
+    if not (0.0 <= leave <= 100.0):
+        raise PathcheckError(f"--leave {leave:g}: expected a thickness between 0 and 100 mm",
+                             code="usage")
+    if deviation_out is not None:
+        from checker.atomic import check_writable
+
+        if stock_text is None:
+            raise PathcheckError("--deviation-out compares the machined part: expected --stock "
+                                 "too", code="usage")
+        if deviation_out.suffix.lower() not in (".ply", ".vtk"):
+            raise PathcheckError("--deviation-out: expected a .ply or .vtk file",
+                                 path=deviation_out, code="usage")
+        check_writable(deviation_out, "deviation file")
+        check_writable(deviation_out.with_suffix(".png"), "deviation map")
+    return StockRequest(stock_text, tuple(fixtures), stock_resolution, stock_out,
+                        deviation_out, leave)
 
 
 def json_to_stdout(json_out: Path | None) -> bool:

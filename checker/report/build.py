@@ -30,6 +30,7 @@ CSV_COLUMNS = (
     "holder", "crash", "inaccessible", "worst_margin", "worst_depth", "largest_safe_cutter",
     "largest_safe_standard", "regions", "previous_status", "previous_gouges", "elapsed_s",
     "cutter", "cutter_kind", "part", "part_hash", "machine", "axis_class", "stock",
+    "rest_machining",
 )
 POINT_COLUMNS = (  # the per-point CSV: part frame, mm, degrees; empty = null
     "job_id", "job_path", "recorded_at", "index", "operation", "line", "kind", "rapid", "x", "y",
@@ -159,6 +160,7 @@ def build_report(
     for j in jobs:
         j["pictures"], j["facts"], j["regions"] = drawn.get(j["id"], ([], None, []))
         j["view"] = view_beside(out, j["job_path"])
+        j["rest_machining"], j["deviation"] = _machined(store, j) if j["stock"] else (None, None)
     per_night = nights(history, until, cfg.report.trend_nights)
     trend_png = trend_picture(per_night, cfg.report.picture_dpi) if history else None
     html = render_page(jobs, since, until, trend_png, compare(per_night))
@@ -177,8 +179,30 @@ def build_report(
                        len(unreadable), None if points_csv is None else Path(points_csv))
 
 
+def _machined(store: ResultsStore, job: dict) -> tuple[str | None, tuple[str, str] | None]:
+    """(the rest-machining advice, (the deviation map as base64 PNG, its caption)) of a job
+    checked against a stock with a part (`stock.machined`: docs/MATH.md §15); the map when
+    its file (`--deviation-out`) is still there."""
+    import base64
+
+    try:
+        doc = store.document(job["id"])
+    except (PathcheckError, ValueError):
+        return None, None
+    m = None if doc is None or doc.stock is None else doc.stock.machined
+    if m is None:
+        return None, None
+    picture = Path(m.picture) if m.picture else None
+    if picture is None or not picture.is_file():
+        return m.advice, None
+    caption = (f"The machined part against the design (top view): over-cut up to "
+               f"{m.overcut_max:.3g} mm ({m.overcut_regions} regions beyond the tolerance), "
+               f"material left up to {m.left_max:.3g} mm; {m.advice or 'no rest machining'}")
+    return m.advice, (base64.b64encode(picture.read_bytes()).decode("ascii"), caption)
+
+
 def _plain(job: dict) -> dict:
-    return {k: v for k, v in job.items() if k not in ("pictures", "facts")}
+    return {k: v for k, v in job.items() if k not in ("pictures", "facts", "deviation")}
 
 
 def _write_json(path: Path, jobs: list[dict], since: float, until: float, per_night: list,

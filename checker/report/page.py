@@ -106,6 +106,8 @@ def _shown(job: dict) -> dict:
             if job[k]]
     figures = (list(zip(job["pictures"], _captions(job), strict=True)) if job["pictures"]
                else [])
+    if job.get("deviation"):
+        figures.append(job["deviation"])
     delta = _delta(job) if job["status"] != "failed" else ""
     return {**job, "region_groups": list(groups.items()), "delta": delta, "meta": meta,
             "figures": figures}

@@ -137,6 +137,7 @@ def check_stock(job, motion: ProgramMotion, cutters: dict, tol, request: StockRe
             from checker.atomic import make_parent
 
             make_parent(Path(out_dir) / "stock_final.stl", "stock STL")
+        design = _comparison(job, stock, cutters, tol, request, error_bound(h, step_mm)[0])
         with step("remove the stock", len(np.unique(motion.op_of))) as advance:
             for o in _ops_in_order(motion.op_of):
                 P = np.flatnonzero(motion.op_of == o)
@@ -148,6 +149,8 @@ def check_stock(job, motion: ProgramMotion, cutters: dict, tol, request: StockRe
                                                          got.volume[P], got.width[P])
                 ops.append(_operation(o, P, moves, m, thick, vol, width, tolerance, out_dir,
                                       stock))
+                if design is not None:
+                    design.after(o, stock)
                 advance(1)
         v, piece = vd.decide_stock(thick, rapid, tolerance)
         worse = _worse(v, verdict)
@@ -173,7 +176,8 @@ def check_stock(job, motion: ProgramMotion, cutters: dict, tol, request: StockRe
                 volume=np.round(vol[feed, 0], 6).tolist(),
                 depth=np.round(thick[feed, 0], 6).tolist(),
                 width=np.round(width[feed], 6).tolist()),
-            overflow=int(stock.overflow), final_stl=final)
+            overflow=int(stock.overflow), final_stl=final,
+            machined=None if design is None else design.result(_library()))
     fixtures = [load_fixture(text, cfg) for text in request.fixtures]
     for fx in fixtures:
         _against_fixture(fx, motion, pieces, tolerance, cfg.check.reach, moves, m, rapid,
@@ -185,6 +189,26 @@ def check_stock(job, motion: ProgramMotion, cutters: dict, tol, request: StockRe
     result = StockResult(**base, fixtures=[f.name for f in fixtures], counts=counts,
                          findings=findings, time_s=time.perf_counter() - t0)
     return StockCheck(verdict, depth, against, result)
+
+
+def _comparison(job, stock: Dexels, cutters: dict, tol, request: StockRequest, along: float):
+    """The machined part against the design as the operations cut (`checker.machined`), or
+    None without a part."""
+    if getattr(job, "triangles", None) is None:
+        return None
+    from checker.machined.compare import Comparison
+    from checker.machined.leave import operation_leave
+
+    with step("compare the stock with the part"):
+        return Comparison(job.triangles, job.index, stock, cutters, tol.value,
+                          operation_leave(job.toolpath, request.leave), along,
+                          axes=job.m.axis, out=request.deviation_out)
+
+
+def _library():
+    from checker.tool_library import load_tool_library
+
+    return load_tool_library()
 
 
 _RANK = {"ok": 0, "within_tolerance": 1, "holder": 2, "crash": 3}

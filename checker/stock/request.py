@@ -19,12 +19,17 @@ class StockRequest:
     """`stock` the `--stock` text (`checker.stock.spec`; None: no stock), `fixtures` the
     `--fixture` texts (`FILE[@RX,RY,RZ,DX,DY,DZ]`, `checker.stock.fixtures`), `resolution` the
     ray spacing (mm; None: `checker.stock.removal.default_resolution` of the stock's size),
-    `stock_out` a folder for the stock after each operation and at the end (STL)."""
+    `stock_out` a folder for the stock after each operation and at the end (STL),
+    `deviation_out` a file (.ply, .vtk) for the part with the machined part's deviation,
+    `leave` the stock left on the part on purpose (mm; THICK in the CL file, the larger) for
+    the comparison with the design (`checker.machined`)."""
 
     stock: str | None = None
     fixtures: tuple[str, ...] = ()
     resolution: float | None = None
     stock_out: Path | None = None
+    deviation_out: Path | None = None
+    leave: float = 0.0
 
     @property
     def asked(self) -> bool:
