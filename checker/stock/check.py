@@ -7,8 +7,9 @@ removed counted per operation (docs/MATH.md §14). Part frame, mm."""
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -16,13 +17,14 @@ from checker import input_limits
 from checker import verdict as vd
 from checker.errors import PathcheckError
 from checker.mesh.tool import tool_pieces
-from checker.moves import FEED, RAPID, START
+from checker.moves import FEED, RAPID, START, Moves
 from checker.progress import step
 from checker.results import MoveEngagement, StockFinding, StockOperation, StockResult, VerdictCounts
 from checker.stock.dexels import Dexels
 from checker.stock.fixtures import Fixture, load_fixture
 from checker.stock.motion import sweep_items
 from checker.stock.request import StockRequest
+from checker.toolpath import MotionArrays
 from checker.verify import ProgramMotion, tool_depths
 
 _PIECES = ("body", "shank", "holder")
@@ -103,92 +105,156 @@ def _ops_in_order(op_of: np.ndarray) -> list[int]:
     return [int(op_of[i]) for i in np.sort(first)]
 
 
+class _Program(NamedTuple):
+    """What every part of the stage reads: the poses and moves, their motion rows, which are
+    rapid (a cycle's retract is not), the tolerance per pose and each operation's tool."""
+
+    moves: Moves
+    m: MotionArrays
+    rapid: np.ndarray
+    tolerance: np.ndarray
+    pieces: dict
+
+
+@dataclass
+class _Verdicts:
+    """Per pose the worst verdict so far against the stock and the fixtures, its depth and
+    what it was against; the findings in the order found."""
+
+    verdict: np.ndarray
+    depth: np.ndarray
+    against: np.ndarray
+    findings: list[StockFinding] = field(default_factory=list)
+
+    @staticmethod
+    def none(n: int) -> _Verdicts:
+        return _Verdicts(np.full(n, "ok", dtype=object), np.zeros(n),
+                         np.full(n, "", dtype=object))
+
+    def merge(self, verdict: np.ndarray, depth: np.ndarray, against: str) -> None:
+        """Take the verdicts that rank above those so far."""
+        worse = _worse(verdict, self.verdict)
+        self.verdict[worse], self.depth[worse], self.against[worse] = (
+            verdict[worse], depth[worse], against)
+
+    def counts(self) -> VerdictCounts:
+        return VerdictCounts(**{k: int((self.verdict == k).sum()) for k in vd.VERDICTS
+                                if k in VerdictCounts.model_fields})
+
+
+@dataclass
+class _Removed:
+    """Per pose (the move that reaches it) what each piece removed (`checker.stock.removal`:
+    `thickness`, `where`, `volume` per piece, the body's `width`) and per operation its
+    summary."""
+
+    thickness: np.ndarray
+    where: np.ndarray
+    volume: np.ndarray
+    width: np.ndarray
+    operations: list[StockOperation] = field(default_factory=list)
+
+    @staticmethod
+    def none(n: int) -> _Removed:
+        return _Removed(np.zeros((n, 3)), np.full((n, 3, 3), np.nan), np.zeros((n, 3)),
+                        np.zeros(n))
+
+
 def check_stock(job, motion: ProgramMotion, cutters: dict, tol, request: StockRequest,
                 part_box: np.ndarray | None) -> StockCheck:
     """The written program's `motion` against the stock and the fixtures of `request`, the
     operations' `cutters` and tolerances `tol` (`checker.tolerance`)."""
-    from checker.stock.removal import error_bound, remove
-
     t0 = time.perf_counter()
-    cfg, m, moves = job.cfg, job.m, motion.moves
-    n = len(moves)
-    tolerance = tol.value[motion.op_of]
+    moves, m = motion.moves, job.m
     rapid = ((moves.kind == RAPID) & ~moves.retract) | ((moves.kind == START) & m.rapid[moves.row])
-    pieces = {o: tool_pieces(cutters[o], with_holder=True) for o in np.unique(motion.op_of)}
-    verdict = np.full(n, "ok", dtype=object)
-    depth = np.zeros(n)
-    against = np.full(n, "", dtype=object)
-    findings: list[StockFinding] = []
-    stock_res = None
+    program = _Program(moves, m, rapid, tol.value[motion.op_of],
+                       {o: tool_pieces(cutters[o], with_holder=True)
+                        for o in np.unique(motion.op_of)})
+    verdicts = _Verdicts.none(len(moves))
+    base = dict(stock="none", resolution=0.0, error_bound=0.0, volume_initial=0.0,
+                volume_final=0.0)
     if request.stock is not None:
-        part_points = None if job.triangles is None else job.triangles.vertices
-        stock, what = build_stock(request, part_box, part_points, job.toolpath, cfg)
-        h = stock.h
-        step_mm = h
-        box = _stock_box(stock)
-        volume0 = stock.volume()
-        thick = np.zeros((n, 3))
-        where = np.full((n, 3, 3), np.nan)
-        vol = np.zeros((n, 3))
-        width = np.zeros(n)
-        ops = []
-        out_dir = request.stock_out
-        if out_dir is not None:  # the folder asked for, made once the stock is known
-            from checker.atomic import make_parent
-
-            make_parent(Path(out_dir) / "stock_final.stl", "stock STL")
-        design = _comparison(job, stock, cutters, tol, request, error_bound(h, step_mm)[0])
-        with step("remove the stock", len(np.unique(motion.op_of))) as advance:
-            for o in _ops_in_order(motion.op_of):
-                P = np.flatnonzero(motion.op_of == o)
-                items = sweep_items(moves, P, box, step_mm, motion.table(P[moves.kind[P] != START]),
-                                    motion.center, motion.machine(o))
-                got = remove(stock, pieces[o], items.a, items.b, items.axis, items.move, n,
-                             step=step_mm)
-                thick[P], where[P], vol[P], width[P] = (got.thickness[P], got.where[P],
-                                                         got.volume[P], got.width[P])
-                ops.append(_operation(o, P, moves, m, thick, vol, width, tolerance, out_dir,
-                                      stock))
-                if design is not None:
-                    design.after(o, stock)
-                advance(1)
-        v, piece = vd.decide_stock(thick, rapid, tolerance)
-        worse = _worse(v, verdict)
-        verdict[worse], against[worse] = v[worse], "stock"
-        depth[worse] = thick[worse].max(axis=1)
-        for i in np.flatnonzero(vd.is_finding(v)):
-            p = int(piece[i])
-            findings.append(_finding(len(findings), str(v[i]), "stock", i, moves, m, rapid,
-                                     p, float(thick[i, p]), float(tolerance[i]),
-                                     where[i, p]))
-        final = None
-        if out_dir is not None:
-            from checker.stock.mesh_out import write_stl
-
-            final = str(write_stl(stock, Path(out_dir) / "stock_final.stl"))
-        feed = np.flatnonzero((moves.kind == FEED) & ~rapid)
-        stock_res = dict(
-            stock=what, resolution=h,
-            error_bound=float(error_bound(h, step_mm)[0]),
-            volume_initial=volume0, volume_final=stock.volume(), operations=ops,
-            engagement=MoveEngagement(
-                move=moves.row[feed].tolist(), line=m.line[moves.row[feed]].tolist(),
-                volume=np.round(vol[feed, 0], 6).tolist(),
-                depth=np.round(thick[feed, 0], 6).tolist(),
-                width=np.round(width[feed], 6).tolist()),
-            overflow=int(stock.overflow), final_stl=final,
-            machined=None if design is None else design.result(_library()))
-    fixtures = [load_fixture(text, cfg) for text in request.fixtures]
+        base = _against_stock(job, program, motion, cutters, tol, request, part_box, verdicts)
+    fixtures = [load_fixture(text, job.cfg) for text in request.fixtures]
     for fx in fixtures:
-        _against_fixture(fx, motion, pieces, tolerance, cfg.check.reach, moves, m, rapid,
-                         verdict, depth, against, findings)
-    counts = VerdictCounts(**{k: int((verdict == k).sum()) for k in vd.VERDICTS
-                              if k in VerdictCounts.model_fields})
-    base = stock_res or dict(stock="none", resolution=0.0, error_bound=0.0,
-                             volume_initial=0.0, volume_final=0.0)
-    result = StockResult(**base, fixtures=[f.name for f in fixtures], counts=counts,
-                         findings=findings, time_s=time.perf_counter() - t0)
-    return StockCheck(verdict, depth, against, result)
+        _against_fixture(fx, program, motion, job.cfg.check.reach, verdicts)
+    result = StockResult(**base, fixtures=[f.name for f in fixtures], counts=verdicts.counts(),
+                         findings=verdicts.findings, time_s=time.perf_counter() - t0)
+    return StockCheck(verdicts.verdict, verdicts.depth, verdicts.against, result)
+
+
+def _against_stock(job, program: _Program, motion: ProgramMotion, cutters: dict, tol,
+                   request: StockRequest, part_box, verdicts: _Verdicts) -> dict:
+    """The stock built, cut operation by operation, each move judged (`decide_stock`) into
+    `verdicts`; the stock's fields of the document."""
+    from checker.stock.removal import error_bound
+
+    part_points = None if job.triangles is None else job.triangles.vertices
+    stock, what = build_stock(request, part_box, part_points, job.toolpath, job.cfg)
+    step_mm = stock.h  # poses of a turning move one ray apart: the bound step / 2
+    bound = float(error_bound(stock.h, step_mm)[0])
+    out_dir = None if request.stock_out is None else Path(request.stock_out)
+    if out_dir is not None:  # the folder asked for, made once the stock is known
+        from checker.atomic import make_parent
+
+        make_parent(out_dir / "stock_final.stl", "stock STL")
+    volume0 = stock.volume()
+    design = _comparison(job, stock, cutters, tol, request, bound)
+    removed = _remove(stock, program, motion, step_mm, out_dir, design)
+    v, piece = vd.decide_stock(removed.thickness, program.rapid, program.tolerance)
+    verdicts.merge(v, removed.thickness.max(axis=1), "stock")
+    for i in np.flatnonzero(vd.is_finding(v)):
+        p = int(piece[i])
+        verdicts.findings.append(_finding(len(verdicts.findings), str(v[i]), "stock", i, program,
+                                          p, float(removed.thickness[i, p]),
+                                          removed.where[i, p]))
+    final = None
+    if out_dir is not None:
+        from checker.stock.mesh_out import write_stl
+
+        final = str(write_stl(stock, out_dir / "stock_final.stl"))
+    return dict(stock=what, resolution=stock.h, error_bound=bound, volume_initial=volume0,
+                volume_final=stock.volume(), operations=removed.operations,
+                engagement=_engagement(program, removed), overflow=int(stock.overflow),
+                final_stl=final,
+                machined=None if design is None else design.result(_library()))
+
+
+def _remove(stock: Dexels, program: _Program, motion: ProgramMotion, step_mm: float,
+            out_dir: Path | None, design) -> _Removed:
+    """Cut `stock` by every operation in program order (`checker.stock.removal.remove` on the
+    items of `checker.stock.motion.sweep_items`): what each move removed, and each
+    operation's summary (its stock written to `out_dir`, compared by `design`)."""
+    from checker.stock.removal import remove
+
+    moves = program.moves
+    n = len(moves)
+    box = _stock_box(stock)
+    out = _Removed.none(n)
+    with step("remove the stock", len(np.unique(motion.op_of))) as advance:
+        for o in _ops_in_order(motion.op_of):
+            P = np.flatnonzero(motion.op_of == o)
+            items = sweep_items(moves, P, box, step_mm, motion.table(P[moves.kind[P] != START]),
+                                motion.center, motion.machine(o))
+            got = remove(stock, program.pieces[o], items.a, items.b, items.axis, items.move, n,
+                         step=step_mm)
+            out.thickness[P], out.where[P] = got.thickness[P], got.where[P]
+            out.volume[P], out.width[P] = got.volume[P], got.width[P]
+            out.operations.append(_operation(o, P, program, out, out_dir, stock))
+            if design is not None:
+                design.after(o, stock)
+            advance(1)
+    return out
+
+
+def _engagement(program: _Program, removed: _Removed) -> MoveEngagement:
+    """Per feed move what the body removed: volume, engaged depth and width."""
+    feed = np.flatnonzero((program.moves.kind == FEED) & ~program.rapid)
+    rows = program.moves.row[feed]
+    return MoveEngagement(move=rows.tolist(), line=program.m.line[rows].tolist(),
+                          volume=np.round(removed.volume[feed, 0], 6).tolist(),
+                          depth=np.round(removed.thickness[feed, 0], 6).tolist(),
+                          width=np.round(removed.width[feed], 6).tolist())
 
 
 def _comparison(job, stock: Dexels, cutters: dict, tol, request: StockRequest, along: float):
@@ -220,56 +286,59 @@ def _worse(new: np.ndarray, old: np.ndarray) -> np.ndarray:
     return rank(new) > rank(old)
 
 
-def _operation(o: int, P: np.ndarray, moves, m, thick, vol, width, tolerance, out_dir,
-               stock: Dexels) -> StockOperation:
+def _operation(o: int, P: np.ndarray, program: _Program, removed: _Removed,
+               out_dir: Path | None, stock: Dexels) -> StockOperation:
     """The operation's removed volume, air cuts and engagement; its stock written when asked."""
+    moves, thick = program.moves, removed.thickness
     ends = P[moves.kind[P] == FEED]
-    air = ends[thick[ends].max(axis=1) <= tolerance[ends]]
+    air = ends[thick[ends].max(axis=1) <= program.tolerance[ends]]
     length = np.linalg.norm(moves.tip[air] - moves.tip[air - 1], axis=1)
-    feed = m.feed[moves.row[air]]
+    feed = program.m.feed[moves.row[air]]
     timed = np.isfinite(feed) & (feed > 0)
     stl = None
     if out_dir is not None:
         from checker.stock.mesh_out import write_stl
 
-        stl = str(write_stl(stock, Path(out_dir) / f"stock_op{o + 1:02d}.stl"))
+        stl = str(write_stl(stock, out_dir / f"stock_op{o + 1:02d}.stl"))
     return StockOperation(
-        op=o, removed=float(vol[P, 0].sum()), feed_moves=int(ends.size), air_cuts=int(air.size),
-        air_length=float(length.sum()),
+        op=o, removed=float(removed.volume[P, 0].sum()), feed_moves=int(ends.size),
+        air_cuts=int(air.size), air_length=float(length.sum()),
         air_time_s=float((60.0 * length[timed] / feed[timed]).sum()) if timed.any() else None,
         depth_max=float(thick[ends, 0].max(initial=0.0)),
-        width_max=float(width[ends].max(initial=0.0)), stl=stl)
+        width_max=float(removed.width[ends].max(initial=0.0)), stl=stl)
 
 
-def _finding(index: int, verdict: str, against: str, i: int, moves, m, rapid, piece: int,
-             depth: float, tolerance: float, point) -> StockFinding:
-    row = int(moves.row[i])
+def _finding(index: int, verdict: str, against: str, i: int, program: _Program, piece: int,
+             depth: float, point) -> StockFinding:
+    """The finding of pose `i` (the move that reaches it)."""
+    row = int(program.moves.row[i])
     pt = None if point is None or not np.isfinite(point).all() else tuple(map(float, point))
     return StockFinding(index=index, verdict=verdict, against=against, move=row,
-                        line=int(m.line[row]), op=int(m.op[row]), rapid=bool(rapid[i]),
+                        line=int(program.m.line[row]), op=int(program.m.op[row]),
+                        rapid=bool(program.rapid[i]),
                         piece=_PIECES[piece] if piece >= 0 else None, depth=depth,
-                        tolerance=tolerance, tip=tuple(map(float, moves.tip[i])), point=pt)
+                        tolerance=float(program.tolerance[i]),
+                        tip=tuple(map(float, program.moves.tip[i])), point=pt)
 
 
-def _against_fixture(fx: Fixture, motion: ProgramMotion, pieces: dict, tolerance, reach: float,
-                     moves, m, rapid, verdict, depth, against, findings) -> None:
-    """The tool against fixture `fx` at every pose and along every move: verdicts merged into
-    `verdict`/`depth`/`against` (per pose: a move's verdict goes to the pose it reaches) and
-    findings appended."""
+def _against_fixture(fx: Fixture, program: _Program, motion: ProgramMotion, reach: float,
+                     verdicts: _Verdicts) -> None:
+    """The tool against fixture `fx` at every pose and along every move (a move's deepest pose
+    counts at the pose it reaches), judged by `decide_fixture` into `verdicts`."""
     box = fx.box + [[-reach], [reach]]
     with step(f"check against the fixture {fx.name}"):
-        poses, along = tool_depths(fx.index, box, motion, pieces, tolerance, reach)
+        poses, along = tool_depths(fx.index, box, motion, program.pieces, program.tolerance,
+                                   reach)
     deepest = poses.depth.copy()
-    at = np.full(len(moves), -1)
+    at = np.full(len(program.moves), -1)
     more = along.depths.depth > deepest[along.end]
     deepest[along.end[more]] = along.depths.depth[more]
     at[along.end[more]] = np.flatnonzero(more)
-    v = vd.decide_fixture(deepest, tolerance)
-    worse = _worse(v, verdict)
-    verdict[worse], against[worse], depth[worse] = v[worse], fx.name, deepest[worse]
+    v = vd.decide_fixture(deepest, program.tolerance)
+    verdicts.merge(v, deepest, fx.name)
     for i in np.flatnonzero(vd.is_finding(v)):
         k = at[i]
         piece = int(poses.piece[i] if k < 0 else along.depths.piece[k])
         point = poses.point[i] if k < 0 else along.depths.point[k]
-        findings.append(_finding(len(findings), str(v[i]), fx.name, int(i), moves, m, rapid,
-                                 piece, float(deepest[i]), float(tolerance[i]), point))
+        verdicts.findings.append(_finding(len(verdicts.findings), str(v[i]), fx.name, int(i),
+                                          program, piece, float(deepest[i]), point))
