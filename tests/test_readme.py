@@ -38,6 +38,7 @@ def outcomes(tmp_path_factory, realdata):
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)  # the first block's setup runs every block (a few minutes on 2 cores)
 @pytest.mark.parametrize("block", BLOCKS, ids=[b.name for b in BLOCKS])
 def test_block_runs_as_written(block, outcomes):
     problems = [p for o in outcomes[block.name] if (p := o.problem(block.kind))]
