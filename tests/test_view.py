@@ -243,6 +243,37 @@ def test_check_and_check_gcode_write_their_views(tmp_path):
     assert scene_of(again.read_text())["path"] == scene_of(gview.read_text())["path"]
 
 
+def test_the_machined_stock_is_coloured_by_its_deviation_to_the_design(tmp_path):
+    """`--view` with `--deviation-out` (PLY): each vertex of the last stock carries the
+    deviation of the part's nearest measuring point, read back from the PLY here with trimesh
+    and matched by a brute-force nearest search; the finishing pass leaves the parting plane's
+    2 mm of stock (the box's margin) and cuts the cavity to within the tolerance."""
+    trimesh = pytest.importorskip("trimesh")
+    job = REPO / "samples/mould/mould.apt"
+    view, results, ply = tmp_path / "v.html", tmp_path / "r.json", tmp_path / "dev.ply"
+    run = subprocess.run(
+        [sys.executable, "-m", "checker.cli", str(job), "--stock", "box:+2",
+         "--stock-resolution", "1", "--stock-out", str(tmp_path / "stock"), "--deviation-out",
+         str(ply), "--json", str(results), "--no-store", "-q", "--view", str(view)],
+        capture_output=True, text=True, cwd=REPO, timeout=600)
+    assert run.returncode in (0, 1), run.stderr
+    scene = scene_of(view.read_text())
+    last = scene["stock"][-1]
+    stock = arr(last["positions"], "f4").reshape(-1, 3)
+    dev = arr(last["deviation"], "f4")
+    assert len(dev) == len(stock) == last["vertices"]
+    cloud = trimesh.load(ply, process=False)
+    points = np.asarray(cloud.vertices)
+    values = np.asarray(cloud.metadata["_ply_raw"]["vertex"]["data"]["deviation"], float)
+    ok = np.isfinite(values)
+    pick = np.linspace(0, len(stock) - 1, 200).astype(int)
+    d2 = ((stock[pick, None, :] - points[None, ok, :]) ** 2).sum(axis=2)
+    np.testing.assert_allclose(dev[pick], values[ok][d2.argmin(axis=1)], atol=1e-5)
+    top = stock[:, 2] > 1.5  # the stock's top at Z 2 above the parting plane at Z 0
+    assert np.median(dev[top]) == pytest.approx(2.0, abs=0.1)
+    assert scene["job"]["tolerance"] == pytest.approx(0.02)
+
+
 def test_report_links_the_views_written_beside_it(tmp_path):
     """A job whose `JOB.view.html` is beside the report gets a link to it; the others none."""
     from checker.report import build_report

@@ -1,7 +1,8 @@
 """`pathcheck view RESULTS.json -o VIEW.html`: the interactive 3-D view of a checked job (one
 offline HTML file: the part, the tool path coloured by verdict, the findings and the tool at
 their pose); `--view FILE.html` on `check` and `check-gcode` writes it after the check, with the
-stock after each operation (from --stock-out) and the fixtures."""
+stock after each operation (from --stock-out), the last coloured by its deviation to the design
+(from --deviation-out as PLY), and the fixtures."""
 
 from __future__ import annotations
 
@@ -15,6 +16,18 @@ view_option = click.option(
     "--view", "view_out", default=None, metavar="FILE.html",
     type=click.Path(dir_okay=False, path_type=Path),
     help="also write the interactive 3-D view of the check (one offline HTML file)")
+
+
+def deviation_of(doc):
+    """The part's measuring points and their deviation to the design from the PLY the check
+    wrote (--deviation-out) and still there, or None."""
+    from checker.view.scene import read_deviation
+
+    machined = None if doc.stock is None else doc.stock.machined
+    name = None if machined is None else machined.deviation_file
+    if name is None or not name.endswith(".ply") or not Path(name).is_file():
+        return None
+    return read_deviation(name)
 
 
 def stock_meshes(doc, beside: Path | None = None) -> list:
@@ -54,7 +67,8 @@ def write_after_check(view_out: Path | None, doc, *, toolpath=None, cutter=None,
                 fixtures = [(f.name, f.vertices, f.triangles)
                             for f in (load_fixture(t, cfg) for t in stock.fixtures)]
             write_view(view_out, doc, toolpath=toolpath, cutter=cutter, config=config,
-                       stock_meshes=stock_meshes(doc), fixtures=fixtures)
+                       stock_meshes=stock_meshes(doc), fixtures=fixtures,
+                       deviation=deviation_of(doc))
     except PathcheckError as err:
         click.echo(f"pathcheck: {printable(str(view_out))}: view not written: {err}", err=True)
 

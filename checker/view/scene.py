@@ -46,6 +46,34 @@ def _mesh(label: str, vertices: np.ndarray, triangles: np.ndarray, most: int) ->
             "vertices": len(v), "triangles": len(t), "cell": cell}
 
 
+def _deviation_colours(mesh: dict, vertices: np.ndarray, deviation) -> None:
+    """The machined stock coloured by the deviation to the design: each vertex of `mesh` (the
+    decimated stock) takes the signed deviation (mm; + material left, - over-cut) of the
+    nearest of the part's measuring points `deviation = (points (N, 3), values (N,))`
+    (`checker.machined`), as `deviation` (f4, base64) beside `positions`."""
+    from pykdtree.kdtree import KDTree
+
+    points, values = (np.asarray(a) for a in deviation)
+    ok = np.isfinite(values)
+    if not ok.any():
+        return
+    _, near = KDTree(np.ascontiguousarray(points[ok], float)).query(
+        np.ascontiguousarray(vertices, float), k=1)
+    mesh["deviation"] = b64(values[ok][near], "f4")
+
+
+def read_deviation(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """(points (N, 3), deviation (N,)) of a binary PLY that `--deviation-out` wrote
+    (`checker.machined.output`: x, y, z, nx, ny, nz, deviation as little-endian floats)."""
+    raw = Path(path).read_bytes()
+    end = raw.index(b"end_header\n") + len(b"end_header\n")
+    head = raw[:end].decode("ascii").splitlines()
+    n = int(next(line.split()[2] for line in head if line.startswith("element vertex")))
+    vert = np.frombuffer(raw, dtype=[("p", "<f4", 3), ("n", "<f4", 3), ("d", "<f4")], count=n,
+                         offset=end)
+    return vert["p"].astype(float), vert["d"].astype(float)
+
+
 def _resolve(name: str | None, beside: Path | None) -> Path | None:
     """`name` as given when it exists, else beside the results document."""
     if name is None:
@@ -235,14 +263,16 @@ def _axes(m, tip: np.ndarray, written: np.ndarray, reach: float) -> dict | None:
 def build_view(doc: ResultsDocument, *, toolpath=None, part: Mesh | None = None,
                stock_meshes: Sequence[Mesh] = (), fixtures: Sequence[Mesh] = (),
                cutter=None, config=None, beside: Path | None = None,
-               load_part: bool = True, machine: str | None = None) -> dict:
+               load_part: bool = True, machine: str | None = None,
+               deviation: tuple[np.ndarray, np.ndarray] | None = None) -> dict:
     """The scene (a JSON-able dict) of the checked job `doc`: `toolpath` the program checked
     (default: the CL file `job.path`, read again), `part` its triangles (default: `job.part`
     loaded when `load_part`), `stock_meshes` the stock after each operation in program order
     and `fixtures`, each `(label, vertices (V, 3), triangles (T, 3))` in the part frame (mm);
     `cutter` the cutter the check was given (default: the CL file's); relative paths of the
     document are also looked for in the folder `beside`; `machine` that of a G-code program
-    (`read_toolpath`)."""
+    (`read_toolpath`); `deviation` the part's measuring points and their deviation
+    (`read_deviation`), which colour the last stock (the machined part against the design)."""
     from checker.job_inputs import job_config
 
     cfg = job_config(config)
@@ -265,7 +295,7 @@ def build_view(doc: ResultsDocument, *, toolpath=None, part: Mesh | None = None,
     return {
         "job": {"path": doc.job.path, "part": doc.job.part, "axis_class": doc.job.axis_class,
                 "cutter": doc.job.cutter, "status": doc.summary.status, "units": doc.job.units,
-                "counts": doc.summary.counts.model_dump()},
+                "counts": doc.summary.counts.model_dump(), "tolerance": doc.summary.tolerance},
         "box": [allv.min(axis=0).tolist(), allv.max(axis=0).tolist()],
         "kinds": list(KINDS),
         "part": None if part is None else _mesh(*part, PART_TRIANGLES),
@@ -277,9 +307,21 @@ def build_view(doc: ResultsDocument, *, toolpath=None, part: Mesh | None = None,
         "axis_reach": reach,
         "tools": {str(o): {"cutter": c.to_apt(), "pieces": tool_outlines(c)}
                   for o, c in cutters.items()},
-        "stock": [_mesh(label, v, t, share) for label, v, t in stock_meshes],
+        "stock": _stocks(stock_meshes, share, deviation),
         "fixtures": [_mesh(label, v, t, FIXTURE_TRIANGLES) for label, v, t in fixtures],
     }
+
+
+def _stocks(stock_meshes: Sequence[Mesh], share: int, deviation) -> list[dict]:
+    """The stock meshes for the page, the last coloured by the deviation when it is known."""
+    out = []
+    for k, (label, v, t) in enumerate(stock_meshes):
+        mesh = _mesh(label, v, t, share)
+        if deviation is not None and k == len(stock_meshes) - 1:
+            _deviation_colours(mesh, np.frombuffer(base64.b64decode(mesh["positions"]),
+                                                   "<f4").reshape(-1, 3), deviation)
+        out.append(mesh)
+    return out
 
 
 def stl_mesh(label: str, path: str | Path) -> Mesh:

@@ -47,13 +47,37 @@ const hi = new THREE.Vector3(...S.box[1]);
 const section = new THREE.Plane(new THREE.Vector3(0, 0, -1), 1e9);
 const clipped = [section];
 
+// the machined stock coloured by its deviation to the design (mm; + left, - over-cut):
+// over-cut beyond the tolerance red, within it green, material left light to dark blue
+function deviationColours(d, tol) {
+  const over = new THREE.Color('#d62728'), ok = new THREE.Color('#2ca02c');
+  const thin = new THREE.Color('#9ecae1'), thick = new THREE.Color('#08306b');
+  let top = tol;
+  for (const x of d) if (x > top) top = x;
+  const out = new Float32Array(d.length * 3);
+  const c = new THREE.Color();
+  for (let i = 0; i < d.length; i++) {
+    if (d[i] < -tol) c.copy(over);
+    else if (d[i] <= tol) c.copy(ok);
+    else c.copy(thin).lerp(thick, Math.min(1, (d[i] - tol) / Math.max(top - tol, 1e-9)));
+    out[3 * i] = c.r; out[3 * i + 1] = c.g; out[3 * i + 2] = c.b;
+  }
+  return out;
+}
+
 function meshOf(m, colour, opacity = 1) {
   const g = new THREE.BufferGeometry();
   g.setAttribute('position', new THREE.BufferAttribute(f32(m.positions), 3));
   g.setIndex(new THREE.BufferAttribute(u32(m.index), 1));
   g.computeVertexNormals();
+  const coloured = Boolean(m.deviation);
+  if (coloured) {
+    g.setAttribute('color', new THREE.BufferAttribute(
+      deviationColours(f32(m.deviation), S.job.tolerance), 3));
+  }
   const mat = new THREE.MeshStandardMaterial({
-    color: colour, flatShading: true, side: THREE.DoubleSide, metalness: 0.1, roughness: 0.7,
+    color: coloured ? '#ffffff' : colour, vertexColors: coloured,
+    flatShading: true, side: THREE.DoubleSide, metalness: 0.1, roughness: 0.7,
     clippingPlanes: clipped, transparent: opacity < 1, opacity,
     polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
   });
