@@ -316,3 +316,45 @@ def test_impeller_shows_the_reoriented_axis(browser, impeller):
     path = arr(scene_of(html.read_text())["path"]["positions"], "f4").reshape(-1, 3)
     np.testing.assert_allclose(path[[q.move for q in cl]], [q.tip for q in cl], atol=1e-4)
     assert max(np.linalg.norm(np.subtract(q.tip, m.tip[q.move])) for q in turned) > 1.0
+
+
+def test_machined_stock_in_the_colours_of_its_deviation(browser, tmp_path):
+    """The mould's finishing pass on a box stock 2 mm around its part, viewed with the stock
+    and its deviation (--stock-out, --deviation-out): the stock's top above the parting plane
+    (2 mm left) shows blue (through the stock's transparency); so does the cavity, where the
+    ball leaves its scallops (tenths of a millimetre, beyond the 0.02 mm tolerance)."""
+    import subprocess
+    import sys
+
+    view = tmp_path / "mould.html"
+    run = subprocess.run(
+        [sys.executable, "-m", "checker.cli", str(REPO / "samples/mould/mould.apt"), "--stock",
+         "box:+2", "--stock-resolution", "1", "--stock-out", str(tmp_path / "stock"),
+         "--deviation-out", str(tmp_path / "dev.ply"), "--no-store", "-q", "--view",
+         str(view)], capture_output=True, text=True, cwd=REPO, timeout=600)
+    assert run.returncode in (0, 1), run.stderr
+    camera = _open(browser, view)
+    for box in ("show-path", "show-part"):  # the stock alone (a user's click on each box)
+        rect = json.loads(browser.evaluate(
+            f"JSON.stringify(document.getElementById('{box}').getBoundingClientRect())"))
+        browser.click(rect["x"] + rect["width"] / 2, rect["y"] + rect["height"] / 2)
+    time.sleep(0.3)  # the frame after the clicks
+    assert browser.evaluate("document.getElementById('show-path').checked") is False
+    shot = browser.screenshot().astype(int)
+    _clean(browser, view)
+    # the parting plane's stock at Z 2 (X -80..-70, Y -50..50) and the cavity's floor cut
+    # by the ball: the deepest CL tips, 5 mm below the ball's centre
+    ys = np.linspace(-40.0, 40.0, 9)
+    rim = np.c_[np.full(9, -75.0), ys, np.full(9, 2.0)]
+    rim_rgb = shot[tuple(np.floor(project(camera, rim))[:, ::-1].astype(int).T)]
+    assert ((rim_rgb[:, 2] - rim_rgb[:, 0] > 20) & (rim_rgb[:, 2] > rim_rgb[:, 1] + 8)).mean() \
+        > 0.6, rim_rgb
+    from checker.apt import read_cl
+
+    m = read_cl(REPO / "samples/mould/mould.apt").motion_arrays()
+    low = m.tip[np.argsort(m.tip[:, 2])[:40]]
+    rgb = shot[tuple(np.floor(project(camera, low))[:, ::-1].astype(int).T)]
+    assert ((rgb[:, 2] - rgb[:, 0] > 20) & (rgb[:, 2] >= rgb[:, 1])).mean() > 0.6, rgb
+    # and neither is the stock's plain colour (tan): the deviation coloured it
+    tan = np.array([0xC9, 0xA2, 0x7A])
+    assert (np.abs(np.r_[rgb, rim_rgb] - tan).max(axis=1) > 40).mean() > 0.9
