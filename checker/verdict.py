@@ -16,7 +16,9 @@ rule with what may be touched: the cutter's body cuts stock at feed (that is mac
 finding); a rapid that removes stock beyond the tolerance is a `crash`, the shank or the holder
 removing stock at feed a `holder` finding; any piece of the tool in a fixture beyond the
 tolerance is a `crash` (`decide_stock`, `decide_fixture`).
-(docs/MATH.md §8, §14)"""
+Between the machine's own solids, the tool and the work, closer than the stated clearance is a
+`machine` finding (`decide_machine`).
+(docs/MATH.md §8, §14, §15)"""
 
 from __future__ import annotations
 
@@ -24,8 +26,8 @@ import numpy as np
 
 # the order is the stores' per-point code (checker.store): new verdicts go at the end
 VERDICTS: tuple[str, ...] = ("ok", "gouge", "interference", "holder", "inaccessible",
-                             "within_tolerance", "crash")
-FINDINGS: tuple[str, ...] = ("gouge", "interference", "holder", "crash")
+                             "within_tolerance", "crash", "machine")
+FINDINGS: tuple[str, ...] = ("gouge", "interference", "holder", "crash", "machine")
 BODY, SHANK, HOLDER = 0, 1, 2  # tool pieces, as `checker.mesh.tool` numbers them
 
 
@@ -81,6 +83,16 @@ def decide_fixture(depth: np.ndarray, tolerance: np.ndarray | float) -> np.ndarr
     out = np.full(depth.shape, "ok", dtype=object)
     out[depth > 0.0] = "within_tolerance"
     out[depth > tol] = "crash"
+    return out
+
+
+def decide_machine(distance: np.ndarray, clearance: np.ndarray | float) -> np.ndarray:
+    """Verdicts (N,) of two solids of the machine check (the machine's components, the tool,
+    the work) from their least `distance` (mm; < 0: penetration): closer than the `clearance`
+    (mm) a `machine` finding, whatever the move (docs/MATH.md §15)."""
+    distance = np.asarray(distance, dtype=float)
+    out = np.full(distance.shape, "ok", dtype=object)
+    out[distance < np.broadcast_to(np.asarray(clearance, dtype=float), distance.shape)] = "machine"
     return out
 
 
