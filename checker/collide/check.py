@@ -53,16 +53,16 @@ class MachineMoves:
 def gauge_length(cutter, tool_length: float) -> float:
     """The spindle nose above the tool tip (mm): the machine's `tool_length` when it states one
     (head machines posted without TCP), else the cutter's stickout plus its holder, else its
-    stickout, flute length or length, else 0."""
+    stickout, else the top of its body as the check models it (its flute length or length, at
+    least four diameters)."""
     if tool_length > 0.0:
         return float(tool_length)
     s, hl = cutter.stickout, cutter.holder_length
     if s is not None and hl:
         return float(s) + float(hl)
-    for v in (s, cutter.flute_length, cutter.H):
-        if v:
-            return float(v)
-    return 0.0
+    if s:
+        return float(s)
+    return max(float(cutter.flute_length or 0.0), float(cutter.H or 0.0), 4.0 * float(cutter.d))
 
 
 def machine_moves(machine, motion, lines: np.ndarray, cutters: dict, path: str | None,
