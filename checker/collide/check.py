@@ -12,8 +12,11 @@ Between poses, conservative advancement: over a stretch of a move on which no po
 solid travels more than L (`checker.collide.placement`), with distances da and db at its ends,
 no pose is closer than (da + db - L) / 2; a stretch whose bound is below the clearance is
 halved until certified, or its contact found, the contact's start located to `T_PRECISION` of
-the move; near each pair's least distance the stretches are halved until it is found to
-`PRECISION` (the near-miss listing). mm, degrees."""
+the move, or until no point travels more than `RESOLUTION` on it (then nothing on it is closer
+than the nearer end's distance less RESOLUTION / 2: a contact shallower than that below the
+clearance, found nowhere at a checked pose, is the one thing that can pass); near each pair's
+least distance the stretches are halved until it is found to `PRECISION` (the near-miss
+listing). mm, degrees."""
 
 from __future__ import annotations
 
@@ -32,6 +35,7 @@ from checker.results import MachineFinding, MachinePair, MachineResult, VerdictC
 HORIZON = 25.0  # mm beyond the clearance: farther spheres are not measured exactly
 PRECISION = 0.005  # mm: a pair's least distance is found to this (or 1 % of it)
 T_PRECISION = 1e-5  # of a move: where a contact starts
+RESOLUTION = 0.005  # mm: a stretch on which no point travels farther is not halved again
 _MAX_ROUNDS = 40
 DEFAULT_CLEARANCE = 1.0  # mm
 
@@ -328,14 +332,15 @@ def _along(scene, dist, d_pose, ends, speed, clearance, best, best_t, contacts, 
     t0, t1 = np.zeros(P.size), np.ones(P.size)
     d0, d1 = d_pose[P, ends[K] - 1], d_pose[P, ends[K]]
     for _ in range(_MAX_ROUNDS):
-        lb = 0.5 * (d0 + d1 - (t1 - t0) * L[P, K])
+        travel = (t1 - t0) * L[P, K]
+        lb = 0.5 * (d0 + d1 - travel)
         in0, in1 = d0 < clearance, d1 < clearance
         width = t1 - t0
         near = best[P] < clearance + HORIZON
         slack = np.maximum(PRECISION, 0.01 * np.abs(best[P]))
-        open_ = (((lb < clearance) & ~in0 & ~in1)
-                 | ((in0 != in1) & (width > T_PRECISION))
-                 | (near & (lb < best[P] - slack) & ~(in0 & in1)))
+        open_ = (((lb < clearance) & ~in0 & ~in1 & (travel > RESOLUTION))
+                 | ((in0 != in1) & (width > T_PRECISION) & (travel > RESOLUTION))
+                 | (near & (lb < best[P] - slack) & ~(in0 & in1) & (travel > slack)))
         P, K, t0, t1, d0, d1 = P[open_], K[open_], t0[open_], t1[open_], d0[open_], d1[open_]
         if P.size == 0:
             break
