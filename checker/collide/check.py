@@ -32,7 +32,7 @@ from checker.moves import START
 from checker.progress import step
 from checker.results import MachineFinding, MachinePair, MachineResult, VerdictCounts
 
-HORIZON = 25.0  # mm beyond the clearance: farther spheres are not measured exactly
+HORIZON = 5.0  # mm beyond the clearance: farther spheres are not measured exactly
 PRECISION = 0.005  # mm: a pair's least distance is found to this (or 1 % of it)
 T_PRECISION = 1e-5  # of a move: where a contact starts
 RESOLUTION = 0.005  # mm: a stretch on which no point travels farther is not halved again
