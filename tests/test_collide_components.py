@@ -6,14 +6,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from collide_machines import machine_file
+from requires import require_extra
 from stl import mesh as stl_mesh
 
 from checker.collide.solids import component_shape
 from checker.config import Config
 from checker.errors import PathcheckError
 from postproc.machine import load_machine_file
-from tests.collide_machines import machine_file
-from tests.requires import require_extra
 
 coal = require_extra("coal", "machine")
 
@@ -79,3 +79,19 @@ def test_stl_component_measures_like_its_box(tmp_path):
                               coal.Transform3s(np.eye(3), np.array([x, 25.0, 20.0])), req, res)
             if want > 0 or comp.mesh is None:  # a mesh is its surface: no depth inside
                 assert abs(d - want) < 1e-6, (comp.name, x, d)
+
+
+@pytest.mark.parametrize(("args", "expected"), [
+    (["--machine", "linuxcnc-hmc", "--machine-check"], "has no components"),
+    (["--machine", "fanuc-trunnion-ac", "--machine-clearance", "-1"], "expected a distance"),
+])
+def test_machine_check_usage_errors(tmp_path, capsys, args, expected):
+    """A machine without solids, a negative clearance: one line, exit 2, before any work."""
+    from checker.cli import main
+
+    prog = tmp_path / "p.nc"
+    prog.write_text("G21 G90\nG0 X0 Y0 Z50\nG1 X10 F100\nM30\n")
+    with pytest.raises(SystemExit) as ex:
+        main(["check-gcode", str(prog), "--cutter", "CUTTER/6", "--no-store", *args])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert ex.value.code == 2 and len(err) == 1 and expected in err[0], err

@@ -9,10 +9,10 @@ import json
 from pathlib import Path
 
 import pytest
+from requires import require_extra
+from test_machines_realdata import PROGRAMS, _program
 
 from checker.cli import main
-from tests.requires import require_extra
-from tests.test_machines_realdata import PROGRAMS, _program
 
 require_extra("coal", "machine")
 

@@ -5,8 +5,8 @@ passes through the column (found along the move, between the checked poses)."""
 
 from __future__ import annotations
 
-from tests.collide_machines import check, machine_file
-from tests.requires import require_extra
+from collide_machines import check, machine_file
+from requires import require_extra
 
 require_extra("coal", "machine")
 
