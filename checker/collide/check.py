@@ -390,9 +390,8 @@ def _result(machine, scene: Scene, mv: MachineMoves, moves, job, d_pose, contact
         first_t[p, e] = min(first_t[p, e], t)
         least[p, e] = min(least[p, e], d)
     touched = np.isfinite(first_t)
-    verdict = np.where(touched.any(axis=0), "machine", "ok").astype(object)
-    verdict_d = np.where(touched, least, np.inf).min(axis=0, initial=np.inf)
-    assert (vd.decide_machine(verdict_d, clearance) == verdict).all()
+    verdict = vd.decide_machine(np.where(touched, least, np.inf).min(axis=0, initial=np.inf),
+                                clearance)
     findings = []
     for p in range(npair):
         rows = np.flatnonzero(touched[p])
