@@ -13,10 +13,10 @@ link j moves at most Σ_{k<=j} |dθ_k| (|x - c_j| + Σ_{i=k}^{j-1} |c_{i+1} - c_
 joint k turns it about a line through c_k, |x - c_j| is kept by every joint (c_j rides link
 j - 1 and T_j fixes it) and so is |c_{i+1} - c_i|; a point of head link j likewise about the
 pivots c'_k, plus the speed of X. Without tool-centre-point control X runs straight (|ΔX|);
-with it the program's tip p_w runs straight in the work frame and X = A_n(p_w) - H(0), so |X'|
-<= |Δp_w| + Σ_table |dθ_k| (max_ends |p_w - c_n| + Σ_{i>=k} |c_{i+1} - c_i|) + Σ_head |dθ_k|
-(|c'_m| + Σ |c'_{i+1} - c'_i|) bounds it (the tip is within |c'_1| + Σ |c'_{i+1} - c'_i| of
-the first pivot... taken over all pivots)."""
+with it the program's tip p_w runs straight in the work frame and X = A_n(p_w) - H(0), so
+|X'| <= |Δp_w| + Σ_table |dθ_k| (max_ends |p_w - c_n| + Σ_{i>=k} |c_{i+1} - c_i|) + Σ_head
+|dθ_k| (max_i |c'_i| + Σ_i |c'_{i+1} - c'_i|): the tip (the tip frame's origin) is within that
+of every head pivot (docs/MATH.md §15.3)."""
 
 from __future__ import annotations
 
