@@ -19,6 +19,7 @@ import numpy as np
 from checker import input_limits, verdict, written
 from checker.apt import read_cl
 from checker.b_axis import check_four_axis
+from checker.collide.section import add_to_document, machine_section
 from checker.config import Config
 from checker.document import build_document, stock_document
 from checker.errors import PathcheckError
@@ -55,7 +56,8 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
               output=None, *, b_range: tuple[float, float] | None = None,
               reorient: bool = False, strategy: str = "allowable",
               part_transform: str | None = None, cutter_units: str | None = None,
-              on_findings: str = "refuse", stock: StockRequest | None = None) -> ResultsDocument:
+              on_findings: str = "refuse", stock: StockRequest | None = None,
+              machine_clearance: float | None = None) -> ResultsDocument:
     """Check a job: `apt_path` the CL file; `part_path` the part (default: the file beside the
     job with the same stem); `cutter` a `Cutter` or "CUTTER/..." overriding the file's; `config`
     a Config or a TOML path; `machine` a machine name, TOML file or `Machine` (default: the CL
@@ -70,18 +72,21 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
     `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's);
     `on_findings` what posting does when the program as written has findings or points
     without a feasible B (`posting.post_checked`: refuse raises `posting.PostRefusedError`);
-    `stock` the stock and the fixtures to check the written program against (`checker.stock`)."""
+    `stock` the stock and the fixtures to check the written program against (`checker.stock`);
+    `machine_clearance` (mm) checks the machine's solids along the motion (`checker.collide`)."""
     t0 = time.perf_counter()
     with step("read the CL file"):
         toolpath = read_cl(Path(apt_path), require_cutter=cutter is None)
     return check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=machine,
                           config=config, output=output, b_range=b_range, reorient=reorient,
                           strategy=strategy, part_transform=part_transform, started=t0,
-                          cutter_units=cutter_units, on_findings=on_findings, stock=stock)
+                          cutter_units=cutter_units, on_findings=on_findings, stock=stock,
+                          machine_clearance=machine_clearance)
 
 
 def _against_stock_only(toolpath, cutter, machine, config, stock: StockRequest, t0: float,
-                        cutter_units: str | None, to_post: bool) -> written.Checked:
+                        cutter_units: str | None, to_post: bool,
+                        machine_clearance: float | None = None) -> written.Checked:
     """The program as written against the stock and the fixtures alone (no part): the CAM's
     own motion, nothing planned, nothing posted."""
     apt_path = Path(toolpath.path)
@@ -109,6 +114,10 @@ def _against_stock_only(toolpath, cutter, machine, config, stock: StockRequest, 
     motion = written.programmed_motion(job, classes, mach)
     checked = check_stock(job, motion, cutters, tol, stock, None)
     doc = stock_document(job, motion, checked, cutters, classes, tol, mach, t0)
+    if machine_clearance is not None:
+        add_to_document(doc, machine_section(job, motion, cutters, mach, stock, None,
+                                             machine_clearance))
+        doc.summary.time_s = time.perf_counter() - t0
     doc.job.stated_stock = _stated(toolpath, None)
     program = written.Program(m.tip, m.axis, written.cam_b(job), None, None,
                               {o: "as-programmed" for o in classes}, stock=checked)
@@ -174,7 +183,8 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
                    part_transform: str | None = None, started: float | None = None,
                    cutter_units: str | None = None,
                    on_findings: str = "refuse",
-                   stock: StockRequest | None = None) -> ResultsDocument:
+                   stock: StockRequest | None = None,
+                   machine_clearance: float | None = None) -> ResultsDocument:
     """`check_job` on a tool path already in memory (read from a CL file, or from a G-code
     program by `pathcheck check-gcode`); `toolpath.path` names the job. With `output`, the
     checked program is posted there (`posting.post_checked`)."""
@@ -182,7 +192,7 @@ def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=N
                             config=config, b_range=b_range, reorient=reorient,
                             strategy=strategy, part_transform=part_transform, started=started,
                             cutter_units=cutter_units, to_post=output is not None,
-                            stock=stock)
+                            stock=stock, machine_clearance=machine_clearance)
     if output is not None:
         post_checked(checked, output, on_findings)
     return checked.document
@@ -192,16 +202,19 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
                   b_range: tuple[float, float] | None = None, reorient: bool = False,
                   strategy: str = "allowable", part_transform: str | None = None,
                   started: float | None = None, cutter_units: str | None = None,
-                  to_post: bool = False, stock: StockRequest | None = None) -> written.Checked:
+                  to_post: bool = False, stock: StockRequest | None = None,
+                  machine_clearance: float | None = None) -> written.Checked:
     """The check of `check_toolpath` without posting: the results document and what is to be
     written (the program, its machine, cutters and finding counts). `to_post`: the program will
     be posted, so its machine is resolved even when no operation is planned. `stock`: the
-    stock and the fixtures the written program is checked against (`checker.stock`)."""
+    stock and the fixtures the written program is checked against (`checker.stock`);
+    `machine_clearance` (mm, None: not asked): the machine's solids along the written motion
+    (`checker.collide`)."""
     t0 = time.perf_counter() if started is None else started
-    if part_path is None and stock is not None and stock.asked and \
-            find_part_beside(Path(toolpath.path)) is None:
-        return _against_stock_only(toolpath, cutter, machine, config, stock, t0, cutter_units,
-                                   to_post)
+    if part_path is None and ((stock is not None and stock.asked) or machine_clearance
+                              is not None) and find_part_beside(Path(toolpath.path)) is None:
+        return _against_stock_only(toolpath, cutter, machine, config, stock or StockRequest(),
+                                   t0, cutter_units, to_post, machine_clearance)
     if strategy not in written.STRATEGIES:
         raise PathcheckError(f"strategy '{strategy}': expected one of "
                              f"{', '.join(written.STRATEGIES)}", code="usage")
@@ -241,7 +254,7 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
     planned = {o for o, cls in classes.items()
                if cls == "4-axis-Y" or (cls == "3-axis" and asked)}
     multi = {o for o, cls in classes.items() if cls == "multi-axis"}
-    if planned or multi or to_post:
+    if planned or multi or to_post or machine_clearance is not None:
         mach = machine_for_toolpath(toolpath, machine)
         job.motion = _machine_motion(mach, multi, cfg)
     reoriented = multi if reorient else set()
@@ -256,6 +269,11 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
                                     np.array([v.min(axis=0), v.max(axis=0)]))
     with step("advice at the cutting poses"):
         doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
+    if machine_clearance is not None:
+        v = tris.vertices
+        add_to_document(doc, machine_section(job, program.written.motion, cutters, mach, stock,
+                                             np.array([v.min(axis=0), v.max(axis=0)]),
+                                             machine_clearance))
     doc.summary.time_s = time.perf_counter() - t0
     v = tris.vertices
     doc.job.stated_stock = _stated(toolpath, np.array([v.min(axis=0), v.max(axis=0)]))

@@ -19,11 +19,11 @@ from checker import verdict
 SCHEMA_VERSION = "2.0"
 
 Verdict = Literal["ok", "within_tolerance", "gouge", "interference", "holder", "crash",
-                  "inaccessible"]
+                  "inaccessible", "machine"]
 VERDICTS: tuple[str, ...] = verdict.VERDICTS
 Piece = Literal["body", "shank", "holder"]
 PointKind = Literal["cl", "cycle", "move"]
-FindingKind = Literal["cl", "cycle", "move", "stock", "fixture"]
+FindingKind = Literal["cl", "cycle", "move", "stock", "fixture", "machine"]
 Vec3 = tuple[float, float, float]
 
 
@@ -118,6 +118,7 @@ class VerdictCounts(_Model):
     holder: int = 0
     crash: int = 0
     inaccessible: int = 0
+    machine: int = 0
 
 
 class FeasibleGrid(_Model):
@@ -362,6 +363,53 @@ class StockResult(_Model):
     time_s: float = 0.0
 
 
+class MachineFinding(_Model):
+    """Two solids of the machine check closer than the clearance (`checker.verdict.
+    decide_machine`): the first contact of a run of consecutive poses in contact."""
+
+    index: int = Field(description="position in `machine.findings`")
+    verdict: Verdict
+    a: str = Field(description="the solid on the work's side (bed, table, part, stock, fixture)")
+    b: str = Field(description="the solid on the tool's side (column, head, spindle, tool)")
+    move: int = Field(description="the motion row of the pose the move reaches")
+    line: int
+    op: int
+    t: float = Field(description="where along the move the contact starts (0..1; 1: at the pose)")
+    axes: dict[str, float] = Field(description="the program's axis values there (X Y Z: machine "
+                                   "position, or the work-frame tip with TCP; rotary words, deg)")
+    distance: float = Field(description="the least distance in the run, mm (< 0: penetration)")
+    poses: int = Field(description="consecutive poses in contact")
+
+
+class MachinePair(_Model):
+    """The least clearance found between two solids along the program."""
+
+    a: str
+    b: str
+    least: float = Field(description="mm (< 0: penetration); exact at the checked poses, along "
+                         "the moves to the stated precision")
+    line: int
+    axes: dict[str, float]
+
+
+class MachineResult(_Model):
+    """The machine's own solids against each other, the tool and the work along the motion
+    (docs/MATH.md §16)."""
+
+    machine: str
+    source: str = Field(description="where the machine's dimensions come from")
+    clearance: float = Field(description="mm: closer than this is a `machine` finding")
+    solids: list[str] = Field(default_factory=list)
+    pairs: int = Field(description="pairs of solids checked")
+    counts: VerdictCounts = Field(description="verdicts of the poses and moves against the "
+                                  "machine")
+    findings: list[MachineFinding] = Field(default_factory=list)
+    near_misses: list[MachinePair] = Field(default_factory=list, description="per pair its least "
+                                           "clearance, nearest first")
+    distances: int = Field(0, description="exact distances computed (coal)")
+    time_s: float = 0.0
+
+
 class Summary(_Model):
     status: Literal["ok", "findings"] = Field(
         description="of the program that is written: 'findings' when any pose is a gouge, "
@@ -401,6 +449,8 @@ class ResultsDocument(_Model):
     gcode: str | None = Field(None, description="path of the corrected G-code, when written")
     stock: StockResult | None = Field(None, description="the program against the stock and the "
                                       "fixtures (None: not asked)")
+    machine: MachineResult | None = Field(None, description="the machine's solids along the "
+                                          "motion (None: not asked)")
 
 
 def stock_line(stock: StockResult | None, stated: str | None = None) -> str:
@@ -433,6 +483,19 @@ def machined_text(m: MachinedResult | None) -> str:
     text = (f"; as cut: over-cut {m.overcut_max:.3g} mm ({m.gouge_points} points gouged), "
             f"left up to {m.left_max:.3g} mm")
     return text + (f"; {m.advice}" if m.advice else "")
+
+
+def machine_line(machine: MachineResult) -> str:
+    """One line on the machine check: its findings or "no machine collision", and the nearest
+    pair."""
+    found = (f"{len(machine.findings)} machine collision(s), first at line "
+             f"{machine.findings[0].line} ({machine.findings[0].a} / {machine.findings[0].b})"
+             if machine.findings else "no machine collision")
+    near = machine.near_misses[0] if machine.near_misses else None
+    nearest = ("" if near is None else
+               f"; nearest {near.a} / {near.b} {near.least:.3f} mm at line {near.line}")
+    return (f"machine {machine.machine} ({machine.pairs} pairs, clearance "
+            f"{machine.clearance:g} mm): {found}{nearest}; {machine.time_s:.2f} s")
 
 
 def json_schema() -> dict:

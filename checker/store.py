@@ -80,6 +80,9 @@ MIGRATIONS: tuple[str, ...] = (
     """
     ALTER TABLE jobs ADD COLUMN stock TEXT;
     """,
+    """
+    ALTER TABLE jobs ADD COLUMN n_machine INTEGER;
+    """,
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 
@@ -121,6 +124,7 @@ class JobRow:
     cutter_size: float | None
     cutter_kind: str | None
     stock: str | None = None  # the stock and fixtures line (`checker.results.stock_line`)
+    n_machine: int | None = None  # poses and moves closer to the machine than its clearance
 
 
 _ROW_COLUMNS = ", ".join(JobRow.__dataclass_fields__)

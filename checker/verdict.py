@@ -19,7 +19,9 @@ tolerance is a `crash` (`decide_stock`, `decide_fixture`).
 Against the design, the machined part (the stock at the end) is a `gouge` where it is cut below
 the part's surface beyond the tolerance by more than the simulation's error bound there
 (`decide_machined`): a gouge as the machine leaves it, counted apart from the poses' verdicts.
-(docs/MATH.md §8, §14, §15)"""
+Between the machine's own solids, the tool and the work, closer than the stated clearance is a
+`machine` finding (`decide_machine`).
+(docs/MATH.md §8, §14, §15, §16)"""
 
 from __future__ import annotations
 
@@ -27,8 +29,8 @@ import numpy as np
 
 # the order is the stores' per-point code (checker.store): new verdicts go at the end
 VERDICTS: tuple[str, ...] = ("ok", "gouge", "interference", "holder", "inaccessible",
-                             "within_tolerance", "crash")
-FINDINGS: tuple[str, ...] = ("gouge", "interference", "holder", "crash")
+                             "within_tolerance", "crash", "machine")
+FINDINGS: tuple[str, ...] = ("gouge", "interference", "holder", "crash", "machine")
 BODY, SHANK, HOLDER = 0, 1, 2  # tool pieces, as `checker.mesh.tool` numbers them
 
 
@@ -99,6 +101,13 @@ def decide_machined(overcut: np.ndarray, tolerance: np.ndarray | float,
     out = np.full(overcut.shape, "ok", dtype=object)
     out[overcut > 0.0] = "within_tolerance"
     out[overcut > limit] = "gouge"
+def decide_machine(distance: np.ndarray, clearance: np.ndarray | float) -> np.ndarray:
+    """Verdicts (N,) of two solids of the machine check (the machine's components, the tool,
+    the work) from their least `distance` (mm; < 0: penetration): closer than the `clearance`
+    (mm) a `machine` finding, whatever the move (docs/MATH.md §16)."""
+    distance = np.asarray(distance, dtype=float)
+    out = np.full(distance.shape, "ok", dtype=object)
+    out[distance < np.broadcast_to(np.asarray(clearance, dtype=float), distance.shape)] = "machine"
     return out
 
 

@@ -42,6 +42,7 @@ from pydantic import (
 from checker.errors import PathcheckError
 from checker.resources import resource
 from checker.toml_load import read_toml, validated
+from postproc.components import Component, check_links
 
 MACHINES_DIR = resource("machines")
 DEFAULT_MACHINE = "fanuc-hmc"
@@ -292,6 +293,8 @@ class Machine(_Model):
     setup: Setup = Setup()
     format: Format = Format()
     program: Program = Program()
+    components: tuple[Component, ...] = ()  # the machine's solids (`postproc.components`)
+    components_source: str = ""  # where their dimensions come from ("generic" when made up)
 
     @model_validator(mode="before")
     @classmethod
@@ -316,6 +319,8 @@ class Machine(_Model):
             raise ValueError(f"at most 3 rotary axes, found {len(names)}")
         if self.feeds.rotary_mode == "g93" and self.dialect in ("heidenhain", "millplus"):
             raise ValueError(f"the {self.dialect} dialect has no inverse-time feed (G93)")
+        check_links(self.components, [a.name for a in self.rotary_axes if a.on == "table"],
+                    [a.name for a in self.rotary_axes if a.on == "head"])
         return self
 
     # -- views ------------------------------------------------------------------------------
@@ -383,6 +388,9 @@ def load_machine_file(path: str | Path) -> Machine:
     path = Path(path)
     data = read_toml(path, what="machine file", code="machine")
     data.setdefault("name", path.stem)
+    for comp in data.get("components") or ():  # a mesh beside the machine file
+        if isinstance(comp, dict) and isinstance(comp.get("mesh"), str):
+            comp["mesh"] = str(path.parent / comp["mesh"])
     return validated(Machine, data, subject="machine", code="machine", path=path)
 
 

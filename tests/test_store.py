@@ -168,10 +168,10 @@ def test_migration_from_version_1_keeps_rows(tmp_path, doc):
     con.commit()
     con.close()
     with ResultsStore(path) as store:
-        assert store.schema_version == SCHEMA_VERSION == 4
+        assert store.schema_version == SCHEMA_VERSION == 5
         (old,) = store.jobs()
-        assert (old.job_path, old.n_gouge, old.cutter_kind, old.n_crash) == ("old.apt", 7, None,
-                                                                      None)
+        assert (old.job_path, old.n_gouge, old.cutter_kind, old.n_crash, old.n_machine) == (
+            "old.apt", 7, None, None, None)
         assert store.arrays(old.id) is None
         store.record_job(doc, elapsed_s=1.0)
         assert len(store.jobs()) == 2

@@ -15,7 +15,8 @@ from checker.commands.view import view_option, write_after_check
 
 def _counts_line(c) -> str:
     return (f"ok {c.ok}  within tolerance {c.within_tolerance}  gouge {c.gouge}  interference "
-            f"{c.interference}  holder {c.holder}  crash {c.crash}  inaccessible {c.inaccessible}")
+            f"{c.interference}  holder {c.holder}  crash {c.crash}  inaccessible {c.inaccessible}"
+            + (f"  machine {c.machine}" if c.machine else ""))
 
 
 def short_cutter(apt: str) -> str:
@@ -34,7 +35,7 @@ def summary_view(doc):
     from rich.table import Table
 
     from checker.cutter import parse_cutter
-    from checker.results import stock_line
+    from checker.results import machine_line, stock_line
 
     s, j = doc.summary, doc.job
     var = parse_cutter(j.cutter).size_symbol
@@ -55,6 +56,8 @@ def summary_view(doc):
                  f"greedy {o.greedy_total_rotation:.1f} deg, CAM {o.original_total_rotation:.1f}"
                  f" deg; {o.infeasible_points} points with no feasible B")
     head += "\n" + stock_line(doc.stock, doc.job.stated_stock)
+    if doc.machine is not None:
+        head += "\n" + machine_line(doc.machine)
     if doc.gcode:
         head += f"\nG-code written: {doc.gcode}"
     out = [head]

@@ -60,10 +60,11 @@ def assumed_units(moves, given: str | None, machine) -> None:
 @click.option("--no-store", is_flag=True, help="do not record this check in the results store")
 @opt.stock_options
 @view_option
+@opt.machine_check_options
 def check_gcode(program: Path, machine, dialect, units, block_delete, part_path, cutter_text,
                 tool_name, tool_library, config_path, json_out, store_path, no_store,
                 stock_text, fixtures, stock_resolution, stock_out, deviation_out, leave,
-                view_out) -> None:
+                view_out, machine_check, machine_clearance) -> None:
     """Read PROGRAM (G-code) for a machine, bring its moves back into the part frame and, with
     --part and --cutter, check them like `pathcheck JOB.apt` (exit 1 on findings).
 
@@ -71,6 +72,7 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
     pathcheck check-gcode prog.nc --machine fanuc-hmc
     pathcheck check-gcode prog.ngc --machine linuxcnc-hmc --json out.json
     pathcheck check-gcode boat.ngc --machine linuxcnc-xyzac-trt --part boat.stl --cutter CUTTER/10
+    pathcheck check-gcode boat.ngc --machine linuxcnc-xyzac-trt --cutter CUTTER/10 --machine-check
     """
     from checker.commands.check import job_inputs
     from checker.commands.outputs import prepare_outputs
@@ -93,7 +95,9 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
         raise PathcheckError("--stock and --fixture check the program's tool against them: "
                              "expected --cutter or --tool (a G-code program does not say its "
                              "cutter)", code="usage")
-    checking = cutter is not None and (part_path is not None or stock.asked)
+    clearance = opt.machine_clearance_of(machine_check, machine_clearance, mach)
+    checking = cutter is not None and (part_path is not None or stock.asked
+                                       or clearance is not None)
     if view_out is not None and not checking:
         raise PathcheckError("--view shows a check: give --cutter with --part or --stock",
                              code="usage")
@@ -117,8 +121,9 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
         doc = describe_program(moves, motions, mach)
     opt.say(format_program_summary(doc), json_out=json_out)
     if not checking:
-        opt.say("give --cutter and --part (gouges and interference) or --stock/--fixture (crashes "
-                "into the stock and the fixtures) to check the program",
+        opt.say("give --cutter and --part (gouges and interference), --stock/--fixture (crashes "
+                "into the stock and the fixtures) or --machine-check (the machine's solids) to "
+                "check the program",
                 json_out=json_out)
         if json_out is not None:
             opt.write_json(json_out, json.dumps(doc, indent=2), what="program JSON")
@@ -131,7 +136,7 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
 
     toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)
     result = check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=mach,
-                            config=config_path, stock=stock)
+                            config=config_path, stock=stock, machine_clearance=clearance)
     write_after_check(view_out, result, toolpath=toolpath, cutter=cutter, stock=stock,
                       config=config_path)
     finish(result, json_out, store=not no_store, store_path=store)

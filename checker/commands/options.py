@@ -141,6 +141,38 @@ def stock_options(command: Callable) -> Callable:
     return command
 
 
+def machine_check_options(command: Callable) -> Callable:
+    """`--machine-check`, `--machine-clearance MM` -> `machine_check, machine_clearance`
+    (`machine_clearance_of` checks them)."""
+    command = click.option(
+        "--machine-clearance", "machine_clearance", type=float, default=None, metavar="MM",
+        help="closer than this between the machine's solids, the tool and the work is a "
+             "finding, mm [default: 1]; implies --machine-check")(command)
+    return click.option(
+        "--machine-check", "machine_check", is_flag=True,
+        help="check the machine's own solids (its [[components]]) against each other, the tool, "
+             "the part, the stock and the fixtures along the motion")(command)
+
+
+def machine_clearance_of(machine_check: bool, clearance: float | None, machine) -> float | None:
+    """The clearance of the machine check (mm), None when it is not asked; a machine without
+    components or a clearance that is not a distance >= 0 is a usage error, before any work."""
+    from checker.errors import PathcheckError
+
+    if not machine_check and clearance is None:
+        return None
+    if clearance is not None and not (0.0 <= clearance < 1e4):
+        raise PathcheckError(f"--machine-clearance {clearance:g}: expected a distance from 0 to "
+                             "10000 mm", code="usage")
+    if not machine.components:
+        raise PathcheckError(f"--machine-check: machine '{machine.name}' has no components: "
+                             "expected [[components]] in its machine file", code="usage")
+    from checker.extras import require
+
+    require("coal", "machine", "the machine check (--machine-check)")
+    return 1.0 if clearance is None else float(clearance)
+
+
 def stock_request(stock_text: str | None, fixtures: tuple[str, ...],
                   stock_resolution: float | None, stock_out: Path | None,
                   deviation_out: Path | None = None, leave: float = 0.0):

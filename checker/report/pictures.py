@@ -55,6 +55,7 @@ UNBOUNDED = "#e377c2"  # allowable map: no point of the part limits the cutter
 VERDICT_COLOURS = {
     "ok": "#c8c8c8", "gouge": "#d62728", "interference": "#ff7f0e", "holder": "#9467bd",
     "inaccessible": "#000000", "within_tolerance": "#8fbc8f", "crash": "#8b0000",
+    "machine": "#1f77b4",
 }
 STANDARD_NONE = "#d62728"  # no standard cutter fits
 B_RANGES = (10.0, 30.0, 60.0, 90.0, 180.0)  # degrees: the fixed scales of the B panel
