@@ -101,6 +101,9 @@ def decide_machined(overcut: np.ndarray, tolerance: np.ndarray | float,
     out = np.full(overcut.shape, "ok", dtype=object)
     out[overcut > 0.0] = "within_tolerance"
     out[overcut > limit] = "gouge"
+    return out
+
+
 def decide_machine(distance: np.ndarray, clearance: np.ndarray | float) -> np.ndarray:
     """Verdicts (N,) of two solids of the machine check (the machine's components, the tool,
     the work) from their least `distance` (mm; < 0: penetration): closer than the `clearance`
