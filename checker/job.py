@@ -263,19 +263,15 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
     with step("plan and check the program"):
         program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach,
                                        reoriented, strategy)
+    part_box = np.array([tris.vertices.min(axis=0), tris.vertices.max(axis=0)])
     if stock is not None and stock.asked:
-        v = tris.vertices
-        program.stock = check_stock(job, program.written.motion, cutters, tol, stock,
-                                    np.array([v.min(axis=0), v.max(axis=0)]))
+        program.stock = check_stock(job, program.written.motion, cutters, tol, stock, part_box)
     with step("advice at the cutting poses"):
         doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
     if machine_clearance is not None:
-        v = tris.vertices
         add_to_document(doc, machine_section(job, program.written.motion, cutters, mach, stock,
-                                             np.array([v.min(axis=0), v.max(axis=0)]),
-                                             machine_clearance))
+                                             part_box, machine_clearance))
     doc.summary.time_s = time.perf_counter() - t0
-    v = tris.vertices
-    doc.job.stated_stock = _stated(toolpath, np.array([v.min(axis=0), v.max(axis=0)]))
+    doc.job.stated_stock = _stated(toolpath, part_box)
     counts = written.written_counts(doc.summary.counts, program)
     return written.Checked(doc, job, program, mach, cutters, counts, t0)
