@@ -30,7 +30,7 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet --no-compile -e .
 	$(BIN)/pip install --quiet --no-compile -e ".[all]" & pip=$$!; \
 		$(BIN)/python -m checker.cli warm; warm=$$?; wait $$pip && test $$warm -eq 0
-	$(BIN)/python -m compileall -q -j 0 $(VENV)/lib checker postproc >/dev/null
+	$(BIN)/python -m compileall -q -j 0 $(VENV)/lib checker >/dev/null
 	touch $(STAMP)
 
 # exit 1 from the check means "findings", which is what the demo job shows; the program is
@@ -48,14 +48,14 @@ demo: setup
 # pytest's status first (exit 5: no tests)
 test: setup
 	bash tools/test-setup.sh
-	$(BIN)/ruff check checker postproc tests benchmarks samples tools
+	$(BIN)/ruff check checker tests benchmarks samples tools
 	log=$$(mktemp); bash tools/wheel-check.sh >$$log 2>&1 & wheel=$$!; \
 		$(BIN)/python -m pytest -q -n 2 --dist loadfile --durations=15; tests=$$?; \
 		wait $$wheel; checked=$$?; cat $$log; rm -f $$log; \
 		if [ $$tests -ne 0 ]; then exit $$tests; fi; exit $$checked
 
 lint: setup
-	$(BIN)/ruff check checker postproc tests benchmarks samples tools
+	$(BIN)/ruff check checker tests benchmarks samples tools
 
 bench: setup
 	$(BIN)/python -m benchmarks.run_all

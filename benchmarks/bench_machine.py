@@ -20,9 +20,9 @@ from tests.test_machines_realdata import PROGRAMS, REAL  # noqa: E402
 _ONE = """
 import json, sys, time
 from checker.job import check_toolpath
-from postproc.machine import load_machine
-from postproc.reader import read_gcode
-from postproc.replay import part_motions, toolpath_of
+from checker.postproc.machine import load_machine
+from checker.postproc.reader import read_gcode
+from checker.postproc.replay import part_motions, toolpath_of
 from checker.cutter import parse_cutter_in
 from checker.stock.request import StockRequest
 path, name = sys.argv[1], sys.argv[2]

@@ -17,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
-from postproc.machine import load_machine
-from postproc.post import PostMoves, post_program
-from postproc.reader import read_gcode, read_gcode_text
-from postproc.replay import part_motions
+from checker.postproc.machine import load_machine
+from checker.postproc.post import PostMoves, post_program
+from checker.postproc.reader import read_gcode, read_gcode_text
+from checker.postproc.replay import part_motions
 
 REALDATA = Path(__file__).resolve().parents[1].parent / "shared" / "realdata"
 N = 100_000

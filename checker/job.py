@@ -31,13 +31,13 @@ from checker.geometry.transform import parse_transform, transform_part
 from checker.job_inputs import job_config, operation_cutters, part_file
 from checker.mesh.bvh import MeshIndex
 from checker.posting import post_checked
+from checker.postproc.kinematics import Chain
+from checker.postproc.post import machine_for_toolpath
 from checker.progress import step
 from checker.results import ResultsDocument
 from checker.stock.check import check_stock
 from checker.stock.request import StockRequest
 from checker.tolerance import operation_tolerances
-from postproc.kinematics import Chain
-from postproc.post import machine_for_toolpath
 
 _AXIS_TOL = 1e-9  # axes equal to this are one axis (an indexed operation)
 

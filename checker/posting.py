@@ -13,10 +13,10 @@ import numpy as np
 from checker.apt import read_cl
 from checker.errors import PathcheckError
 from checker.job_inputs import job_config, operation_cutters
+from checker.postproc.header import verdict_text
+from checker.postproc.post import post_toolpath
 from checker.progress import step
 from checker.written import Checked, flags
-from postproc.header import verdict_text
-from postproc.post import post_toolpath
 
 ON_FINDINGS = ("refuse", "stop", "comment")
 

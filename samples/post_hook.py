@@ -26,7 +26,7 @@ from pathlib import Path
 
 from checker.client import Client, raise_for_error
 from checker.errors import PathcheckError
-from postproc.header import CLEAN, read_verdict
+from checker.postproc.header import CLEAN, read_verdict
 
 
 def part_field(part: Path) -> dict:

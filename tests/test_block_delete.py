@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from checker.cli import main
-from postproc.reader import BLOCK_DELETE_RUN, BLOCK_DELETE_SKIPPED, read_gcode_text
+from checker.postproc.reader import BLOCK_DELETE_RUN, BLOCK_DELETE_SKIPPED, read_gcode_text
 
 #: the `/` blocks would rapid elsewhere, plunge 7 mm deeper (a gouge) and switch to G91
 PROGRAM = """G21 G90 G17

@@ -52,10 +52,10 @@ def test_five_axis_machine_program_reads_back_to_the_cl_motion(repo, tmp_path, m
     import numpy as np
 
     from checker.apt import read_cl
-    from postproc.machine import load_machine
-    from postproc.post import post_toolpath
-    from postproc.reader import read_gcode
-    from postproc.replay import part_motions, toolpath_of
+    from checker.postproc.machine import load_machine
+    from checker.postproc.post import post_toolpath
+    from checker.postproc.reader import read_gcode
+    from checker.postproc.replay import part_motions, toolpath_of
 
     job = read_cl(repo / "samples/mould/mould.apt")
     cl = job.motion_arrays(arc_chord_tol=0.01)

@@ -13,7 +13,7 @@ from stl import mesh as stl_mesh
 from checker.collide.solids import component_shape
 from checker.config import Config
 from checker.errors import PathcheckError
-from postproc.machine import load_machine_file
+from checker.postproc.machine import load_machine_file
 
 coal = require_extra("coal", "machine")
 

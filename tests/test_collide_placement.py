@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from checker.collide.placement import Links
-from postproc.kinematics import Chain
-from postproc.machine import available_machines, load_machine
+from checker.postproc.kinematics import Chain
+from checker.postproc.machine import available_machines, load_machine
 
 
 @pytest.mark.parametrize("name", available_machines())

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from checker.apt import read_cl_text
-from postproc.machine import load_machine
-from postproc.post import moves_from_toolpath, post_program
+from checker.postproc.machine import load_machine
+from checker.postproc.post import moves_from_toolpath, post_program
 
 JOB = """PARTNO/COOLANT
 UNITS/MM

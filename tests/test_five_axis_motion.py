@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from checker.five_axis.motion import MachineMotion
-from postproc.kinematics import Chain
-from postproc.machine import load_machine
+from checker.postproc.kinematics import Chain
+from checker.postproc.machine import load_machine
 
 MACHINES = ["linuxcnc-xyzac-trt", "fanuc-trunnion-ac", "siemens-trunnion-bc",
             "heidenhain-head-table-bc", "linuxcnc-head-head-ac", "dmc160u-millplus"]

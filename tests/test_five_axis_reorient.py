@@ -27,10 +27,10 @@ from checker.five_axis.plan import (
 from checker.five_axis.poses import PoseJudge
 from checker.job import check_program, check_toolpath
 from checker.posting import post_checked
-from postproc.kinematics import Chain
-from postproc.machine import load_machine
-from postproc.reader import read_gcode
-from postproc.replay import part_motions, toolpath_of
+from checker.postproc.kinematics import Chain
+from checker.postproc.machine import load_machine
+from checker.postproc.reader import read_gcode
+from checker.postproc.replay import part_motions, toolpath_of
 
 ROUND_TRIP = 1e-4  # mm and rad
 

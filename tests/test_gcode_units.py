@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from checker.cli import main
-from postproc.machine import load_machine
-from postproc.reader import read_gcode
+from checker.postproc.machine import load_machine
+from checker.postproc.reader import read_gcode
 
 PROGRAM = """%
 G17 G90 G54

@@ -194,9 +194,9 @@ def test_snap_leaves_a_point_beyond_the_tree_unmoved():
 
 # ---------------------------------------------------------------- LinuxCNC's arc turns P
 def _arc_rows(text: str):
-    from postproc.machine import load_machine
-    from postproc.reader import read_gcode_text
-    from postproc.replay import part_motions
+    from checker.postproc.machine import load_machine
+    from checker.postproc.reader import read_gcode_text
+    from checker.postproc.replay import part_motions
 
     return part_motions(read_gcode_text(text, "linuxcnc"), load_machine("linuxcnc-hmc"))
 

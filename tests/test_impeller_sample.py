@@ -18,9 +18,9 @@ from checker import verdict as vd
 from checker.apt import read_cl
 from checker.job import check_job, check_toolpath
 from checker.posting import post_unchecked
-from postproc.machine import load_machine
-from postproc.reader import read_gcode
-from postproc.replay import part_motions, toolpath_of
+from checker.postproc.machine import load_machine
+from checker.postproc.reader import read_gcode
+from checker.postproc.replay import part_motions, toolpath_of
 
 _SCRIPT = Path(__file__).resolve().parents[1] / "samples" / "make_samples.py"
 _spec = importlib.util.spec_from_file_location("make_samples", _SCRIPT)

@@ -10,8 +10,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from checker.errors import PathcheckError
-from postproc.kinematics import POLE_DEG, Chain
-from postproc.machine import Machine, load_machine
+from checker.postproc.kinematics import POLE_DEG, Chain
+from checker.postproc.machine import Machine, load_machine
 
 RNG = np.random.default_rng(11)
 

@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc.dialects import DIALECTS
-from postproc.kinematics import Chain, rotate
-from postproc.machine import Machine, load_machine
-from postproc.post import PostMoves, moves_from_toolpath, post
-from postproc.reader import read_gcode_text
-from postproc.replay import part_motions
+from checker.postproc.dialects import DIALECTS
+from checker.postproc.kinematics import Chain, rotate
+from checker.postproc.machine import Machine, load_machine
+from checker.postproc.post import PostMoves, moves_from_toolpath, post
+from checker.postproc.reader import read_gcode_text
+from checker.postproc.replay import part_motions
 
 REPO = Path(__file__).resolve().parents[1]
 KINDS = {
@@ -98,7 +98,7 @@ def _check_feeds(moves, machine, read, idx, src):
     """The tip speed read back (averaged over each block) is the programmed feed, except where
     an axis would pass its maximum speed: no piece of any block drives an axis beyond its
     maximum, and in the slowed blocks the fastest axis runs at (close to) its maximum."""
-    from postproc.checks import machine_xyz
+    from checker.postproc.checks import machine_xyz
 
     feed = read.block_feed()
     rows = ~moves.rapid[src] & np.isfinite(feed[idx])

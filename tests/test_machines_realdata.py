@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from checker.cli import main
-from postproc.describe import describe_program, format_program_summary
-from postproc.machine import load_machine
-from postproc.reader import read_gcode
-from postproc.replay import part_motions
+from checker.postproc.describe import describe_program, format_program_summary
+from checker.postproc.machine import load_machine
+from checker.postproc.reader import read_gcode
+from checker.postproc.replay import part_motions
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "realdata"
 PROGRAMS = [

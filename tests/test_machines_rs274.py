@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc.machine import load_machine
-from postproc.post import post_program
-from postproc.reader import read_gcode_text
+from checker.postproc.machine import load_machine
+from checker.postproc.post import post_program
+from checker.postproc.reader import read_gcode_text
 from tests.test_machines_kinds import KINDS, five_axis_path, four_axis_path
 
 RS274 = shutil.which("rs274")
@@ -116,7 +116,7 @@ def test_rs274_reads_the_fanuc_post_of_the_compressor_as_we_do(interp, tmp_path,
     rs274 and our Fanuc reader read the same moves; without the header rs274 reads the very
     same canonical moves (the header is comments only)."""
     from checker.apt import read_cl
-    from postproc.post import post_toolpath
+    from checker.postproc.post import post_toolpath
 
     toolpath = read_cl(REPO / "samples" / "compressor" / "compressor.apt")
     program = post_toolpath(toolpath, tmp_path / "compressor.nc", machine="fanuc-hmc")

@@ -11,12 +11,12 @@ import subprocess
 import sys
 
 from checker.config import default_config
+from checker.postproc.header import read_verdict
 from checker.service.cache import PartCache
 from checker.service.ops import WorkerState
 from checker.service.recorder import NullRecorder
 from checker.service.worker import handle
 from checker.store import ResultsStore
-from postproc.header import read_verdict
 
 SMALL_D12 = "samples/compressor/compressor_small_d12.apt"
 

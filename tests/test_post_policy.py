@@ -25,11 +25,11 @@ from checker import __version__
 from checker.errors import PathcheckError
 from checker.geometry import find_part_beside
 from checker.job import check_job
+from checker.postproc.dialects import DIALECTS
+from checker.postproc.header import read_verdict
+from checker.postproc.machine import load_machine
+from checker.postproc.reader import read_gcode_text
 from checker.verdict import FINDINGS
-from postproc.dialects import DIALECTS
-from postproc.header import read_verdict
-from postproc.machine import load_machine
-from postproc.reader import read_gcode_text
 
 REPO = Path(__file__).resolve().parents[1]
 _FLAG = re.compile(r"^\(PATHCHECK ([A-Z]+) CL LINE (\d+)")
@@ -163,8 +163,8 @@ def test_header_of_a_clean_two_tool_job(jobs, tmp_path):
                                               ("linuxcnc-hmc", "X1.23457", "B17.12524")])
 def test_words_on_the_machines_increments(name, x, b):
     """#19's `B17.12524`: Fanuc IS-B takes 0.001 mm and 0.001 deg, LinuxCNC's file 0.00001."""
-    from postproc.kinematics import axis_from_rotation
-    from postproc.post import PostMoves, post_program
+    from checker.postproc.kinematics import axis_from_rotation
+    from checker.postproc.post import PostMoves, post_program
 
     b_deg = np.array([0.0, 17.12524])
     tip = np.array([[0.0, 0.0, 50.0], [0.0, 0.0, 50.0]])
@@ -183,7 +183,7 @@ def test_words_on_the_machines_increments(name, x, b):
 @pytest.mark.parametrize("dialect", list(DIALECTS))
 def test_header_in_every_dialect_changes_no_motion(jobs, dialect):
     from checker.apt import read_cl
-    from postproc.post import moves_from_toolpath, post_program
+    from checker.postproc.post import moves_from_toolpath, post_program
 
     machine = load_machine("fanuc-hmc").with_dialect(dialect)
     moves = moves_from_toolpath(read_cl(jobs / "clean.apt"))

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from checker.cli import main
-from postproc.machine import load_machine
-from postproc.post import PostMoves, post_program
-from postproc.writer import write_program
+from checker.postproc.machine import load_machine
+from checker.postproc.post import PostMoves, post_program
+from checker.postproc.writer import write_program
 
 
 def run(argv: list[str]) -> int:

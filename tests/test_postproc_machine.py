@@ -7,8 +7,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from checker.errors import PathcheckError
-from postproc.kinematics import Chain, axis_from_rotation, rotation_from_axis
-from postproc.machine import available_machines, load_machine
+from checker.postproc.kinematics import Chain, axis_from_rotation, rotation_from_axis
+from checker.postproc.machine import available_machines, load_machine
 
 
 def test_shipped_machines_load():
@@ -126,7 +126,7 @@ def test_tip_path_length_pure_rotation_is_an_arc():
 def test_older_four_axis_form_reads_as_the_same_b_table(tmp_path):
     """A machine file in the older form ([kinematics] + one [rotary]) is the B table it
     describes: same chain, same program as the shipped file in the chain form."""
-    from postproc.post import PostMoves, post_program
+    from checker.postproc.post import PostMoves, post_program
 
     old = tmp_path / "old-hmc.toml"
     old.write_text(

@@ -15,8 +15,8 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from checker.errors import PathcheckError
-from postproc.machine import Machine, load_machine
-from postproc.post import (
+from checker.postproc.machine import Machine, load_machine
+from checker.postproc.post import (
     PostMoves,
     machine_for_toolpath,
     moves_from_toolpath,
@@ -24,9 +24,9 @@ from postproc.post import (
     post_program,
     post_toolpath,
 )
-from postproc.reader import read_gcode_text
-from postproc.replay import part_motions
-from postproc.writer import comment, write_program
+from checker.postproc.reader import read_gcode_text
+from checker.postproc.replay import part_motions
+from checker.postproc.writer import comment, write_program
 from tests.test_machines_kinds import increment_bounds
 
 REPO = Path(__file__).resolve().parents[1]

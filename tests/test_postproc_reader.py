@@ -14,10 +14,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from checker.errors import PathcheckError
-from postproc.machine import load_machine
-from postproc.post import PostMoves, post_program
-from postproc.reader import CYCLE, HOME, MACHINE_FRAME, read_gcode, read_gcode_text
-from postproc.replay import part_motions
+from checker.postproc.machine import load_machine
+from checker.postproc.post import PostMoves, post_program
+from checker.postproc.reader import CYCLE, HOME, MACHINE_FRAME, read_gcode, read_gcode_text
+from checker.postproc.replay import part_motions
 
 
 def test_modal_words_incremental_and_inch():

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from checker.errors import PathcheckError
-from postproc.machine import load_machine
-from postproc.post import PostMoves, post_program
-from postproc.reader import read_gcode_text
-from postproc.replay import part_motions
-from postproc.wrap import range_branches, rollover_words, unroll_rollover
+from checker.postproc.machine import load_machine
+from checker.postproc.post import PostMoves, post_program
+from checker.postproc.reader import read_gcode_text
+from checker.postproc.replay import part_motions
+from checker.postproc.wrap import range_branches, rollover_words, unroll_rollover
 
 
 def machine(wrap: str, **rotary):

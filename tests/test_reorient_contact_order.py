@@ -31,9 +31,9 @@ from checker.five_axis.poses import PoseJudge
 from checker.geometry.evaluate import evaluate
 from checker.job import check_program
 from checker.posting import post_checked
-from postproc.machine import load_machine
-from postproc.reader import read_gcode
-from postproc.replay import part_motions
+from checker.postproc.machine import load_machine
+from checker.postproc.reader import read_gcode
+from checker.postproc.replay import part_motions
 
 MACHINE = "linuxcnc-xyzac-trt"
 CUTTERS = (("CUTTER/10", 10.0), ("CUTTER/16,3", 6.0))  # the CAM's leads, degrees: too small

@@ -7,8 +7,8 @@ import pytest
 
 from checker.config import load_config
 from checker.errors import PathcheckError
+from checker.postproc.machine import load_machine_file
 from checker.tool_library import load_tool_library
-from postproc.machine import load_machine_file
 
 LOADERS = [(load_config, "config file", "config"), (load_machine_file, "machine file", "machine"),
            (load_tool_library, "tool library", "tools")]

@@ -221,9 +221,9 @@ def test_check_and_check_gcode_write_their_views(tmp_path):
          "--view", str(gview), "--json", str(tmp_path / "g.json")], capture_output=True,
         text=True, cwd=REPO, timeout=600)
     assert run.returncode == 0, run.stderr
-    from postproc.machine import load_machine
-    from postproc.reader import read_gcode
-    from postproc.replay import part_motions, toolpath_of
+    from checker.postproc.machine import load_machine
+    from checker.postproc.reader import read_gcode
+    from checker.postproc.replay import part_motions, toolpath_of
 
     mach = load_machine("fanuc-hmc")
     motions = part_motions(read_gcode(program, mach.dialect, units=mach.units), mach)

@@ -22,7 +22,7 @@ seconds() { printf "%d.%d" $(($1 / 1000000000)) $(($1 % 1000000000 / 100000000))
 # tests run beside this)
 mkdir "$work/src"
 (cd "$repo" && tar --exclude=__pycache__ --exclude=checker/resources/kernels -cf - \
-    pyproject.toml README.md checker postproc) | tar -xf - -C "$work/src"
+    pyproject.toml README.md checker) | tar -xf - -C "$work/src"
 start=$(date +%s%N)
 (cd "$work/src" && PYTHONPATH="$work/src" "$repo/.venv/bin/python" -m checker.warm \
     --portable checker/resources/kernels) >"$work/portable.log" 2>&1 \

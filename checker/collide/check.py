@@ -75,7 +75,7 @@ def machine_moves(machine, motion, lines: np.ndarray, cutters: dict, path: str |
     the check ran the joints linearly, else the words the post would choose for the poses'
     axes (`checker.five_axis.motion.MachineMotion`)."""
     from checker.five_axis.motion import MachineMotion
-    from postproc.kinematics import Chain
+    from checker.postproc.kinematics import Chain
 
     moves = motion.moves
     op = np.asarray(motion.op_of)
@@ -256,7 +256,7 @@ def check_machine(machine, motion, cutters: dict, job, *, clearance: float = DEF
     lines (`job.m`), the part's triangles (None: no part), `stock` a resolved stock shape
     (`checker.stock.spec`) or None, `fixtures` (`checker.stock.fixtures.Fixture`)."""
     from checker.collide.solids import stock_shape
-    from postproc.kinematics import Chain
+    from checker.postproc.kinematics import Chain
 
     t0 = time.perf_counter()
     moves = motion.moves

@@ -1,5 +1,5 @@
 """The solids of the machine check as `coal` geometries (the narrow phase, docs/MATH.md §16): the
-machine's components (`postproc.components`), the tool assembly per operation (its body,
+machine's components (`checker.postproc.components`), the tool assembly per operation (its body,
 shank and holder, `checker.mesh.tool`, each as its bounding cylinder: exact for a flat end, a
 capsule for a ball), the part's triangles, the stock (box, cylinder or mesh) and the fixtures.
 Each solid knows its link (`Links`), its side (the work: bed, table, part; the tool: ram, head,
@@ -116,7 +116,7 @@ def _box(lo, hi) -> Shape:
 
 
 def component_shape(comp, cfg) -> Shape:
-    """The coal shape of a machine component (`postproc.components.Component`)."""
+    """The coal shape of a machine component (`checker.postproc.components.Component`)."""
     if comp.box is not None:
         return _box(comp.box.min, comp.box.max)
     if comp.cylinder is not None:

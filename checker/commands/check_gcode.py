@@ -23,7 +23,7 @@ def assumed_units(moves, given: str | None, machine) -> None:
     if moves.units_stated:
         return
     from checker.errors import PathcheckError, printable
-    from postproc.dialects import get_dialect
+    from checker.postproc.dialects import get_dialect
 
     codes = "/".join(f"G{c}" for c in get_dialect(moves.dialect).units_codes)
     if given is None and "units" not in machine.model_fields_set:
@@ -78,10 +78,10 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
     from checker.commands.outputs import prepare_outputs
     from checker.cutter import parse_cutter_in
     from checker.errors import PathcheckError
-    from postproc.describe import describe_program, format_program_summary
-    from postproc.machine import load_machine
-    from postproc.reader import CYCLE, PROGRAMMED, read_gcode
-    from postproc.replay import part_motions
+    from checker.postproc.describe import describe_program, format_program_summary
+    from checker.postproc.machine import load_machine
+    from checker.postproc.reader import CYCLE, PROGRAMMED, read_gcode
+    from checker.postproc.replay import part_motions
 
     mach = load_machine(machine)
     cutter = opt.cutter_choice(cutter_text, tool_name, tool_library)
@@ -132,7 +132,7 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
         return
     from checker.commands.check import finish
     from checker.job import check_toolpath
-    from postproc.replay import toolpath_of
+    from checker.postproc.replay import toolpath_of
 
     toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)
     result = check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=mach,

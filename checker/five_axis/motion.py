@@ -3,7 +3,7 @@ linearly (program X Y Z and the two rotary words; with tool-centre-point control
 the work-frame tip), so the tool's path relative to the part is the machine's forward kinematics
 of linearly interpolated joints, not a straight tip with a turning axis. The joints of every
 pose come from the machine's inverse kinematics with the same choice of solutions the post
-makes (`Kinematics.words_for_axes` over all motion rows of the job, as `postproc.post` calls
+makes (`Kinematics.words_for_axes` over all motion rows of the job, as `checker.postproc.post` calls
 it), so the check sees the motion the posted program commands.
 
 The chain is passed in (`postproc.kinematics.Chain` satisfies `Kinematics`); this module does

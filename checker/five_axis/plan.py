@@ -70,7 +70,7 @@ class FivePlan:
 
 
 def machine_reach(chain, *, cone: float, tolerance: float = 1e-3) -> Machine:
-    """The axes (M, 3), part frame, that machine `chain` (`postproc.kinematics.Chain`) makes
+    """The axes (M, 3), part frame, that machine `chain` (`checker.postproc.kinematics.Chain`) makes
     within `tolerance` degrees, with at least one solution inside its rotary limits, and, for
     two rotary axes, more than `cone` degrees from the free rotation's axis (its singular
     direction, e.g. C on an A/C trunnion: there C turns by the axis' turn divided by the sine

@@ -171,7 +171,7 @@ def _machine(name: str | None, toolpath: Any, files: _Files) -> str | None:
         name, field_name = toolpath.machine_name(), "PPRINT/MACHINE"
     if name is None:
         return None
-    from postproc.machine import MACHINES_DIR
+    from checker.postproc.machine import MACHINES_DIR
 
     shipped = MACHINES_DIR / f"{name}.toml"
     if "/" not in name and shipped.is_file():

@@ -123,9 +123,9 @@ def read_toolpath(doc: ResultsDocument, beside: Path | None = None,
         raise PathcheckError("a G-code program's results name no machine: expected --machine "
                              "NAME|FILE, the machine it was checked for", path=doc.job.path,
                              code="usage")
-    from postproc.machine import load_machine
-    from postproc.reader import read_gcode
-    from postproc.replay import part_motions, toolpath_of
+    from checker.postproc.machine import load_machine
+    from checker.postproc.reader import read_gcode
+    from checker.postproc.replay import part_motions, toolpath_of
 
     mach = load_machine(machine)
     moves = read_gcode(path, mach.dialect, units=mach.units, block_delete=True)

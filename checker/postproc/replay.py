@@ -14,13 +14,13 @@ import numpy as np
 from checker.b_axis import b_for_axis
 from checker.errors import PathcheckError
 from checker.input_limits import MAX_PROGRAM_POINTS
+from checker.postproc.dialects import get_dialect
+from checker.postproc.kinematics import Chain
+from checker.postproc.machine import Machine
+from checker.postproc.reader import CYCLE, PROGRAMMED, GcodeMoves
+from checker.postproc.wrap import unroll_rollover
 from checker.toolpath import MotionArrays, Operation, ToolPath
 from checker.units import mm_per_unit
-from postproc.dialects import get_dialect
-from postproc.kinematics import Chain
-from postproc.machine import Machine
-from postproc.reader import CYCLE, PROGRAMMED, GcodeMoves
-from postproc.wrap import unroll_rollover
 
 _LETTERS = "ABC"
 

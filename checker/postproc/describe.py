@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from postproc.checks import machine_checks, machine_xyz
-from postproc.machine import Machine
-from postproc.reader import CYCLE, HOME, MACHINE_FRAME, GcodeMoves
-from postproc.replay import PartMotions
+from checker.postproc.checks import machine_checks, machine_xyz
+from checker.postproc.machine import Machine
+from checker.postproc.reader import CYCLE, HOME, MACHINE_FRAME, GcodeMoves
+from checker.postproc.replay import PartMotions
 
 
 def _range(values: np.ndarray) -> list[float] | None:

@@ -10,7 +10,7 @@ import re
 from dataclasses import dataclass, field
 
 from checker.errors import PathcheckError
-from postproc.dialects import Dialect
+from checker.postproc.dialects import Dialect
 
 _NUMBER = re.compile(r"[0-9]*\.?[0-9]*")
 #: plain blocks (letters and numbers only): one regular expression instead of the cursor

@@ -6,7 +6,7 @@ limits, pole passages reported) -> program X Y Z (machine coordinates, or work-f
 tool-centre-point control) -> blocks split where a rotary axis turns MAX_STEP or more -> words
 per wrap mode, with retract / rotate / re-enter where a cut crosses the end of a word range or
 turns too far, approach after each tool change -> feed words (G94 rule of the dialect or G93
-inverse time) -> travel-limit check in machine coordinates -> text (`postproc.writer`).
+inverse time) -> travel-limit check in machine coordinates -> text (`checker.postproc.writer`).
 """
 
 from __future__ import annotations
@@ -18,19 +18,19 @@ import numpy as np
 
 from checker.config import default_config
 from checker.errors import PathcheckError, raise_at_first
-from checker.units import mm_per_unit
-from postproc.dialects import get_dialect
-from postproc.header import NOT_CHECKED, header_lines
-from postproc.kinematics import (
+from checker.postproc.dialects import get_dialect
+from checker.postproc.header import NOT_CHECKED, header_lines
+from checker.postproc.kinematics import (
     PATH_SUBSTEPS,
     Chain,
     Choice,
     axis_from_rotation,
     rotation_from_axis,
 )
-from postproc.machine import Machine, load_machine
-from postproc.wrap import MAX_STEP, range_branches, rollover_words
-from postproc.writer import Rows, format_program, write_program
+from checker.postproc.machine import Machine, load_machine
+from checker.postproc.wrap import MAX_STEP, range_branches, rollover_words
+from checker.postproc.writer import Rows, format_program, write_program
+from checker.units import mm_per_unit
 
 
 @dataclass(frozen=True)
@@ -624,7 +624,7 @@ def post(moves: PostMoves, machine: Machine, *, program_name: str = "PATHCHECK",
          tools: list[str] | None = None, verdict: str = NOT_CHECKED) -> PostedProgram:
     """Post ``moves`` for ``machine`` in the job's units: the program text, the row table and
     the rotary solution chosen (see PostedProgram). The header names ``tools`` (default: the
-    moves' tool numbers) and the ``verdict`` (`postproc.header.verdict_text`)."""
+    moves' tool numbers) and the ``verdict`` (`checker.postproc.header.verdict_text`)."""
     _validate(moves, machine)
     if moves.units is not None and moves.units != machine.units:
         machine = machine.model_copy(update={"units": moves.units})

@@ -1,5 +1,5 @@
 """Forward and inverse kinematics of a machine, derived from its kinematic chain
-(`postproc.machine`), vectorised over all moves.
+(`checker.postproc.machine`), vectorised over all moves.
 
 Frames: *part* (CL coordinates), *work* (the table frame at every rotary word 0: work =
 ``setup.rotation @ part + setup.origin``) and *machine* (the frame of the linear axes). Table
@@ -23,7 +23,7 @@ import numpy as np
 
 from checker.b_axis import axis_for_b, b_for_axis, check_four_axis
 from checker.errors import PathcheckError
-from postproc.machine import Machine
+from checker.postproc.machine import Machine
 
 #: sub-steps used to integrate the tip path relative to the part over one block
 PATH_SUBSTEPS = 16

@@ -40,9 +40,9 @@ from pydantic import (
 )
 
 from checker.errors import PathcheckError
+from checker.postproc.components import Component, check_links
 from checker.resources import resource
 from checker.toml_load import read_toml, validated
-from postproc.components import Component, check_links
 
 MACHINES_DIR = resource("machines")
 DEFAULT_MACHINE = "fanuc-hmc"
@@ -223,7 +223,7 @@ class Format(_Model):
 
 class Program(_Model):
     """Fixed program text and safe positions. ``tool_change`` lines may use ``{tool}``; None:
-    the dialect's own lines (`postproc.dialects`)."""
+    the dialect's own lines (`checker.postproc.dialects`)."""
 
     header: list[str] | None = None
     footer: list[str] | None = None
@@ -293,7 +293,7 @@ class Machine(_Model):
     setup: Setup = Setup()
     format: Format = Format()
     program: Program = Program()
-    components: tuple[Component, ...] = ()  # the machine's solids (`postproc.components`)
+    components: tuple[Component, ...] = ()  # the machine's solids (`checker.postproc.components`)
     components_source: str = ""  # where their dimensions come from ("generic" when made up)
 
     @model_validator(mode="before")
@@ -356,7 +356,7 @@ class Machine(_Model):
     def with_dialect(self, dialect: str) -> Machine:
         """A copy for another control: the dialect, its program text, and its feed mode where it
         has no inverse time."""
-        from postproc.dialects import get_dialect
+        from checker.postproc.dialects import get_dialect
 
         mode = self.feeds.rotary_mode if get_dialect(dialect).inverse_time else "g94"
         return self.with_options(

@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 
 from checker.atomic import write_file
+from checker.postproc.dialects import Dialect
+from checker.postproc.machine import Machine
 from checker.units import mm_per_unit
-from postproc.dialects import Dialect
-from postproc.machine import Machine
 
 _TRAILING_ZEROS = re.compile(r"0+$", re.M)
 _DOT_END = re.compile(r"\.$", re.M)

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from postproc.kinematics import POLE_DEG, Chain
-from postproc.machine import Machine
-from postproc.reader import GcodeMoves
-from postproc.replay import PartMotions
+from checker.postproc.kinematics import POLE_DEG, Chain
+from checker.postproc.machine import Machine
+from checker.postproc.reader import GcodeMoves
+from checker.postproc.replay import PartMotions
 
 #: a free-axis swing larger than this (deg) in one block near the pole is a singular passage
 FLIP_DEG = 20.0

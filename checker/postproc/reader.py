@@ -5,7 +5,7 @@ Interpreted: G0-G3 (arcs by I/J/K or R, planes G17-G19), canned cycles G73/G76/G
 as rapid down to R, feed to Z, rapid back to R or the initial level), G20/G21 (converted to mm),
 G90/G91, G93/G94/G95, G28/G30 and G53 (the named linear axes end unknown in the work frame),
 G92 and G10 L20 (set the position), T/M6, S/M3/M4/M5, M7/M8/M9, A/B/C words, full circles by
-I/J/K alone; per dialect (`postproc.dialects`): the units and feed-mode codes (Sinumerik,
+I/J/K alone; per dialect (`checker.postproc.dialects`): the units and feed-mode codes (Sinumerik,
 Heidenhain and MillPlus G70/G71), the machine-frame words (G53, SUPA, G74, M91), the words that
 switch tool-centre-point control (G43.4, G234, M428, TRAORI, M128, G141) and their cancels,
 Sinumerik ``MCALL CYCLE81..89(RTP, RFP, SDIS, DP, DPR)`` holes, MillPlus G93/G92 datum shifts, G7
@@ -28,9 +28,9 @@ import numpy as np
 
 from checker.errors import PathcheckError, read_input
 from checker.input_limits import MAX_ARC_TURNS, MAX_COORDINATE_MM, MAX_ROTARY_DEG
+from checker.postproc.dialects import CANNED_CYCLES, Dialect, get_dialect
+from checker.postproc.gcode_lex import Block, lex_block
 from checker.units import mm_per_unit
-from postproc.dialects import CANNED_CYCLES, Dialect, get_dialect
-from postproc.gcode_lex import Block, lex_block
 
 _NO_CENTER = (math.nan, math.nan, math.nan)
 _NOT_TEXT = re.compile(r"[^\t\n\r\x0b\x0c\x20-\x7e]")
