@@ -1,8 +1,13 @@
 """The cutter model of docs/MATH.md §2 (flat, ball, bull-nose, APT, tapered ball) and its parsers.
 
-A `Cutter` is plain data (mm, radians) plus the family's closed forms: the imaginary-cutter size
-(compiled in `checker.kernels`), the tool tip from a contact, the profile radius and the signed
-distance of its solid of revolution. Tool frame: tip at the origin, axis +z.
+A `Cutter` is plain data (mm, radians) plus the family's interface, which every algorithm asks
+instead of reading `kind`, `psi`, `theta` or `r` (OpenCAMLib's lesson: each algorithm is written
+once against the cutter): the contact case of a normal (`contact_case`, decided by
+`checker.kernels.contact_case` with its one slack), the imaginary-cutter size (compiled in
+`checker.kernels`, on `kernel_params`), the tool tip from a contact and the line it moves on
+with the size (`size_reach`), the profile (`profile_radius`, `profile_slope`), the solid as a
+core (`core`, `cores`), the curvature limit at the CC point (`curvature_limit`) and the signed
+distance. Tool frame: tip at the origin, axis +z. (docs/MATH.md §2, §3)
 
 Statements: APT `CUTTER/d`, `CUTTER/d,r`, `CUTTER/d,r,e,f,alpha,beta,h` (ISO 4343; angles in
 degrees) and Siemens NX `TLDATA/MILL,D,R1,L,B,A[,XC,YC[,R2,X2,Y2]]` (D diameter, R1 lower corner
@@ -14,9 +19,11 @@ from __future__ import annotations
 
 import importlib
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -57,6 +64,36 @@ def diameter_from(R: float, r: float, psi: float, theta: float) -> float:
 
 def _canonical_angle(a: float) -> float:
     return math.radians(round(math.degrees(a), _ANGLE_DIGITS))
+
+
+class SizeReach(NamedTuple):
+    """Where the cutters of a family touching CC rows lie, as a function of the size s (tool
+    frame, axis +z, mm; docs/MATH.md §5.1): the tip is horizontally at `c0 + s w` (N, 2) and at
+    height `z0 - t s` (N,); the profile radius is at most `a s + side + flare max(0, z -
+    base)` (a (N,), side and flare scalars, base (N,) heights). `sphere`: below the
+    sphere/taper boundary (height of the sphere centre minus s sin_theta) the cutter is the
+    sphere of centre cc + s n and radius s (ball family)."""
+
+    c0: np.ndarray
+    w: np.ndarray
+    a: np.ndarray
+    z0: np.ndarray
+    t: np.ndarray
+    base: np.ndarray
+    side: float
+    flare: float
+    sphere: bool
+    sin_theta: float
+
+
+class CurvatureLimitForm(NamedTuple):
+    """The closed-form size at the CC point (docs/MATH.md §3.7): `size (K,)` mm (inf: none
+    from the form), `direction (K, 3)` the tangent along which the size tends to it (sign
+    free), `form (K,)` where the closed form applies."""
+
+    size: np.ndarray
+    direction: np.ndarray
+    form: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -123,6 +160,12 @@ class Cutter:
     def core(self) -> Core:
         """The cutter's solid as a core grown by a ball of radius r (`checker.cutter_core`)."""
         return Core(float(self.r), float(self.R), float(self.psi), float(self.theta))
+
+    def cores(self, sizes: np.ndarray) -> Core:
+        """The cores of the cutters of this family with the allowable sizes `sizes (N,)` (mm):
+        one `Core` whose r and R are (N,) arrays."""
+        r, R = self.radii(sizes)
+        return Core(r, R, float(self.psi), float(self.theta))
 
     def radii(self, sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(r, R) (N,) of the cutters of this family with the allowable sizes `sizes` (mm)."""
@@ -212,29 +255,126 @@ class Cutter:
             r, R = self.radii(np.broadcast_to(np.asarray(sizes, dtype=float), (len(cc),)))
         f = R * math.tan(self.psi) + r / math.cos(self.psi)
         tip = cc + r[:, None] * n + R[:, None] * ev - f[:, None] * a
-        if self.psi > 0.0:
-            tipc = na > math.cos(self.psi)
-            tip[tipc] = cc[tipc]
+        tipc = self.tip_contact(na)
+        tip[tipc] = cc[tipc]
         return tip
 
+    # ---- the family interface ---------------------------------------------------------------
+    def contact_case(self, nz: np.ndarray) -> np.ndarray:
+        """(N,) int8 contact case (`checker.kernels` UNTOUCHABLE, FILLET, TIP) of CC points whose
+        unit normals have tool-frame z components `nz (N,)`: `kernels.contact_case`, the one
+        rule with the one slack (docs/MATH.md §3)."""
+        nz = np.ascontiguousarray(nz, dtype=np.float64).ravel()
+        return _kernels().contact_cases(nz, self.kernel_params())
+
+    def untouchable(self, nz: np.ndarray) -> np.ndarray:
+        """(N,) whether no cutter of the family touches the CC point tangentially (n_z <= 0 or
+        n_z below sin(theta)): every size is 0 there."""
+        return self.contact_case(nz) == _kernels().UNTOUCHABLE
+
+    def fillet_contact(self, nz: np.ndarray) -> np.ndarray:
+        """(N,) whether the corner arc (r = 0: the bottom edge) touches the CC point."""
+        return self.contact_case(nz) == _kernels().FILLET
+
+    def tip_contact(self, nz: np.ndarray) -> np.ndarray:
+        """(N,) whether the cone's vertex touches the CC point (psi > 0, n_z > cos(psi))."""
+        return self.contact_case(nz) == _kernels().TIP
+
+    def size_reach(self, cc: np.ndarray, n: np.ndarray, e: np.ndarray,
+                   degenerate: np.ndarray) -> SizeReach:
+        """The `SizeReach` of the family's cutters touching `cc` with unit normal `n` (N, 3),
+        axis towards unit horizontal `e` (N, 3), tool frame; `degenerate (N,)` rows without a
+        direction e (the kernels' worst case over directions: |d| <= 2 s + k about the fillet
+        centre). R family: fillet centre O = cc + r n, tip O - (r sec(psi) + s tan(psi)) z +
+        s e; tip contact: tip at cc for every size. Ball family: tip cc + s (n - z)."""
+        r, th = float(self.r), float(self.theta)
+        tpos = max(np.tan(th), 0.0)
+        if self.ball_family:
+            z0 = cc[:, 2].copy()
+            return SizeReach(cc[:, :2].copy(), n[:, :2].copy(), np.full(len(cc), 1.0 / np.cos(th)),
+                             z0, 1.0 - n[:, 2], cc[:, 2], 0.0, tpos, True,
+                             max(np.sin(th), 0.0))
+        psi = float(self.psi)
+        O = cc + r * n
+        z0 = O[:, 2] - r / np.cos(psi)
+        t = np.full(len(cc), np.tan(psi))
+        c0, w, a = O[:, :2], e[:, :2].copy(), np.ones(len(cc))
+        w[degenerate], a[degenerate] = 0.0, 2.0
+        tip = self.tip_contact(n[:, 2])  # cone tip on cc, axis through cc
+        c0[tip], w[tip], z0[tip], t[tip] = cc[tip, :2], 0.0, cc[tip, 2], 0.0
+        return SizeReach(c0, w, a, z0, t, np.minimum(O[:, 2], cc[:, 2]), r / np.cos(th), tpos,
+                         False, 0.0)
+
+    def curvature_limit(self, n: np.ndarray, e: np.ndarray,
+                        basis: Callable[[], tuple[np.ndarray, np.ndarray]],
+                        forms: Callable[[np.ndarray, np.ndarray], tuple]) -> CurvatureLimitForm:
+        """The size in the limit P -> Pcc (docs/MATH.md §3.7) at CC rows with unit normals `n`
+        and unit horizontal `e` (K, 3), tool frame. `basis()` gives an orthonormal tangent basis
+        (t1, t2) (K, 3) and `forms(t1, t2)` the surface's second fundamental form (a, b, c) =
+        II(t1, t1), II(t1, t2), II(t2, t2) (K,) in any tangent basis (positive towards the tool).
+        Ball family: 1 / k_max along the direction of k_max. R family: the corner torus's limit
+        R_lim = h / k - r h (k = c + b^2 r / (1 - a r) in the basis (t_m, t_c)), where the
+        contact case is the fillet and e is defined."""
+        if self.ball_family:
+            t1, t2 = basis()
+            a, b, c = forms(t1, t2)
+            half = np.sqrt((0.5 * (a - c)) ** 2 + b * b)
+            k_max = 0.5 * (a + c) + half
+            with np.errstate(divide="ignore"):
+                lim = np.where(k_max > 0.0, 1.0 / k_max, np.inf)
+            angle = 0.5 * np.arctan2(2.0 * b, a - c)  # the direction of k_max from t1
+            t = np.cos(angle)[:, None] * t1 + np.sin(angle)[:, None] * t2
+            return CurvatureLimitForm(lim, t, np.ones(len(n), dtype=bool))
+        r = float(self.r)
+        h = np.hypot(n[:, 0], n[:, 1])
+        tc = np.column_stack([-e[:, 1], e[:, 0], np.zeros(len(e))])  # z x e
+        tm = np.cross(tc, n)
+        a, b, c = forms(tm, tc)
+        den = 1.0 - a * r
+        with np.errstate(divide="ignore", invalid="ignore"):
+            k = c + b * b * r / den
+            lim = np.where(den <= 0.0, 0.0, np.where(k > 0.0, h / k - r * h, np.inf))
+        defined = (h > _kernels().EPS_H) & (np.linalg.norm(e, axis=1) > 0.5)
+        direction = (b * r)[:, None] * tm + np.where(den > 0.0, den, 0.0)[:, None] * tc
+        direction = np.where((den > 0.0)[:, None], direction, tm)
+        form = self.fillet_contact(n[:, 2]) & defined
+        return CurvatureLimitForm(np.where(form, lim, np.inf), direction, form)
+
+    def _profile_pieces(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(dz, on_taper, on_fillet): the height above the corner centre of heights z (mm above
+        the tip) and which piece of the profile holds them (the cone or flat bottom
+        elsewhere; docs/MATH.md §2)."""
+        dz = z - self.f
+        taper = dz >= -self.r * math.sin(self.theta)
+        return dz, taper, ~taper & (dz > -self.r * math.cos(self.psi))
+
     def profile_radius(self, z: np.ndarray) -> np.ndarray:
-        """(N,) radius of the cutter's solid of revolution at height z (mm) above the tip;
-        0 below the tip and above H (H > 0)."""
+        """(N,) radius of the cutter's solid of revolution at height z (mm) above the tip
+        (OpenCAMLib's width(h)); 0 below the tip and above H (H > 0)."""
         z = np.asarray(z, dtype=float)
         R = 0.0 if self.kind in BALL_FAMILY else self.R
         r, psi, theta = self.r, self.psi, self.theta
-        dz = z - self.f
+        dz, on_taper, on_fillet = self._profile_pieces(z)
         with np.errstate(invalid="ignore"):
             taper = R + dz * math.tan(theta) + r / math.cos(theta)
             fillet = R + np.sqrt(np.maximum(r * r - dz * dz, 0.0))
             cone = z / math.tan(psi) if psi > 0.0 else np.where(z >= 0.0, R, 0.0)
-        out = np.where(
-            dz >= -r * math.sin(theta), taper, np.where(dz > -r * math.cos(psi), fillet, cone)
-        )
+        out = np.where(on_taper, taper, np.where(on_fillet, fillet, cone))
         out = np.where(z < 0.0, 0.0, out)
         if self.H > 0.0:
             out = np.where(z > self.H, 0.0, out)
         return out
+
+    def profile_slope(self, z: np.ndarray) -> np.ndarray:
+        """(N,) d(profile radius)/dz at heights z (mm above the tip): tan(theta) on the side,
+        -dz / sqrt(r^2 - dz^2) on the corner arc, cot(psi) on the cone, inf at a flat bottom."""
+        z = np.asarray(z, dtype=float)
+        r = self.r
+        dz, on_taper, on_fillet = self._profile_pieces(z)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            fillet = -dz / np.sqrt(np.maximum(r * r - dz * dz, 0.0))
+        cone = 1.0 / math.tan(self.psi) if self.psi > 0.0 else np.inf
+        return np.where(on_taper, math.tan(self.theta), np.where(on_fillet, fillet, cone))
 
     def signed_distance(self, pts: np.ndarray) -> np.ndarray:
         """(N,) signed distance (mm) from tool-frame points (tip at origin, axis +z) to the

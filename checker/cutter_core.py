@@ -6,14 +6,17 @@ axis with slope tan(psi) (the bottom offset by r), its outer side leaves C upwar
 theta (the side offset by r). Signed distance to the cutter = distance to the core - r (exact
 outside the core; inside it, minus r plus the depth inside the core; at a conical tip, psi > 0,
 the grown core is rounded where the real tip is sharp, short of it by r (sec(psi) - 1) along
-the axis). Used by the contact search (`geometry.contact`), the cutter's own signed distance and
-the mesh checks' tool pieces (`checker.mesh.tool`). Points (N,3) in mm, in the part frame with
-the tool's tips and unit axes (N,3), or in the tool frame with tips 0 and axes +z.
+the axis). Used by the contact search (`geometry.contact`: the projection and the sides'
+normals, `core_sides`), the cutter's own signed distance and the mesh checks' tool pieces
+(`checker.mesh.tool`: the wedge's profile, `Core.profile`). Points (N,3) in mm, in the part
+frame with the tool's tips and unit axes (N,3), or in the tool frame with tips 0 and axes +z.
 (docs/MATH.md §2)"""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -21,10 +24,11 @@ import numpy as np
 @dataclass(frozen=True)
 class Core:
     """The core of a cutter: corner radius `r`, corner-centre radius `R`, bottom cone angle
-    `psi` and taper angle `theta` (rad); mm. `h_o` is the corner-centre height above the tip."""
+    `psi` and taper angle `theta` (rad); mm. `h_o` is the corner-centre height above the tip.
+    r and R may be (N,) arrays: the cores of N cutters of one family (`Cutter.cores`)."""
 
-    r: float
-    R: float
+    r: float | np.ndarray
+    R: float | np.ndarray
     psi: float = 0.0
     theta: float = 0.0
 
@@ -32,18 +36,67 @@ class Core:
     def h_o(self) -> float:
         return self.R * np.tan(self.psi) + self.r / np.cos(self.psi)
 
+    def profile(self, top: float) -> tuple[np.ndarray, np.ndarray]:
+        """The wedge's half-profile closed at height `top` (mm above the tip; raised to the
+        corner centre where lower) and the radius it is grown by: (vertices (N, 4, 2)
+        counter-clockwise (rho, h): the lower side's end on the axis (0, r sec(psi)), the
+        corner centre C, the outer side at `top`, the axis at `top`; grow (N,) = r). A ball's
+        vertices repeat (R = 0): `checker.mesh.tool` drops the repeats."""
+        r = np.atleast_1d(np.asarray(self.r, dtype=np.float64))
+        R = np.broadcast_to(np.asarray(self.R, dtype=np.float64), r.shape)
+        h0 = r / math.cos(self.psi)                 # the lower side meets the axis
+        ho = R * math.tan(self.psi) + h0            # corner centre height
+        top = np.maximum(top, ho)
+        out = np.zeros((len(r), 4, 2))
+        out[:, 0, 1] = h0
+        out[:, 1, 0], out[:, 1, 1] = R, ho
+        out[:, 2, 0], out[:, 2, 1] = R + (top - ho) * math.tan(self.theta), top
+        out[:, 3, 1] = top
+        return out, r.copy()
+
+
+class CoreSides(NamedTuple):
+    """The core's two sides seen from N points (N,3 arrays in the points' frame): `lower` and
+    `outer` the outward unit normals of the lower side (the bottom offset by r) and of the
+    outer side (the side offset by r), `below` and `beyond` the points' signed distances past
+    each side's line (> 0 outside)."""
+
+    lower: np.ndarray
+    outer: np.ndarray
+    below: np.ndarray
+    beyond: np.ndarray
+
+
+def _side_normals(core: Core) -> tuple[np.ndarray, np.ndarray]:
+    """Outward unit normals (rho, h) of the wedge's lower side and outer side."""
+    n1 = np.array([np.sin(core.psi), -np.cos(core.psi)])
+    n3 = np.array([np.cos(core.theta), -np.sin(core.theta)])
+    return n1, n3
+
+
+def core_sides(core: Core, h: np.ndarray, rho: np.ndarray, w: np.ndarray,
+               axes: np.ndarray) -> CoreSides:
+    """The `CoreSides` of points at height h above the tip, radial distance rho and unit
+    radial direction w (`tool_coordinates`), tool axes `axes` (N,3)."""
+    n1, n3 = _side_normals(core)
+    dr, dh = rho - core.R, h - core.h_o
+    return CoreSides(n1[0] * w + n1[1] * axes, n3[0] * w + n3[1] * axes,
+                     dr * n1[0] + dh * n1[1], dr * n3[0] + dh * n3[1])
+
 
 @dataclass
 class CoreProjection:
     """Nearest core points of N points: `q (N,3)` on the core, `dist (N,)` (0 inside the core),
     `hess (N,3,3)` the Hessian of dist^2/2 with respect to the point (exact for psi = theta = 0,
     the in-plane part exact and the circumferential part approximate otherwise), `signed (N,)`
-    the distance, negative inside the core (minus the distance to its boundary)."""
+    the distance, negative inside the core (minus the distance to its boundary), `gap (N,)` the
+    signed distance to the cutter (the core grown by r)."""
 
     q: np.ndarray
     dist: np.ndarray
     hess: np.ndarray
     signed: np.ndarray
+    gap: np.ndarray
 
 
 def tool_coordinates(points: np.ndarray, tips: np.ndarray, axes: np.ndarray):
@@ -65,12 +118,11 @@ def _profile_nearest(core: Core, rho: np.ndarray, h: np.ndarray):
     (0 inside, 1 lower side, 2 corner C, 3 outer side), and for inside points minus their
     distance to the wedge's boundary (the wedge is convex: the nearer of its two sides)."""
     R, ho = core.R, core.h_o
-    # lower side: from C towards the axis, direction t1 = (-cos psi, -sin psi); outer normal
+    n1, n3 = _side_normals(core)
+    # lower side: from C towards the axis, direction t1 = (-cos psi, -sin psi)
     t1 = np.array([-np.cos(core.psi), -np.sin(core.psi)])
-    n1 = np.array([np.sin(core.psi), -np.cos(core.psi)])
-    # outer side: from C upwards, direction t3 = (sin theta, cos theta); outer normal
+    # outer side: from C upwards, direction t3 = (sin theta, cos theta)
     t3 = np.array([np.sin(core.theta), np.cos(core.theta)])
-    n3 = np.array([np.cos(core.theta), -np.sin(core.theta)])
     dr, dh = rho - R, h - ho
     s1 = dr * n1[0] + dh * n1[1]          # > 0 below the lower side
     s3 = dr * n3[0] + dh * n3[1]          # > 0 outside the outer side
@@ -106,7 +158,8 @@ def project_to_core(
     inplane = np.where((piece == 0)[:, None, None], 0.0, inplane)
     ratio = np.where(rho > 1e-12, 1.0 - rq / np.where(rho > 1e-12, rho, 1.0), 0.0)
     hess = inplane + np.where((piece == 0)[:, None, None], 0.0, ratio[:, None, None] * circ)
-    return CoreProjection(q, dist, hess, np.where(piece == 0, depth, dist))
+    signed = np.where(piece == 0, depth, dist)
+    return CoreProjection(q, dist, hess, signed, signed - core.r)
 
 
 def signed_distance(
@@ -114,4 +167,4 @@ def signed_distance(
 ) -> np.ndarray:
     """Signed distance (N,) mm of each point to the cutter solid (negative inside), via the core:
     exact, inside too (the core is convex, so a point t inside it is t + r inside the cutter)."""
-    return project_to_core(core, points, tips, axes).signed - core.r
+    return project_to_core(core, points, tips, axes).gap

@@ -13,10 +13,12 @@ coordinates' rounding (a flat face through Pcc), which must not decide a size (d
 `tol` (mm, >= 0) is a depth tolerance: P counts as cut only when it lies at least `tol` inside the
 cutter (the profile offset inward by `tol`). `tol = 0` is the exact model (docs/MATH.md §3.6).
 
-Contact cases (APT family):
-- fillet contact (sin(theta) <= n_z <= cos(psi)): fillet centre O = Pcc + r n, axis through
-  O + R e, closed form R = (|d|^2 - k^2) / (2 (e.d + k)) with k from the band of dz
-  (docs/MATH.md §3.1, §3.2);
+Contact cases (`contact_case`, the one place they are decided, with the one slack NZ_SLACK;
+`Cutter.contact_case` asks it for many rows, docs/MATH.md §2):
+- untouchable (n_z <= 0 or n_z < sin(theta) - NZ_SLACK): every size is 0;
+- fillet contact (sin(theta) - NZ_SLACK <= n_z <= cos(psi), every n_z > 0 when psi = 0):
+  fillet centre O = Pcc + r n, axis through O + R e, closed form R = (|d|^2 - k^2) /
+  (2 (e.d + k)) with k from the band of dz (docs/MATH.md §3.1, §3.2);
 - tip contact (psi > 0 and n_z > cos(psi), e.g. a drill on a floor): the cone vertex touches Pcc,
   the axis passes through Pcc, R is the smallest size whose solid contains P (§3.3);
 - vertical normal (|n_xy| < EPS_H) with psi = 0: e is taken from the caller's `e`; without it the
@@ -33,7 +35,7 @@ import numpy as np
 from numba import njit, prange
 
 EPS_H = 1e-9  # |n_xy| below this: the normal is vertical, e is not defined by the surface
-EPS_N = 1e-9  # slack on n_z >= sin(theta) (a wall parallel to the taper is still touchable)
+NZ_SLACK = 1e-9  # n_z this far below sin(theta) still touches (a wall parallel to the taper)
 _ROUNDING_MM = 1e-9  # mm: bounds this near a decision leave it to the exact kernel
 PLANE_SLOPE = 1e-8  # P within this slope of the tangent plane at Pcc (|n.q| <= it |q|) lies on it
 _PLANE_SLOPE2 = PLANE_SLOPE * PLANE_SLOPE
@@ -41,6 +43,11 @@ INF = np.inf
 
 FAMILY_APT = 0  # R variable: flat, bull-nose, general APT
 FAMILY_BALL = 1  # r variable: ball, tapered ball
+
+# contact cases (`contact_case`)
+UNTOUCHABLE = 0  # no cutter of the family touches Pcc tangentially: every size is 0
+FILLET = 1  # the corner arc (or, r = 0, the bottom edge) touches Pcc
+TIP = 2  # the cone's vertex touches Pcc (psi > 0, n_z > cos(psi))
 
 # layout of the parameter vector built by `params`
 _R, _RP, _TOL, _SIN_T, _COS_T, _TAN_T, _SEC_T = 0, 1, 2, 3, 4, 5, 6
@@ -156,10 +163,26 @@ def _fillet_size(dx, dy, dz, ux, uy, worst, prm):
 
 
 @njit(cache=True, inline="always")
-def _untouchable(nz, prm):
-    """Whether no cutter of the family touches Pcc tangentially (n_z <= 0 or n_z < sin(theta)):
-    every size is 0 there (`sizes.untouchable` for many rows)."""
-    return nz <= 0.0 or nz < prm[_SIN_T] - EPS_N
+def contact_case(nz, prm):
+    """The contact case of a CC point with tool-frame unit normal z-component `nz` for the
+    family of `prm` (module docstring): UNTOUCHABLE below the taper (n_z <= 0 or n_z <
+    sin(theta) - NZ_SLACK), TIP above the cone (psi > 0 and n_z > cos(psi): at n_z = cos(psi)
+    the cone's side lies in the tangent plane and the fillet case is kept), FILLET between.
+    psi + theta < 90 degrees, so the two bounds never cross."""
+    if nz <= 0.0 or nz < prm[_SIN_T] - NZ_SLACK:
+        return UNTOUCHABLE
+    if prm[_FLAT] < 0.5 and nz > prm[_COS_P]:
+        return TIP
+    return FILLET
+
+
+@njit(cache=True)
+def contact_cases(nz, prm):
+    """(N,) int8 `contact_case` of each n_z of `nz (N,)`: the cutter's rows ask this."""
+    out = np.empty(nz.shape[0], dtype=np.int8)
+    for i in range(nz.shape[0]):
+        out[i] = contact_case(nz[i], prm)
+    return out
 
 
 @njit(cache=True, inline="always")
@@ -174,11 +197,12 @@ def _not_above(nq, qx, qy, qz, tol):
 @njit(cache=True, inline="always")
 def apt_size(qx, qy, qz, nx, ny, nz, ex, ey, has_e, prm):
     """R of the imaginary APT-family cutter through P = Pcc + q, touching Pcc with normal n."""
-    if _untouchable(nz, prm):
+    case = contact_case(nz, prm)
+    if case == UNTOUCHABLE:
         return 0.0
     if _not_above(qx * nx + qy * ny + qz * nz, qx, qy, qz, prm[_TOL]):
         return INF  # on or below the tangent plane: the convex cutter never reaches P
-    if prm[_FLAT] < 0.5 and nz > prm[_COS_P]:
+    if case == TIP:
         return _apt_tip_contact(qx, qy, qz, prm)
     r = prm[_R]
     ux, uy, worst = _axis_dir(nx, ny, ex, ey, has_e)
@@ -204,7 +228,7 @@ class PlaneDisc(NamedTuple):
 def plane_disc(qz, nx, ny, nz, ex, ey, prm):
     """The `PlaneDisc` of a flat-bottomed APT-family cutter (psi = 0) touching Pcc with normal
     n, for points at height qz above Pcc (`apt_size` with has_e True)."""
-    usable = prm[_FLAT] > 0.5 and not _untouchable(nz, prm)
+    usable = prm[_FLAT] > 0.5 and contact_case(nz, prm) == FILLET
     r = prm[_R]
     ux, uy, worst = _axis_dir(nx, ny, ex, ey, True)
     return PlaneDisc(usable, r * nx, r * ny, ux, uy, worst, _k_band(qz - r * nz, prm))
@@ -235,7 +259,7 @@ def ball_size(qx, qy, qz, nx, ny, nz, prm):
     sphere centre Pcc + r n, taper angle theta above the sphere (theta = 0: cylinder)."""
     sin_t = prm[_SIN_T]
     tol = prm[_TOL]
-    if _untouchable(nz, prm):
+    if contact_case(nz, prm) == UNTOUCHABLE:
         return 0.0
     nq = qx * nx + qy * ny + qz * nz
     if _not_above(nq, qx, qy, qz, tol):
@@ -243,7 +267,7 @@ def ball_size(qx, qy, qz, nx, ny, nz, prm):
     qh2 = qx * qx + qy * qy
     den = nz - sin_t
     num = qz - tol * sin_t
-    if den > EPS_N:
+    if den > NZ_SLACK:  # n_z above sin(theta): the sphere/taper boundary is at a finite size
         rref = num / den  # size at which P's height is the sphere/taper boundary
     elif num > 0.0:
         rref = INF

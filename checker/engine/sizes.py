@@ -1,6 +1,7 @@
 """Imaginary sizes of (row, point) pairs in the tool frame, through the cutter's kernels, with the
-engine's rules on top: a point within `exclusion` mm of the CC point is the CC point itself (not
-a test point), and a point above the length of the cutter that would touch it is not cut."""
+engine's rules on top (docs/MATH.md §3, §5): a point within `exclusion` mm of the CC point is the
+CC point itself (not a test point), and a point above the length of the cutter that would touch
+it is not cut."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ import numpy as np
 from checker import kernels
 from checker.engine.grid.family import FamilyBounds
 
-_EPS_H = 1e-9
+_EPS_H = kernels.EPS_H  # |n_h| below this: the normal is along the axis
 
 
 @dataclass
@@ -103,6 +104,6 @@ def point_size(sz, i, x, y, z):
 
 def untouchable(cutter, n: np.ndarray) -> np.ndarray:
     """(N,) rows whose CC point no cutter of the family touches tangentially (unit tool-frame
-    normals `n (N, 3)` with n_z <= 0 or n_z < sin(theta)): every size is 0 there (kernels.py)."""
-    nz = n[:, 2]
-    return (nz <= 0.0) | (nz < np.sin(float(cutter.theta)) - kernels.EPS_N)
+    normals `n (N, 3)`; `Cutter.untouchable`, the kernels' contact case): every size is 0
+    there."""
+    return cutter.untouchable(n[:, 2])

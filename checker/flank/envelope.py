@@ -5,7 +5,6 @@ envelope surface is the union of the grazing curves over t. Part frame, mm."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,18 +15,9 @@ from checker.flank.motion import MotionState
 
 def profile(cutter: Cutter, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(rho, slope) (Z,): the radius of the cutter's surface of revolution at height z (mm
-    above the tip) and d rho / dz, by the segment of the APT profile (cone psi, corner torus r,
-    side taper theta; docs/MATH.md §2)."""
-    z = np.asarray(z, dtype=float)
-    rho = cutter.profile_radius(z)
-    dz = z - cutter.f
-    r = cutter.r
-    with np.errstate(divide="ignore", invalid="ignore"):
-        fillet = -dz / np.sqrt(np.maximum(r * r - dz * dz, 0.0))
-    cone = 1.0 / math.tan(cutter.psi) if cutter.psi > 0.0 else np.inf
-    slope = np.where(dz >= -r * math.sin(cutter.theta), math.tan(cutter.theta),
-                     np.where(dz > -r * math.cos(cutter.psi), fillet, cone))
-    return rho, slope
+    above the tip) and d rho / dz, as the cutter answers them (`Cutter.profile_radius`,
+    `Cutter.profile_slope`; docs/MATH.md §2)."""
+    return cutter.profile_radius(z), cutter.profile_slope(z)
 
 
 @dataclass(frozen=True)

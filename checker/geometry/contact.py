@@ -2,7 +2,8 @@
 closest approach between the cutter and the exact NURBS surfaces.
 
 Distance from points to a cutter goes through its core (`checker.cutter_core`, the cutter's
-own solid: a core grown by a ball of the corner radius).
+own solid: a core grown by a ball of the corner radius), which also gives the sides' normals
+(`core_sides`); nothing here reads the cutter's angles or radii (docs/MATH.md §2).
 
 All inputs in mm in the part frame: tips (N,3), unit axes (N,3) (tip -> spindle), points (N,3).
 The contact minimises the core distance over the part: start at the best of the k test points
@@ -19,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from checker.cutter_core import Core, project_to_core, signed_distance, tool_coordinates
+from checker.cutter_core import Core, core_sides, project_to_core, signed_distance, tool_coordinates
 from checker.geometry.evaluate import evaluate_mixed, points_mixed
 from checker.geometry.newton_uv import newton_steps
 from checker.geometry.sampling import TestPoints
@@ -87,7 +88,7 @@ def cl_to_cc(part: Part, test_points: TestPoints, cutter, tips: np.ndarray, axes
     uv = _keep_trimmed(part, sid, uv, test_points.uv[start])
     ev = evaluate_mixed(part, sid, uv[:, 0], uv[:, 1])
     proj = project_to_core(core, ev.points, tips[rows], axes[rows])
-    gap = proj.signed - core.r
+    gap = proj.gap
     align = _alignment(ev.points, ev.normals, proj.q, axes[rows])
     deepest = _pick(rows, gap, align)
     # the contact is the surface the cutter touches; where it also cuts into another one, that
@@ -166,11 +167,7 @@ def _depth_model(core: Core, points, tips, axes, J=None):
     proj = project_to_core(core, points, tips, axes)
     if J is None:
         return proj.signed, None, None
-    dr, dh = rho - core.R, h - core.h_o
-    n1 = np.sin(core.psi) * w - np.cos(core.psi) * axes
-    n3 = np.cos(core.theta) * w - np.sin(core.theta) * axes
-    s1 = dr * np.sin(core.psi) - dh * np.cos(core.psi)
-    s3 = dr * np.cos(core.theta) - dh * np.sin(core.theta)
+    n1, n3, s1, s3 = core_sides(core, h, rho, w, axes)
     G = np.einsum("kia,kib->kab", J, J)
     # the projector onto the tangent plane; pinv where a parameter direction degenerates
     # (a pole, a collapsed edge: du or dv = 0 makes G singular)

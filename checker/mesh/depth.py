@@ -1167,10 +1167,9 @@ def body_depths(mesh_index: MeshIndex, cutter, sizes: np.ndarray, tips: np.ndarr
     """(N,) signed depth of the body of `cutter.with_size(sizes[i])` at pose i, values at or
     below `floor` (mm) reported as `floor` (only triangles beating it are examined)."""
     sizes = _arr(sizes, np.float64)
-    r, R = cutter.radii(sizes)
-    prof, nprof = body_profiles(r, R, float(cutter.psi), float(cutter.theta), body_top(cutter))
+    prof, nprof, rho = body_profiles(cutter.cores(sizes), body_top(cutter))
     n = len(sizes)
-    d, _, _, _, _ = _run(mesh_index, prof, nprof, _arr(r, np.float64),
+    d, _, _, _, _ = _run(mesh_index, prof, nprof, _arr(rho, np.float64),
                          np.zeros(n, dtype=np.int64), np.arange(n + 1, dtype=np.int64),
                          np.arange(n, dtype=np.int64), _arr(tips, np.float64),
                          _arr(axes, np.float64), float(floor), max(0.0, -float(floor)))

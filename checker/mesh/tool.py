@@ -7,17 +7,17 @@ the axis, so the solid is convex; the polygon may be degenerate (a segment on th
 end-mill's core). Vertices are stored counter-clockwise in (r, h) (r to the right, h up).
 
 Pieces of a `Cutter` (`tool_pieces`):
-- kind 0, the body: exactly `cutter.core` (checker/cutter_core.py) grown by the corner
-  radius r. The core's profile is the wedge with its corner at C = (R, h_o), h_o = R tan(psi) +
-  r sec(psi): its lower side goes from C to the axis at (0, r sec(psi)) (the bottom offset by r),
+- kind 0, the body: exactly `cutter.core` (checker/cutter_core.py, `Core.profile`) grown by the
+  corner radius r. The core's profile is the wedge with its corner at C = (R, h_o), h_o = R tan(psi)
+  + r sec(psi): its lower side goes from C to the axis at (0, r sec(psi)) (the bottom offset by r),
   its outer side leaves C upwards with taper theta (the side offset by r), its top is at `top`.
-  flat: the rectangle [0, R] x [0, top], rho = 0; ball: the axis segment from h = r to top,
-  rho = r; bull-nose: [0, R] x [r, top], rho = r; APT: the wedge; tapered ball: the cone from
-  (0, r). `top` is the flute length when known, else `H` when > 0, else unbounded (`UNBOUNDED`
-  mm; the depth kernel clips it per pose just above the mesh, which changes no answer). With
-  rho > 0 the body's top is the core's top grown by rho: a rounded cap reaching rho above `top`
-  (into the shank's span: conservative). With psi > 0 and r > 0 the grown core is rounded where
-  the real tip is sharp, short of it by r (sec(psi) - 1) along the axis (as in contact.py).
+  flat: the rectangle [0, R] x [0, top], rho = 0; ball: the axis segment from h = r to top, rho = r;
+  bull-nose: [0, R] x [r, top], rho = r; APT: the wedge; tapered ball: the cone from (0, r). `top`
+  is the flute length when known, else `H` when > 0, else unbounded (`UNBOUNDED` mm; the depth
+  kernel clips it per pose just above the mesh, which changes no answer). With rho > 0 the body's
+  top is the core's top grown by rho: a rounded cap reaching rho above `top` (into the shank's span:
+  conservative). With psi > 0 and r > 0 the grown core is rounded where the real tip is sharp, short
+  of it by r (sec(psi) - 1) along the axis (as in contact.py).
 - kind 1, the shank: the cylinder of radius shank_diameter / 2 from the flute length to the
   stickout, rho = 0; present when `flute_length`, `shank_diameter` and `stickout` are known.
 - kind 2, the holder: the cylinder of radius holder_diameter / 2 from the stickout to
@@ -27,7 +27,6 @@ Pieces of a `Cutter` (`tool_pieces`):
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numba as nb
@@ -71,31 +70,24 @@ def drop_repeats(pts: np.ndarray, k: int, tol: float) -> int:
 
 
 @nb.njit(cache=True)
-def body_profile(r: float, R: float, psi: float, theta: float, top: float,
-                 out: np.ndarray) -> int:
-    """Write the body core's half-profile (counter-clockwise (r, h) vertices) into `out (>= 4,
-    2)` for corner radius r, corner-centre radius R, bottom angle psi, taper theta (rad) and
-    core top `top` (mm); return the vertex count (2 for a ball: a segment on the axis)."""
-    h0 = r / math.cos(psi)                      # the lower side meets the axis
-    ho = R * math.tan(psi) + h0                 # corner centre height
-    top = max(top, ho)
-    out[0, 0], out[0, 1] = 0.0, h0
-    out[1, 0], out[1, 1] = R, ho
-    out[2, 0], out[2, 1] = R + (top - ho) * math.tan(theta), top
-    out[3, 0], out[3, 1] = 0.0, top
-    return drop_repeats(out, 4, 1e-12)
+def _compact(prof: np.ndarray, nprof: np.ndarray) -> None:
+    """Drop the repeated vertices of each closed polygon prof[i, :nprof[i]] in place (within
+    1e-12 mm), nprof updated."""
+    for i in range(prof.shape[0]):
+        nprof[i] = drop_repeats(prof[i], nprof[i], 1e-12)
 
 
-@nb.njit(cache=True)
-def body_profiles(r: np.ndarray, R: np.ndarray, psi: float, theta: float, top: float):
-    """Body cores of N cutters of one family differing in r and R (N,): (prof (N, MAXV, 2),
-    nprof (N,))."""
-    n = r.shape[0]
-    prof = np.zeros((n, MAXV, 2))
-    nprof = np.zeros(n, dtype=np.int64)
-    for i in range(n):
-        nprof[i] = body_profile(r[i], R[i], psi, theta, top, prof[i])
-    return prof, nprof
+def body_profiles(core, top: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Body pieces of the cutters whose cores are `core` (a `checker.cutter_core.Core`, r and
+    R scalars or (N,) arrays: `Cutter.core`, `Cutter.cores(sizes)`) with the core's top at
+    `top` (mm): (prof (N, MAXV, 2), nprof (N,), rho (N,) the radius each core is grown by);
+    a ball's core is a segment on the axis (2 vertices)."""
+    verts, rho = core.profile(top)
+    prof = np.zeros((len(verts), MAXV, 2))
+    prof[:, :4] = verts
+    nprof = np.full(len(verts), 4, dtype=np.int64)
+    _compact(prof, nprof)
+    return prof, nprof, rho
 
 
 def _cylinder(radius: float, h0: float, h1: float) -> np.ndarray:
@@ -115,14 +107,8 @@ def body_top(cutter) -> float:
 def tool_pieces(cutter, *, with_holder: bool) -> ToolPieces:
     """The pieces of `cutter` (a `checker.cutter.Cutter`): its body, its shank when known and,
     with `with_holder`, its holder when known (module docstring)."""
-    core = cutter.core
-    R, r, psi, theta = core.R, core.r, core.psi, core.theta
-    profs, rhos, kinds = [], [], []
-    buf = np.zeros((MAXV, 2))
-    m = body_profile(r, R, psi, theta, body_top(cutter), buf)
-    profs.append(buf[:m].copy())
-    rhos.append(r)
-    kinds.append(BODY)
+    body, nbody, grow = body_profiles(cutter.core, body_top(cutter))
+    profs, rhos, kinds = [body[0, : nbody[0]].copy()], [float(grow[0])], [BODY]
     L, S = cutter.flute_length, cutter.stickout
     if L is not None and S is not None and cutter.shank_diameter and S > L:
         profs.append(_cylinder(0.5 * float(cutter.shank_diameter), float(L), float(S)))

@@ -1,12 +1,13 @@
 """Sound bounds on where a test point with a small imaginary size can lie, per CC row.
 
-Derivation (tool frame, tool axis +z, mm). R-family (flat, bull-nose, APT; size s = R, corner
-radius r, bottom angle psi, taper theta): the size-s cutter has its axis through `O_h + s e`
-(O = Pcc + r n) and profile radius at most `s + kappa` at every height the part reaches, with
-`kappa = r sec(theta) + max(0, z_top - O_z) max(tan(theta), 0)`. Ball family (ball, tapered ball;
-size s = r): axis through `Pcc_h + s n_h`, radius at most `s sec(theta) + kappa`, `kappa =
-max(0, z_top - Pcc_z) max(tan(theta), 0)`. Both are a moving disc `|P_h - c0 - s w| <= a s +
-kappa` with `a >= |w|`, so the discs are nested in s: a point with R(P) <= s lies in disc(s).
+Derivation (tool frame, tool axis +z, mm; the cutter's part is `Cutter.size_reach`). R-family (flat,
+bull-nose, APT; size s = R, corner radius r, bottom angle psi, taper theta): the size-s cutter has
+its axis through `O_h + s e` (O = Pcc + r n) and profile radius at most `s + kappa` at every height
+the part reaches, with `kappa = r sec(theta) + max(0, z_top - O_z) max(tan(theta), 0)`. Ball family
+(ball, tapered ball; size s = r): axis through `Pcc_h + s n_h`, radius at most `s sec(theta) +
+kappa`, `kappa = max(0, z_top - Pcc_z) max(tan(theta), 0)`. Both are a moving disc `|P_h - c0 - s w|
+<= a s + kappa` with `a >= |w|`, so the discs are nested in s: a point with R(P) <= s lies in
+disc(s).
 The tip `z0 - t s` only sinks as s grows (t = tan(psi), resp. 1 - n_z), so such a point also lies
 between `z0 - t s` and `z0 + H` (H the cutter length; the part top when the length is unknown).
 Tip contact (psi > 0, n_z > cos(psi)): the axis passes through Pcc, the disc is fixed (w = 0).
@@ -74,11 +75,6 @@ class FamilyBounds:
                             pick(self.cc), pick(self.n), self.sin_theta)
 
 
-def is_ball_family(cutter) -> bool:
-    """True when the allowable variable is the ball radius r (ball, tapered ball)."""
-    return cutter.ball_family
-
-
 def cutter_length(cutter) -> float:
     """Cutting length H in mm, inf when the cutter gives none."""
     h = float(getattr(cutter, "H", 0.0) or 0.0)
@@ -89,26 +85,13 @@ def family_bounds(cutter, cc: np.ndarray, n: np.ndarray, e: np.ndarray, degenera
                   part_top: float | np.ndarray) -> FamilyBounds:
     """Bounds for N rows: `cc`, unit `n` (N, 3) and unit horizontal `e` (N, 3), tool frame;
     `degenerate (N,)` rows without a direction e; `part_top` the highest test point (mm), one
-    or (N,) per row in its own tool frame."""
-    r, th = float(cutter.r), float(cutter.theta)
-    tpos = max(np.tan(th), 0.0)
+    or (N,) per row in its own tool frame. The family's geometry is the cutter's answer
+    (`Cutter.size_reach`); this adds the heights the part and the cutter's length allow."""
+    reach = cutter.size_reach(cc, n, e, degenerate)
     length = cutter_length(cutter)
-    if is_ball_family(cutter):
-        z0 = cc[:, 2].copy()
-        t = 1.0 - n[:, 2]
-        c0, w, a = cc[:, :2].copy(), n[:, :2].copy(), np.full(len(cc), 1.0 / np.cos(th))
-        z_top = np.minimum(z0 + length, part_top)
-        kappa = np.maximum(z_top - cc[:, 2], 0.0) * tpos
-        return FamilyBounds(c0, w, a, kappa, z0, t, length, z_top, cc, n, max(np.sin(th), 0.0))
-    else:
-        psi = float(cutter.psi)
-        O = cc + r * n
-        z0 = O[:, 2] - r / np.cos(psi)
-        t = np.full(len(cc), np.tan(psi))
-        c0, w, a = O[:, :2], e[:, :2].copy(), np.ones(len(cc))
-        w[degenerate], a[degenerate] = 0.0, 2.0
-        tip = (psi > 0.0) & (n[:, 2] > np.cos(psi))  # cone tip on Pcc, axis through Pcc
-        c0[tip], w[tip], z0[tip], t[tip] = cc[tip, :2], 0.0, cc[tip, 2], 0.0
-        z_top = np.minimum(z0 + length, part_top)
-        kappa = r / np.cos(th) + np.maximum(z_top - np.minimum(O[:, 2], cc[:, 2]), 0.0) * tpos
-    return FamilyBounds(c0, w, a, kappa, z0, t, length, z_top)
+    z_top = np.minimum(reach.z0 + length, part_top)
+    kappa = reach.side + np.maximum(z_top - reach.base, 0.0) * reach.flare
+    if reach.sphere:
+        return FamilyBounds(reach.c0, reach.w, reach.a, kappa, reach.z0, reach.t, length, z_top,
+                            cc, n, reach.sin_theta)
+    return FamilyBounds(reach.c0, reach.w, reach.a, kappa, reach.z0, reach.t, length, z_top)

@@ -10,7 +10,10 @@ the rings of refinement starts only approach when its direction is not sharp.
 
 Ball family (sphere of radius s):  K_tool = I / s, so s_lim = 1 / k_max (inf when k_max <= 0).
 
-R family on the corner (fillet contact, `sin(theta) <= n_z <= cos(psi)`; flat end-mills with
+The closed forms are the cutter's (`Cutter.curvature_limit`); this module gives them the
+surface's second fundamental form in the row's tool frame and keeps the limit where it holds.
+
+R family on the corner (fillet contact, `Cutter.contact_case`; flat end-mills with
 r = 0 on their bottom edge): a torus of tube radius r about a circle of radius R = s. In the basis
 (t_m, t_c), t_c = z x e horizontal and t_m = t_c x n in the plane of the axis and n, its normal
 curvatures are 1/r (meridian) and h / (R + r h) (parallel circle, Meusnier; h = |n_h|), no
@@ -39,7 +42,6 @@ from checker.geometry.evaluate import evaluate_mixed
 from checker.geometry.fundamental import second_form, tangent_basis, uv_of_tangents
 from checker.part import Part
 
-_EPS_H = 1e-9  # |n_h| below this: the normal is along the axis (no parallel circle)
 _COS_SAME = np.cos(1e-4)  # the surface's normal within 1e-4 rad of the row's: tangent contact
 
 
@@ -65,45 +67,14 @@ def curvature_limit(cutter, part: Part, frame: RowFrame, Q: np.ndarray, rows: np
     second = [rotate_rows(Q, d, rows) for d in (ev.duu, ev.duv, ev.dvv)]
     n = frame.n[rows]
     to_uv = uv_of_tangents(su, sv)
-    if cutter.ball_family:
-        form = np.ones(len(rows), dtype=bool)
-        t1, t2 = tangent_basis(su, n)
-        a, b, c = _forms(n, second, to_uv, t1, t2)
-        half = np.sqrt((0.5 * (a - c)) ** 2 + b * b)
-        k_max = 0.5 * (a + c) + half
-        with np.errstate(divide="ignore"):
-            lim = np.where(k_max > 0.0, 1.0 / k_max, np.inf)
-        angle = 0.5 * np.arctan2(2.0 * b, a - c)  # the direction of k_max from t1
-        t = np.cos(angle)[:, None] * t1 + np.sin(angle)[:, None] * t2
-    else:
-        lim, t, defined = _corner_limit(float(cutter.r), n, frame.e[rows], second, to_uv)
-        fillet = (n[:, 2] <= np.cos(float(cutter.psi)) + 1e-12) & \
-            (n[:, 2] >= np.sin(float(cutter.theta)) - 1e-12)
-        form = fillet & defined
-        lim = np.where(form, lim, np.inf)
+    closed = cutter.curvature_limit(n, frame.e[rows], lambda: tangent_basis(su, n),
+                                    lambda t1, t2: _forms(n, second, to_uv, t1, t2))
+    lim, t, form = closed.size, closed.direction, closed.form
     tangent = np.einsum("ij,ij->i", rotate_rows(Q, ev.normals, rows), n) >= _COS_SAME
     ok = np.isfinite(lim) & tangent & _leads_inside(part, sid, uv, to_uv(t))
     return CurvatureLimit(np.where(ok, np.maximum(lim, 0.0), np.inf),
                           np.where(ok[:, None], t, np.nan),
                           ok | (form & tangent & np.isinf(lim)))
-
-
-def _corner_limit(r: float, n: np.ndarray, e: np.ndarray, second: list, to_uv):
-    """(R_lim (K,), its direction (K, 3), where it is defined (K,)) for the R family's corner of
-    radius r (module docstring); inf and undefined where the normal is along the axis or e is
-    undefined."""
-    h = np.hypot(n[:, 0], n[:, 1])
-    tc = np.column_stack([-e[:, 1], e[:, 0], np.zeros(len(e))])  # z x e
-    tm = np.cross(tc, n)
-    a, b, c = _forms(n, second, to_uv, tm, tc)
-    den = 1.0 - a * r
-    with np.errstate(divide="ignore", invalid="ignore"):
-        k = c + b * b * r / den
-        lim = np.where(den <= 0.0, 0.0, np.where(k > 0.0, h / k - r * h, np.inf))
-    defined = (h > _EPS_H) & (np.linalg.norm(e, axis=1) > 0.5)
-    direction = (b * r)[:, None] * tm + np.where(den > 0.0, den, 0.0)[:, None] * tc
-    direction = np.where((den > 0.0)[:, None], direction, tm)
-    return np.where(defined, lim, np.inf), direction, defined
 
 
 def _forms(n: np.ndarray, second: list, to_uv, t1: np.ndarray, t2: np.ndarray):
