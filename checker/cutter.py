@@ -17,7 +17,6 @@ validated and ignored: it rounds the top of the flutes, outside the cutting mode
 
 from __future__ import annotations
 
-import importlib
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -38,9 +37,11 @@ _ANGLE_DIGITS = 12  # angles are kept as radians(round(degrees, 12)) so CUTTER/ 
 
 
 def _kernels():
-    """`checker.kernels`, imported on first use so that reading a CL file does not pay for
-    numba."""
-    return importlib.import_module("checker.kernels")
+    """`checker.kernels` (a layer below the cutter: it imports nothing of `checker`), imported
+    on first use so that reading a CL file does not pay for numba."""
+    from checker import kernels
+
+    return kernels
 
 
 def size_symbol_of(kind: str) -> str:

@@ -13,30 +13,33 @@ import numpy as np
 import pytest
 
 from checker import kernels
-from checker.cutter import parse_cutter
+from checker.cutter import diameter_from, parse_cutter
 from checker.engine.grid.family import family_bounds
 from checker.engine.sizes import untouchable
 from checker.flank.envelope import profile
 
 REPO = Path(__file__).resolve().parents[1]
+
+
+def _apt_text(r: float, R: float, psi_deg: float, theta_deg: float, h: float) -> str:
+    """`CUTTER/d,r,e,f,alpha,beta,h` with d and f from eq. 2.5 and f = R tan(psi) + r sec(psi)."""
+    psi, th = math.radians(psi_deg), math.radians(theta_deg)
+    f = R * math.tan(psi) + r / math.cos(psi)
+    return f"CUTTER/{diameter_from(R, r, psi, th)!r},{r},{R},{f!r},{psi_deg},{theta_deg},{h}"
+
+
 CUTTERS = {
     "flat": "CUTTER/10",
     "ball": "CUTTER/10,5",
     "bullnose": "CUTTER/10,2",
     "tapered_ball": "CUTTER/9.1633,5,0,5,0,5,40",
     "drill": "CUTTER/20,0,10,5.7735,30,0,0",  # psi = 30 deg, sharp
-    "apt": None,  # psi = 20, theta = 7, r = 1.5, R = 4.5: built below from eq. 2.5
+    "apt": _apt_text(1.5, 4.5, 20.0, 7.0, 30.0),  # cone, corner and taper
 }
 
 
 def _cutter(name: str):
-    if name != "apt":
-        return parse_cutter(CUTTERS[name])
-    from checker.cutter import diameter_from
-    r, R, psi, th = 1.5, 4.5, math.radians(20.0), math.radians(7.0)
-    f = R * math.tan(psi) + r / math.cos(psi)
-    d = diameter_from(R, r, psi, th)
-    return parse_cutter(f"CUTTER/{d!r},{r},{R},{f!r},20,7,30")
+    return parse_cutter(CUTTERS[name])
 
 
 def _expected(c, nz: np.ndarray) -> np.ndarray:

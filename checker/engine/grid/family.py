@@ -1,18 +1,17 @@
 """Sound bounds on where a test point with a small imaginary size can lie, per CC row.
 
-Derivation (tool frame, tool axis +z, mm; the cutter's part is `Cutter.size_reach`). R-family (flat,
-bull-nose, APT; size s = R, corner radius r, bottom angle psi, taper theta): the size-s cutter has
-its axis through `O_h + s e` (O = Pcc + r n) and profile radius at most `s + kappa` at every height
-the part reaches, with `kappa = r sec(theta) + max(0, z_top - O_z) max(tan(theta), 0)`. Ball family
-(ball, tapered ball; size s = r): axis through `Pcc_h + s n_h`, radius at most `s sec(theta) +
-kappa`, `kappa = max(0, z_top - Pcc_z) max(tan(theta), 0)`. Both are a moving disc `|P_h - c0 - s w|
-<= a s + kappa` with `a >= |w|`, so the discs are nested in s: a point with R(P) <= s lies in
-disc(s).
-The tip `z0 - t s` only sinks as s grows (t = tan(psi), resp. 1 - n_z), so such a point also lies
-between `z0 - t s` and `z0 + H` (H the cutter length; the part top when the length is unknown).
-Tip contact (psi > 0, n_z > cos(psi)): the axis passes through Pcc, the disc is fixed (w = 0).
-Vertical normal without a direction e (worst case over e, R = (|d| - k) / 2): |d| <= 2 s + k,
-the disc about O_h with a = 2, w = 0.
+Derivation (tool frame, tool axis +z, mm; the cutter's part is `Cutter.size_reach`). R-family
+(flat, bull-nose, APT; size s = R, corner radius r, bottom angle psi, taper theta): the size-s
+cutter has its axis through `O_h + s e` (O = Pcc + r n) and profile radius at most `s + kappa` at
+every height the part reaches, with `kappa = r sec(theta) + max(0, z_top - O_z) max(tan(theta),
+0)`. Ball family (ball, tapered ball; size s = r): axis through `Pcc_h + s n_h`, radius at most `s
+sec(theta) + kappa`, `kappa = max(0, z_top - Pcc_z) max(tan(theta), 0)`. Both are a moving disc
+`|P_h - c0 - s w| <= a s + kappa` with `a >= |w|`, so the discs are nested in s: a point with R(P)
+<= s lies in disc(s). The tip `z0 - t s` only sinks as s grows (t = tan(psi), resp. 1 - n_z), so
+such a point also lies between `z0 - t s` and `z0 + H` (H the cutter length; the part top when the
+length is unknown). Tip contact (`Cutter.contact_case`: psi > 0, n_z > cos(psi)): the axis passes
+through Pcc, the disc is fixed (w = 0). Vertical normal without a direction e (worst case over e, R
+= (|d| - k) / 2): |d| <= 2 s + k, the disc about O_h with a = 2, w = 0.
 (docs/MATH.md §5.1)
 """
 
