@@ -156,17 +156,28 @@ class Scene:
 
 
 class Distances:
-    """Exact distances between the pairs' solids through coal, counted."""
+    """Exact distances between the pairs' solids through coal, counted: one distance functor
+    per pair of geometries (it keeps the GJK's last guess) and two placements set in place."""
 
     def __init__(self, scene: Scene) -> None:
         import coal
 
         self.coal, self.scene, self.count = coal, scene, 0
         self.req, self.res = coal.DistanceRequest(), coal.DistanceResult()
+        self.Ta, self.Tb = coal.Transform3s(), coal.Transform3s()
+        self.functors: dict = {}
+
+    def _functor(self, ga, gb):
+        key = (id(ga), id(gb))
+        f = self.functors.get(key)
+        if f is None:
+            f = self.functors[key] = self.coal.ComputeDistance(ga, gb)
+        return f
 
     def __call__(self, a: Solid, b: Solid, Pa: Rigid, Pb: Rigid, op: np.ndarray) -> np.ndarray:
         """(N,) mm between solids a and b placed by Pa, Pb (already taken at the N states)."""
-        coal, out = self.coal, np.full(len(op), np.inf)
+        out = np.full(len(op), np.inf)
+        req, res, Ta, Tb = self.req, self.res, self.Ta, self.Tb
         for o in np.unique(op):
             sa, sb = a.shape(int(o)), b.shape(int(o))
             if sa is None or sb is None:
@@ -174,10 +185,16 @@ class Distances:
             rows = np.flatnonzero(op == o)
             Ra, ta = Pa.R[rows] @ sa.R0, np.einsum("nij,j->ni", Pa.R[rows], sa.t0) + Pa.t[rows]
             Rb, tb = Pb.R[rows] @ sb.R0, np.einsum("nij,j->ni", Pb.R[rows], sb.t0) + Pb.t[rows]
-            for i, r in enumerate(rows):  # the narrow phase: one library call per pair and pose
-                self.res.clear()
-                out[r] = coal.distance(sa.geom, coal.Transform3s(Ra[i], ta[i]), sb.geom,
-                                       coal.Transform3s(Rb[i], tb[i]), self.req, self.res)
+            f = self._functor(sa.geom, sb.geom)
+            got = np.empty(len(rows))
+            for i in range(len(rows)):  # the narrow phase: one library call per pair and pose
+                Ta.setRotation(Ra[i])
+                Ta.setTranslation(ta[i])
+                Tb.setRotation(Rb[i])
+                Tb.setTranslation(tb[i])
+                res.clear()
+                got[i] = f(Ta, Tb, req, res)
+            out[rows] = got
             self.count += len(rows)
         return out
 
