@@ -6,9 +6,10 @@ each move (with or without tool-centre-point control), as the check computes the
 (`checker.verify.ProgramMotion`). The tool against the part, the stock and the fixtures is the
 part's and the stock's check, not repeated here.
 
-Broad phase: each solid's bounding sphere; where two spheres are within `HORIZON` of the
-clearance, the exact distance (coal, the narrow phase), else the spheres' gap (a lower bound).
-Between poses, conservative advancement: over a stretch of a move on which no point of either
+Broad phase: each solid's bounding sphere, and from a pose measured exactly its distance less
+the travel between (docs/MATH.md §16.4); a pose is measured (coal, the narrow phase) only where
+those lower bounds leave a finding, the pair's least distance or its moves' certification
+open. Between poses, conservative advancement: over a stretch of a move on which no point of either
 solid travels more than L (`checker.collide.placement`), with distances da and db at its ends,
 no pose is closer than (da + db - L) / 2; a stretch whose bound is below the clearance is
 halved until certified, or its contact found, the contact's start located to `T_PRECISION` of
@@ -32,7 +33,8 @@ from checker.moves import START
 from checker.progress import step
 from checker.results import MachineFinding, MachinePair, MachineResult, VerdictCounts
 
-HORIZON = 5.0  # mm beyond the clearance: farther spheres are not measured exactly
+HORIZON = 5.0  # mm beyond the clearance: along a move, farther spheres are measured exactly
+# only where their gap is below the pair's least distance
 PRECISION = 0.005  # mm: a pair's least distance is found to this (or 1 % of it)
 T_PRECISION = 1e-5  # of a move: where a contact starts
 RESOLUTION = 0.005  # mm: a stretch on which no point travels farther is not halved again
@@ -317,10 +319,9 @@ def _at_poses(scene: Scene, dist: Distances, places: list[Rigid], mv: MachineMov
     least distance over the poses (exact). The lower bounds are the spheres' gap and, from a
     pose measured exactly, its distance less the travel bound L of the moves between them (no
     point of the two solids moves farther). Poses are measured every `STRIDES[0]`-th first,
-    then every `STRIDES[k]`-th where the bound is below the need: the clearance plus the
-    travel of the moves at the pose (so that the conservative advancement certifies them), or
-    the pair's least distance so far (plus that travel where the near-miss listing refines
-    it)."""
+    then every `STRIDES[k]`-th where the bound is below the need: the larger of the clearance
+    and the pair's least distance so far, plus the travel of the moves at the pose (so that
+    the conservative advancement certifies them at once)."""
     n, npair = len(mv.op), len(scene.pairs)
     idx = np.arange(n)
     seg = np.cumsum(mv.start | (idx == 0))  # the moves between poses of one segment
