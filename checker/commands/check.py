@@ -1,6 +1,6 @@
 """`pathcheck JOB.apt [--part PART] [--cutter "CUTTER/..."] [--json FILE|-] [-o JOB.nc]`: check a
-job; exit 0 when clean, 1 with findings (gouge, interference, holder, crash) in the program
-that is written, 2 on bad input."""
+job; exit 0 when clean, 1 with findings (gouge, interference, holder, crash; with
+--machine-check, machine collisions) in the program that is written, 2 on bad input."""
 
 from __future__ import annotations
 
@@ -156,9 +156,9 @@ def record(doc, store_path: Path | None = None) -> None:
 @click.option("--on-findings", type=click.Choice(["refuse", "stop", "comment"]),
               default="refuse", show_default=True,
               help="posting (-o) when the program as written has gouges, interference, holder "
-                   "hits, crashes or points without a feasible B: refuse (write nothing, exit "
-                   "1), stop (a comment and an optional stop M01 before each offending move) or "
-                   "comment (a comment before each)")
+                   "hits, crashes, machine collisions or points without a feasible B: refuse "
+                   "(write nothing, exit 1), stop (a comment and an optional stop M01 before "
+                   "each offending move) or comment (a comment before each)")
 @click.option("--no-check", is_flag=True,
               help="post -o without checking (no part read); the program's header says NOT "
                    "CHECKED")
