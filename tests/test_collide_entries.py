@@ -92,3 +92,15 @@ def test_a_machine_without_components_is_refused_before_the_run(tmp_path, capsys
     err = capsys.readouterr().err.strip()
     assert code == 2 and "\n" not in err, err
     assert "--machine-check: machine 'linuxcnc-head-head-ac' has no components" in err
+
+
+@pytest.mark.parametrize("args, said", [
+    (["--machine-clearance", "-1"], "--machine-clearance -1: expected a distance from 0 to 10000"),
+    (["--machine-check", "--no-check", "-o", "x.nc"], "--no-check posts without checking: "
+                                                       "remove --machine-check"),
+])
+def test_a_machine_check_that_cannot_run_is_a_usage_error(tmp_path, capsys, args, said):
+    job, machine = descent_job(tmp_path)
+    code = _run([str(job), "--machine", str(machine), "--no-store", *args])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "\n" not in err and said in err, err
