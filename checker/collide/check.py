@@ -325,14 +325,6 @@ def _at_poses(scene: Scene, dist: Distances, places: list[Rigid], mv: MachineMov
     n, npair = len(mv.op), len(scene.pairs)
     idx = np.arange(n)
     seg = np.cumsum(mv.start | (idx == 0))  # the moves between poses of one segment
-    A = np.array([a for a, _ in scene.pairs], dtype=int)
-    B = np.array([b for _, b in scene.pairs], dtype=int)
-    into = np.zeros((npair, n))  # the travel bound of the move reaching each pose
-    into[:, ends] = speed[A] + speed[B]
-    out_of = np.zeros((npair, n))
-    out_of[:, :-1] = into[:, 1:]
-    step_l = np.maximum(into, out_of)
-    C = np.cumsum(into, axis=1)
     d = np.full((npair, n), np.inf)
     exact = np.zeros((npair, n), bool)
     best = np.full(npair, np.inf)
@@ -341,9 +333,13 @@ def _at_poses(scene: Scene, dist: Distances, places: list[Rigid], mv: MachineMov
         present = np.isfinite(lb)
         if not present.any():
             continue
+        into = np.zeros(n)  # the travel bound of the move reaching each pose
+        into[ends] = speed[ia] + speed[ib]
+        step_l = np.maximum(into, np.r_[into[1:], 0.0])  # of the moves into and out of it
+        C = np.cumsum(into)
         ex = exact[p]
         for stride in STRIDES:
-            need = np.maximum(clearance, best[p]) + step_l[p]
+            need = np.maximum(clearance, best[p]) + step_l
             on = (idx % stride == 0) | (seg != np.r_[-1, seg[:-1]]) if stride > 1 else True
             cand = np.flatnonzero(on & present & ~ex & (lb < need))
             if cand.size == 0:
@@ -352,7 +348,7 @@ def _at_poses(scene: Scene, dist: Distances, places: list[Rigid], mv: MachineMov
                             places[ib].take(cand), mv.op[cand])
             ex[cand] = True
             best[p] = min(best[p], float(lb[cand].min()))
-            lb = np.maximum(lb, _from_measured(lb, ex, C[p], seg))
+            lb = np.maximum(lb, _from_measured(lb, ex, C, seg))
         d[p] = lb
     return d, exact, best
 
