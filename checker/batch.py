@@ -75,16 +75,43 @@ def _job_function(name: str) -> Callable[..., ResultsDocument]:
     return getattr(importlib.import_module(module), attr)
 
 
+def _folder_options(path: Path) -> dict:
+    """The keyword arguments of a job's check that its folder's `pathcheck-stock.toml` gives: a
+    stock and fixtures (`checker.stock.request.folder_stock`) and a machine check (`machine`,
+    `machine_clearance`: `folder_machine`), the machine loaded and its check validated before
+    the run (an error names the folder's file)."""
+    from checker.collide.section import asked_clearance
+    from checker.postproc.machine import load_machine
+    from checker.stock.request import folder_machine, folder_stock
+
+    out: dict = {}
+    stock = folder_stock(path)
+    if stock is not None:
+        out["stock"] = stock
+    asked = folder_machine(path)
+    if asked is None:
+        return out
+    if asked.machine is None:  # the job's own: its PPRINT/MACHINE, else the default
+        from checker.apt import read_cl
+
+        machine = load_machine(read_cl(path, require_cutter=False).machine_name())
+    try:
+        if asked.machine is not None:
+            machine = load_machine(asked.machine)
+        clearance = asked_clearance(machine, asked.clearance, check="machine_check",
+                                    clearance_name="machine_clearance", code="config")
+    except PathcheckError as err:  # named by the folder's file, where the check was asked
+        raise PathcheckError(str(err), path=asked.file, code="config") from None
+    return {**out, "machine": machine, "machine_clearance": clearance}
+
+
 def run_one(path: str, job_function: str = DEFAULT_JOB_FUNCTION) -> JobOutcome:
     """Check one job (in a pool worker or on a Dask worker); never raises for a bad job. A
-    folder's `pathcheck-stock.toml` gives its jobs a stock and fixtures
-    (`checker.stock.request.folder_stock`)."""
-    from checker.stock.request import folder_stock
-
+    folder's `pathcheck-stock.toml` gives its jobs a stock, fixtures and a machine check
+    (`_folder_options`)."""
     start = time.perf_counter()
     try:
-        stock = folder_stock(Path(path))
-        doc = _job_function(job_function)(path, **({} if stock is None else {"stock": stock}))
+        doc = _job_function(job_function)(path, **_folder_options(Path(path)))
         return JobOutcome(path, doc.model_dump_json(), None, time.perf_counter() - start)
     except PathcheckError as err:
         reason = str(err)

@@ -34,11 +34,12 @@ class PostRefusedError(Exception):
 
 def post_checked(checked: Checked, output, on_findings: str = "refuse") -> Path:
     """Write the checked program to `output` (`doc.gcode` names it) with its header (every
-    cutter, the verdict from the counts) and what is wrong before each offending move: a comment
-    (``comment``), a comment and an optional stop M01 (``stop``); ``refuse`` writes nothing when
-    any count is non-zero (PostRefusedError). A multi-axis program cannot be posted for a B-table
-    machine. An error carries the check that ran (``err.document``, so that the caller may still
-    record it, #18); the document's time includes posting."""
+    cutter, the verdict from the counts) and what is wrong before each offending move (its
+    findings, a machine collision starting on it: `_with_machine`): a comment (``comment``), a
+    comment and an optional stop M01 (``stop``); ``refuse`` writes nothing when any count,
+    machine collisions included, is non-zero (PostRefusedError). A multi-axis program cannot
+    be posted for a B-table machine. An error carries the check that ran (``err.document``, so
+    that the caller may still record it); the document's time includes posting."""
     doc = checked.document
     try:
         with step("post the G-code"):
@@ -63,13 +64,25 @@ def _post(checked: Checked, output, on_findings: str):
                              f"{', '.join(ON_FINDINGS)}", code="usage")
     if on_findings == "refuse" and any(checked.counts.values()):
         raise PostRefusedError(checked.counts)
-    comments = flags(job, program)
+    comments = _with_machine(flags(job, program), checked.document)
     stops = np.array([bool(c) for c in comments]) if on_findings == "stop" else None
     return post_toolpath(job.toolpath, output, machine=checked.machine, b_deg=program.b,
                          comments=comments, stops=stops,
                          arc_chord_tol=job.cfg.check.arc_chord_tolerance, tip=program.tip,
                          cutters=checked.cutters, verdict=verdict_text(checked.counts),
                          axes=program.axis)
+
+
+def _with_machine(comments: list[str], doc) -> list[str]:
+    """`comments` (per motion row, `written.flags`) with each machine finding of `doc`
+    (`checker.collide`) before the move where it starts: its two solids and the least distance
+    of its run (mm, < 0: into each other)."""
+    found = [] if doc.machine is None else doc.machine.findings
+    out = list(comments)
+    for f in found:
+        text = f"MACHINE {f.a.upper()} / {f.b.upper()} LEAST {f.distance:.4f}"
+        out[f.move] = f"{out[f.move]}; {text}" if out[f.move] else f"PATHCHECK {text}"
+    return out
 
 
 def post_unchecked(apt_path, output, cutter=None, machine=None, config=None,

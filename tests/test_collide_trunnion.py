@@ -85,3 +85,17 @@ def test_c_swing_through_the_post_between_poses(tmp_path):
     assert f["line"] == 3 and 0.0 < f["t"] < 1.0
     assert 89.5 < f["axes"]["C"] < 90.5
     assert f["distance"] < 0.0
+
+
+def test_least_clearance_of_a_far_pair_along_one_long_move(tmp_path):
+    """The tool (tip at Z 200, A = C = 0) crosses the whole platter (top at Z 0) in one move
+    from X -1000 to X 1000: the least clearance is 200 mm, over the platter, between the two
+    poses (each 870 mm away); the spheres' gap there (68 mm, a lower bound) is not it. Found
+    along the move to the listing's precision (1 % of the distance)."""
+    machine = machine_file(tmp_path, "fanuc-trunnion-ac", PLATTER)
+    doc = check(tmp_path, machine, "G21 G90 G94\nG0 X-1000 Y0 Z200 A0 C0\nG1 X1000 F5000\n"
+                                   "M30\n")
+    (near,) = doc["machine"]["near_misses"]
+    assert (near["a"], near["b"], near["line"]) == ("platter", "tool body", 3)
+    assert abs(near["least"] - 200.0) <= 2.0, near
+    assert abs(near["axes"]["X"]) <= 150.0  # over the platter

@@ -6,9 +6,10 @@ each move (with or without tool-centre-point control), as the check computes the
 (`checker.verify.ProgramMotion`). The tool against the part, the stock and the fixtures is the
 part's and the stock's check, not repeated here.
 
-Broad phase: each solid's bounding sphere; where two spheres are within `HORIZON` of the
-clearance, the exact distance (coal, the narrow phase), else the spheres' gap (a lower bound).
-Between poses, conservative advancement: over a stretch of a move on which no point of either
+Broad phase: each solid's bounding sphere, and from a pose measured exactly its distance less
+the travel between (docs/MATH.md §16.4); a pose is measured (coal, the narrow phase) only where
+those lower bounds leave a finding, the pair's least distance or its moves' certification
+open. Between poses, conservative advancement: over a stretch of a move on which no point of either
 solid travels more than L (`checker.collide.placement`), with distances da and db at its ends,
 no pose is closer than (da + db - L) / 2; a stretch whose bound is below the clearance is
 halved until certified, or its contact found, the contact's start located to `T_PRECISION` of
@@ -32,7 +33,8 @@ from checker.moves import START
 from checker.progress import step
 from checker.results import MachineFinding, MachinePair, MachineResult, VerdictCounts
 
-HORIZON = 5.0  # mm beyond the clearance: farther spheres are not measured exactly
+HORIZON = 5.0  # mm beyond the clearance: along a move, farther spheres are measured exactly
+# only where their gap is below the pair's least distance
 PRECISION = 0.005  # mm: a pair's least distance is found to this (or 1 % of it)
 T_PRECISION = 1e-5  # of a move: where a contact starts
 RESOLUTION = 0.005  # mm: a stretch on which no point travels farther is not halved again
@@ -156,17 +158,28 @@ class Scene:
 
 
 class Distances:
-    """Exact distances between the pairs' solids through coal, counted."""
+    """Exact distances between the pairs' solids through coal, counted: one distance functor
+    per pair of geometries (it keeps the GJK's last guess) and two placements set in place."""
 
     def __init__(self, scene: Scene) -> None:
         import coal
 
         self.coal, self.scene, self.count = coal, scene, 0
         self.req, self.res = coal.DistanceRequest(), coal.DistanceResult()
+        self.Ta, self.Tb = coal.Transform3s(), coal.Transform3s()
+        self.functors: dict = {}
+
+    def _functor(self, ga, gb):
+        key = (id(ga), id(gb))
+        f = self.functors.get(key)
+        if f is None:
+            f = self.functors[key] = self.coal.ComputeDistance(ga, gb)
+        return f
 
     def __call__(self, a: Solid, b: Solid, Pa: Rigid, Pb: Rigid, op: np.ndarray) -> np.ndarray:
         """(N,) mm between solids a and b placed by Pa, Pb (already taken at the N states)."""
-        coal, out = self.coal, np.full(len(op), np.inf)
+        out = np.full(len(op), np.inf)
+        req, res, Ta, Tb = self.req, self.res, self.Ta, self.Tb
         for o in np.unique(op):
             sa, sb = a.shape(int(o)), b.shape(int(o))
             if sa is None or sb is None:
@@ -174,20 +187,27 @@ class Distances:
             rows = np.flatnonzero(op == o)
             Ra, ta = Pa.R[rows] @ sa.R0, np.einsum("nij,j->ni", Pa.R[rows], sa.t0) + Pa.t[rows]
             Rb, tb = Pb.R[rows] @ sb.R0, np.einsum("nij,j->ni", Pb.R[rows], sb.t0) + Pb.t[rows]
-            for i, r in enumerate(rows):  # the narrow phase: one library call per pair and pose
-                self.res.clear()
-                out[r] = coal.distance(sa.geom, coal.Transform3s(Ra[i], ta[i]), sb.geom,
-                                       coal.Transform3s(Rb[i], tb[i]), self.req, self.res)
+            f = self._functor(sa.geom, sb.geom)
+            got = np.empty(len(rows))
+            for i in range(len(rows)):  # the narrow phase: one library call per pair and pose
+                Ta.setRotation(Ra[i])
+                Ta.setTranslation(ta[i])
+                Tb.setRotation(Rb[i])
+                Tb.setTranslation(tb[i])
+                res.clear()
+                got[i] = f(Ta, Tb, req, res)
+            out[rows] = got
             self.count += len(rows)
         return out
 
 
 def _distances(scene: Scene, dist: Distances, places: list[Rigid], op: np.ndarray,
-               pair_of: np.ndarray, row_of: np.ndarray, clearance: float) -> np.ndarray:
+               pair_of: np.ndarray, row_of: np.ndarray, limit: np.ndarray):
     """(Q,) distances of pairs `pair_of (Q,)` at state rows `row_of (Q,)` of `places` (per
-    solid, None: not placed): exact where the spheres are within the horizon, else the
-    spheres' gap."""
+    solid, None: not placed): exact where the spheres' gap is below `limit (Q,)`, else the
+    gap (a lower bound); and (Q,) whether each is exact."""
     out = np.full(len(pair_of), np.inf)
+    exact = np.zeros(len(pair_of), bool)
     for p in np.unique(pair_of):
         ia, ib = scene.pairs[int(p)]
         a, b = scene.solids[ia], scene.solids[ib]
@@ -199,12 +219,13 @@ def _distances(scene: Scene, dist: Distances, places: list[Rigid], op: np.ndarra
         Pa, Pb = places[ia].take(rows), places[ib].take(rows)
         gap = np.linalg.norm(Pa.apply(ca) - Pb.apply(cb), axis=1) - ra - rb
         gap = np.where(ha & hb, gap, np.inf)
-        near = gap < clearance + HORIZON
+        near = gap < limit[q]
         out[q] = gap
         if near.any():
             k = np.flatnonzero(near)
             out[q[k]] = dist(a, b, Pa.take(k), Pb.take(k), o[k])
-    return out
+            exact[q[k]] = True
+    return out, exact
 
 
 def _speeds(scene: Scene, end: np.ndarray) -> np.ndarray:
@@ -271,19 +292,15 @@ def check_machine(machine, motion, cutters: dict, job, *, clearance: float = DEF
     scene = Scene(solids, links, mv)
     dist = Distances(scene)
     n, npair = len(moves), len(scene.pairs)
-    # every pose, every pair
     idx = np.arange(n)
-    with step("machine: the solids at every pose"):
-        places = scene.place(mv.xyz, mv.joints, mv.op, mv.gauge)
-        pair_of = np.repeat(np.arange(npair), n)
-        row_of = np.tile(idx, npair)
-        d_pose = _distances(scene, dist, places, mv.op, pair_of, row_of, clearance).reshape(
-            npair, n)
-    best = _least_at_poses(scene, dist, places, mv.op, d_pose, clearance)
     ends = np.flatnonzero(~mv.start & (idx > 0))
     speed = _speeds(scene, ends)
+    with step("machine: the solids at every pose"):
+        places = scene.place(mv.xyz, mv.joints, mv.op, mv.gauge)
+        d_pose, exact, best = _at_poses(scene, dist, places, mv, ends, speed, clearance)
     contacts = Contacts([], [], [], [])
-    best_t = {p: (int(np.argmin(d_pose[p])), 1.0) for p in range(npair)}
+    best_t = {p: (int(np.argmin(np.where(exact[p], d_pose[p], np.inf))), 1.0)
+              for p in range(npair)}
     with step("machine: along the moves") as advance:
         _along(scene, dist, d_pose, ends, speed, clearance, best, best_t, contacts, advance)
     result = _result(machine, scene, mv, moves, job, d_pose, contacts, best, best_t, clearance,
@@ -292,30 +309,73 @@ def check_machine(machine, motion, cutters: dict, job, *, clearance: float = DEF
     return result
 
 
-def _least_at_poses(scene, dist, places, op, d_pose, clearance) -> np.ndarray:
-    """(pairs,) each pair's least distance over the poses, exact: a pair whose spheres never
-    come within the horizon has its poses measured nearest gap first, while a gap is below the
-    least distance measured (the gaps are lower bounds). `d_pose` takes the measured values."""
-    best = np.empty(len(scene.pairs))
-    limit = clearance + HORIZON
+STRIDES = (64, 16, 4, 1)  # the poses measured exactly first, then between them
+
+
+def _at_poses(scene: Scene, dist: Distances, places: list[Rigid], mv: MachineMoves,
+              ends: np.ndarray, speed: np.ndarray, clearance: float):
+    """Per pair and pose a distance that is exact where it matters and a lower bound elsewhere
+    (docs/MATH.md §16.4): `(d (pairs, P), exact (pairs, P), best (pairs,))`, `best` each pair's
+    least distance over the poses (exact). The lower bounds are the spheres' gap and, from a
+    pose measured exactly, its distance less the travel bound L of the moves between them (no
+    point of the two solids moves farther). Poses are measured every `STRIDES[0]`-th first,
+    then every `STRIDES[k]`-th where the bound is below the need: the larger of the clearance
+    and the pair's least distance so far, plus the travel of the moves at the pose (so that
+    the conservative advancement certifies them at once)."""
+    n, npair = len(mv.op), len(scene.pairs)
+    idx = np.arange(n)
+    seg = np.cumsum(mv.start | (idx == 0))  # the moves between poses of one segment
+    d = np.full((npair, n), np.inf)
+    exact = np.zeros((npair, n), bool)
+    best = np.full(npair, np.inf)
     for p, (ia, ib) in enumerate(scene.pairs):
-        d = d_pose[p]
-        if d.min() < limit or not np.isfinite(d.min()):
-            best[p] = d.min()
+        lb = _gaps(scene, places, mv.op, ia, ib)
+        present = np.isfinite(lb)
+        if not present.any():
             continue
-        measured = np.zeros(len(d), bool)
-        least = np.inf
-        while True:
-            cand = np.flatnonzero(~measured & (d < least))
+        into = np.zeros(n)  # the travel bound of the move reaching each pose
+        into[ends] = speed[ia] + speed[ib]
+        step_l = np.maximum(into, np.r_[into[1:], 0.0])  # of the moves into and out of it
+        C = np.cumsum(into)
+        ex = exact[p]
+        for stride in STRIDES:
+            need = np.maximum(clearance, best[p]) + step_l
+            on = (idx % stride == 0) | (seg != np.r_[-1, seg[:-1]]) if stride > 1 else True
+            cand = np.flatnonzero(on & present & ~ex & (lb < need))
             if cand.size == 0:
-                break
-            take = cand[np.argsort(d[cand])[:64]]
-            d[take] = dist(scene.solids[ia], scene.solids[ib], places[ia].take(take),
-                           places[ib].take(take), op[take])
-            measured[take] = True
-            least = min(least, float(d[take].min()))
-        best[p] = least
-    return best
+                continue
+            lb[cand] = dist(scene.solids[ia], scene.solids[ib], places[ia].take(cand),
+                            places[ib].take(cand), mv.op[cand])
+            ex[cand] = True
+            best[p] = min(best[p], float(lb[cand].min()))
+            lb = np.maximum(lb, _from_measured(lb, ex, C, seg))
+        d[p] = lb
+    return d, exact, best
+
+
+def _from_measured(d: np.ndarray, exact: np.ndarray, C: np.ndarray,
+                   seg: np.ndarray) -> np.ndarray:
+    """(P,) the lower bound at every pose from the nearest pose measured exactly before and
+    after it in its segment: its distance less the travel between them (`C` the cumulative
+    travel bound); -inf where there is none."""
+    n = len(d)
+    idx = np.arange(n)
+    left = np.maximum.accumulate(np.where(exact, idx, -1))
+    right = np.minimum.accumulate(np.where(exact, idx, n)[::-1])[::-1]
+    lc, rc = np.maximum(left, 0), np.minimum(right, n - 1)
+    from_l = np.where((left >= 0) & (seg[lc] == seg), d[lc] - (C - C[lc]), -np.inf)
+    from_r = np.where((right < n) & (seg[rc] == seg), d[rc] - (C[rc] - C), -np.inf)
+    return np.maximum(from_l, from_r)
+
+
+def _gaps(scene: Scene, places: list[Rigid], op: np.ndarray, ia: int, ib: int) -> np.ndarray:
+    """(P,) the gap between the bounding spheres of solids ia and ib at every pose (a lower
+    bound of their distance; inf where either is absent for the pose's operation)."""
+    a, b = scene.solids[ia], scene.solids[ib]
+    ca, ra, ha = scene.shape_table(a, op)
+    cb, rb, hb = scene.shape_table(b, op)
+    gap = np.linalg.norm(places[ia].apply(ca) - places[ib].apply(cb), axis=1) - ra - rb
+    return np.where(ha & hb, gap, np.inf)
 
 
 def _along(scene, dist, d_pose, ends, speed, clearance, best, best_t, contacts, advance):
@@ -336,30 +396,33 @@ def _along(scene, dist, d_pose, ends, speed, clearance, best, best_t, contacts, 
         lb = 0.5 * (d0 + d1 - travel)
         in0, in1 = d0 < clearance, d1 < clearance
         width = t1 - t0
-        near = best[P] < clearance + HORIZON
         slack = np.maximum(PRECISION, 0.01 * np.abs(best[P]))
         open_ = (((lb < clearance) & ~in0 & ~in1 & (travel > RESOLUTION))
                  | ((in0 != in1) & (width > T_PRECISION) & (travel > RESOLUTION))
-                 | (near & (lb < best[P] - slack) & ~(in0 & in1) & (travel > slack)))
+                 | ((lb < best[P] - slack) & ~(in0 & in1) & (travel > slack)))
         P, K, t0, t1, d0, d1 = P[open_], K[open_], t0[open_], t1[open_], d0[open_], d1[open_]
         if P.size == 0:
             break
         tm = 0.5 * (t0 + t1)
         e = ends[K]
-        dm = np.empty(P.size)
+        dm, exact = np.empty(P.size), np.zeros(P.size, bool)
         for p in np.unique(P):
             q = np.flatnonzero(np.equal(P, p))
             xyz, joints, op, gauge = scene.state(e[q], tm[q])
             places = scene.place(xyz, joints, op, gauge, only=set(scene.pairs[int(p)]))
-            dm[q] = _distances(scene, dist, places, op, P[q], np.arange(q.size), clearance)
+            limit = np.full(q.size, max(clearance + HORIZON, best[int(p)]))
+            dm[q], exact[q] = _distances(scene, dist, places, op, P[q], np.arange(q.size),
+                                         limit)
         advance(1)
         hit = np.flatnonzero(dm < clearance)
         contacts.pair += P[hit].tolist()
         contacts.end += e[hit].tolist()
         contacts.t += tm[hit].tolist()
         contacts.d += dm[hit].tolist()
-        for p in np.unique(P):
-            q = np.flatnonzero(np.equal(P, p))
+        for p in np.unique(P):  # the least distances: exact ones only (a gap is a bound)
+            q = np.flatnonzero(np.equal(P, p) & exact)
+            if q.size == 0:
+                continue
             k = q[np.argmin(dm[q])]
             if dm[k] < best[p]:
                 best[p] = dm[k]

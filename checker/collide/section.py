@@ -7,10 +7,29 @@ from __future__ import annotations
 
 import numpy as np
 
+from checker.collide.check import DEFAULT_CLEARANCE
 from checker.errors import PathcheckError
 from checker.results import Finding, MachineResult, ResultsDocument
 
 _WORST = 10
+
+
+def asked_clearance(machine, clearance: float | None, *, check: str = "--machine-check",
+                    clearance_name: str = "--machine-clearance", code: str = "usage") -> float:
+    """The clearance of a machine check that is asked (mm; None: `DEFAULT_CLEARANCE`), checked
+    before any work: a clearance that is not a distance from 0 to 10000 mm, a machine without
+    components, or a missing collision library (code `extra`) is a PathcheckError naming the
+    option (`check`, `clearance_name`: the CLI's options or the service's fields)."""
+    from checker.extras import require
+
+    if clearance is not None and not (0.0 <= clearance <= 1e4):
+        raise PathcheckError(f"{clearance_name} {clearance:g}: expected a distance from 0 to "
+                             "10000 mm", code=code)
+    if not machine.components:
+        raise PathcheckError(f"{check}: machine '{machine.name}' has no components: expected "
+                             "[[components]] in its machine file", code=code)
+    require("coal", "machine", f"the machine check ({check})")
+    return DEFAULT_CLEARANCE if clearance is None else float(clearance)
 
 
 def machine_section(job, motion, cutters: dict, machine, stock, part_box,

@@ -1,6 +1,6 @@
 """`pathcheck JOB.apt [--part PART] [--cutter "CUTTER/..."] [--json FILE|-] [-o JOB.nc]`: check a
-job; exit 0 when clean, 1 with findings (gouge, interference, holder, crash) in the program
-that is written, 2 on bad input."""
+job; exit 0 when clean, 1 with findings (gouge, interference, holder, crash; with
+--machine-check, machine collisions) in the program that is written, 2 on bad input."""
 
 from __future__ import annotations
 
@@ -156,18 +156,19 @@ def record(doc, store_path: Path | None = None) -> None:
 @click.option("--on-findings", type=click.Choice(["refuse", "stop", "comment"]),
               default="refuse", show_default=True,
               help="posting (-o) when the program as written has gouges, interference, holder "
-                   "hits, crashes or points without a feasible B: refuse (write nothing, exit "
-                   "1), stop (a comment and an optional stop M01 before each offending move) or "
-                   "comment (a comment before each)")
+                   "hits, crashes, machine collisions or points without a feasible B: refuse "
+                   "(write nothing, exit 1), stop (a comment and an optional stop M01 before "
+                   "each offending move) or comment (a comment before each)")
 @click.option("--no-check", is_flag=True,
               help="post -o without checking (no part read); the program's header says NOT "
                    "CHECKED")
 @opt.stock_options
 @view_option
+@opt.machine_check_options
 def check(job, part_path, cutter_text, units, tool_name, tool_library, config_path, json_out,
           output, machine, b_range, reorient, strategy, part_transform, store_path, no_store,
           on_findings, no_check, stock_text, fixtures, stock_resolution, stock_out, deviation_out,
-          leave, view_out) -> None:
+          leave, view_out, machine_check, machine_clearance) -> None:
     """Check JOB (APT-CL or NX CLSF) against its part: allowable cutter, verdict and margin at
     every CC point.
 
@@ -175,6 +176,7 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     pathcheck samples/mould/mould.apt
     pathcheck samples/mould/mould.apt --json out/mould.json
     pathcheck samples/mould/mould.apt --json - 2>/dev/null   # the document alone on stdout
+    pathcheck job.apt --machine linuxcnc-xyzac-trt --machine-check   # the machine's solids too
     """
     from checker.commands.outputs import prepare_outputs
     from checker.errors import PathcheckError
@@ -196,8 +198,15 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     stock = opt.stock_request(stock_text, fixtures, stock_resolution, stock_out,
                                deviation_out, leave)
     if no_check:
+        if machine_check or machine_clearance is not None:
+            raise PathcheckError("--no-check posts without checking: remove --machine-check",
+                                 code="usage")
         post_without_check(job, output, cutter, machine, config_path, part_path, json_out, units)
         return
+    clearance = opt.machine_clearance_of(machine_check, machine_clearance,
+                                         _job_machine(job, machine)
+                                         if machine_check or machine_clearance is not None
+                                         else None)
     from checker.errors import printable
     from checker.posting import PostRefusedError
 
@@ -207,7 +216,8 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
         doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
                         output=output, machine=machine, b_range=parse_b_range(b_range),
                         reorient=reorient, strategy=strategy, part_transform=part_transform,
-                        cutter_units=units, on_findings=on_findings, stock=stock)
+                        cutter_units=units, on_findings=on_findings, stock=stock,
+                        machine_clearance=clearance)
     except PostRefusedError as refused:
         write_after_check(view_out, refused.document, cutter=cutter, stock=stock,
                           config=config_path)
@@ -225,6 +235,18 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
         raise
     write_after_check(view_out, doc, cutter=cutter, stock=stock, config=config_path)
     finish(doc, json_out, store=not no_store, store_path=store)
+
+
+def _job_machine(job: Path, machine: str | None):
+    """The machine the job runs on (`--machine`, else the CL file's PPRINT/MACHINE, else the
+    default), loaded before the check so that a machine check it cannot make is refused
+    first."""
+    from checker.apt import read_cl
+    from checker.postproc.machine import load_machine
+
+    if machine is not None:
+        return load_machine(machine)
+    return load_machine(read_cl(job, require_cutter=False).machine_name())
 
 
 def job_inputs(job: Path, part_path: Path | None, config_path: Path | None,

@@ -156,21 +156,13 @@ def machine_check_options(command: Callable) -> Callable:
 
 def machine_clearance_of(machine_check: bool, clearance: float | None, machine) -> float | None:
     """The clearance of the machine check (mm), None when it is not asked; a machine without
-    components or a clearance that is not a distance >= 0 is a usage error, before any work."""
-    from checker.errors import PathcheckError
-
+    components or a clearance that is not a distance >= 0 is a usage error, before any work
+    (`checker.collide.section.asked_clearance`)."""
     if not machine_check and clearance is None:
         return None
-    if clearance is not None and not (0.0 <= clearance < 1e4):
-        raise PathcheckError(f"--machine-clearance {clearance:g}: expected a distance from 0 to "
-                             "10000 mm", code="usage")
-    if not machine.components:
-        raise PathcheckError(f"--machine-check: machine '{machine.name}' has no components: "
-                             "expected [[components]] in its machine file", code="usage")
-    from checker.extras import require
+    from checker.collide.section import asked_clearance
 
-    require("coal", "machine", "the machine check (--machine-check)")
-    return 1.0 if clearance is None else float(clearance)
+    return asked_clearance(machine, clearance)
 
 
 def stock_request(stock_text: str | None, fixtures: tuple[str, ...],

@@ -117,12 +117,14 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
                 part_path = files.beside(given_apt)
             machine = _machine(req.machine, toolpath, files)
             stock = _stock(req, files)
+            clearance = _machine_clearance(req, machine, toolpath)
             doc = check_toolpath(toolpath, part_path=part_path, cutter=req.cutter,
                                  machine=machine, config=config, output=gcode_path,
                                  b_range=req.b_range, reorient=req.reorient,
                                  strategy=req.strategy,
                                  part_transform=req.part_transform, started=t0,
-                                 on_findings=req.on_findings, stock=stock)
+                                 on_findings=req.on_findings, stock=stock,
+                                 machine_clearance=clearance)
         except PostRefusedError as err:
             doc, refused = err.document, f"G-code not written: {err} (on_findings=refuse)"
         except PathcheckError as err:
@@ -160,6 +162,22 @@ def _stock(req: p.CheckRequest, files: _Files):
         found = str(files.get(str(path), "fixtures", "a fixture (STL, STEP, IGES)", "input"))
         fixtures.append(found if placement is None else f"{found}@{placement}")
     return StockRequest(stock, tuple(fixtures), req.stock_resolution)
+
+
+def _machine_clearance(req: p.CheckRequest, machine: str | None, toolpath: Any) -> float | None:
+    """The clearance of the machine check (mm), None when not asked; checked before the run
+    (`checker.collide.section.asked_clearance`): a machine without components is an error
+    naming the field (code `request`), a missing collision library one naming the extra to
+    install (code `extra`)."""
+    if not req.machine_check and req.machine_clearance is None:
+        return None
+    from checker.collide.section import asked_clearance
+    from checker.postproc.post import machine_for_toolpath
+
+    field = "machine_clearance" if req.machine_clearance is not None else "machine_check"
+    return asked_clearance(machine_for_toolpath(toolpath, machine), req.machine_clearance,
+                           check=f"field '{field}'", clearance_name="field 'machine_clearance'",
+                           code="request")
 
 
 def _machine(name: str | None, toolpath: Any, files: _Files) -> str | None:

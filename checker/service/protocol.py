@@ -101,7 +101,8 @@ class CheckRequest(_Request):
     re-orient multi-axis operations) and its `strategy`;
     `post: true` also returns the corrected G-code; `on_findings` what posting does when the
     program as written has findings or points without a feasible B (as `pathcheck check
-    --on-findings`: `refuse` returns no `gcode` but `refused`, the reason)."""
+    --on-findings`: `refuse` returns no `gcode` but `refused`, the reason); `stock`, `fixtures`
+    and `machine_check` / `machine_clearance` as the command's options."""
 
     model_config = ConfigDict(json_schema_extra={"oneOf": [  # exactly one source, as _one_source
         {"required": [name], "properties": {name: {"type": "string"}}}
@@ -135,6 +136,13 @@ class CheckRequest(_Request):
         "FILE[@RX,RY,RZ,DX,DY,DZ], files read through the roots)")
     stock_resolution: float | None = Field(
         None, ge=0.001, le=100.0, description="ray spacing of the stock model, mm")
+    machine_check: bool = Field(
+        False, description="check the machine's own solids (its [[components]]) against each "
+        "other, the tool, the part, the stock and the fixtures along the motion (as `pathcheck "
+        "check --machine-check`)")
+    machine_clearance: float | None = Field(
+        None, ge=0.0, le=10000.0, description="closer than this between the machine's solids, "
+        "the tool and the work is a `machine` finding, mm (default 1; implies machine_check)")
 
     @model_validator(mode="after")
     def _one_source(self) -> CheckRequest:

@@ -43,17 +43,54 @@ class _FolderStock(BaseModel):
     stock: str | None = Field(None, min_length=1)
     fixtures: list[str] = Field(default_factory=list)
     resolution: float | None = Field(None, ge=0.001, le=100.0)
+    machine: str | None = Field(None, min_length=1)
+    machine_check: bool = False
+    machine_clearance: float | None = Field(None, ge=0.0, le=10000.0)
+
+
+def _folder_file(job: Path) -> tuple[Path, _FolderStock] | None:
+    path = Path(job).parent / FOLDER_FILE
+    if not path.is_file():
+        return None
+    return path, validated(_FolderStock, read_toml(path, what="stock file", code="config"),
+                           subject="stock file", code="config", path=path)
+
+
+@dataclass(frozen=True)
+class FolderMachine:
+    """The machine check a batch folder asks (`machine_check = true` or `machine_clearance`):
+    `machine` a shipped name or a machine file (a path inside the folder; None: the job's
+    own), `clearance` mm (None: the default), `file` the folder's file."""
+
+    machine: str | None
+    clearance: float | None
+    file: Path
+
+
+def folder_machine(job: Path) -> FolderMachine | None:
+    """The machine check of the jobs of a folder (`pathcheck-stock.toml`'s `machine`,
+    `machine_check`, `machine_clearance`), or None when it asks none."""
+    found = _folder_file(job)
+    if found is None:
+        return None
+    path, got = found
+    if not got.machine_check and got.machine_clearance is None:
+        return None
+    machine = got.machine
+    if machine is not None and (path.parent / machine).is_file():
+        machine = str(path.parent / machine)
+    return FolderMachine(machine, got.machine_clearance, path)
 
 
 def folder_stock(job: Path) -> StockRequest | None:
     """The stock and fixtures of the jobs of a folder (`pathcheck batch`): the file
     `pathcheck-stock.toml` beside the job (`stock = "box:+3"`, `fixtures = ["vise.stl"]`,
-    `resolution = 0.1`; files relative to that folder), or None when there is none."""
-    path = Path(job).parent / FOLDER_FILE
-    if not path.is_file():
+    `resolution = 0.1`; files relative to that folder; `folder_machine` reads its machine
+    check), or None when there is none."""
+    found = _folder_file(job)
+    if found is None:
         return None
-    got = validated(_FolderStock, read_toml(path, what="stock file", code="config"),
-                    subject="stock file", code="config", path=path)
+    path, got = found
     here = path.parent
 
     def local(text: str) -> str:
