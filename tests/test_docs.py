@@ -103,8 +103,9 @@ def test_the_papers_are_cited_by_author_and_year():
         assert title.lower() in refs.lower().replace("\n  ", " "), title
     seeds = re.compile(r"\bseeds? 00\d", re.I)
     history = REPO / "CHANGELOG.md"  # may quote an output as it was
-    files = [*(p for p in PAGES if p != history), *(REPO / "checker").rglob("*.py"), *(REPO / "checker").rglob("*.toml"),
-             *(REPO / "benchmarks").rglob("*.py"), REPO / "samples" / "README.md"]
+    files = [*(p for p in PAGES if p != history), *(REPO / "checker").rglob("*.py"),
+             *(REPO / "checker").rglob("*.toml"), *(REPO / "benchmarks").rglob("*.py"),
+             REPO / "samples" / "README.md"]
     found = [f"{f.relative_to(REPO)}:{n}" for f in files
              for n, line in enumerate(f.read_text().splitlines(), 1) if seeds.search(line)]
     assert not found, found
