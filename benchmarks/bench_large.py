@@ -1,6 +1,7 @@
-"""Memory and time of large inputs: generates CL programs of 1 M, 5 M and 10 M moves and a CSV of
-1 M CC points in a scratch folder, runs `pathcheck info`, a check and `pathcheck allowable --cc`
-on them under `/usr/bin/time -v` and prints peak RSS and wall time (the README's job-size table).
+"""Memory and time of large inputs: generates CL programs of 1 M, 5 M and 10 M moves and a CSV
+of 1 M CC points in a scratch folder, runs `pathcheck info`, a check and `pathcheck allowable --cc`
+on them under `/usr/bin/time -v` and prints peak RSS and wall time (the job-size table of
+docs/benchmarks.md).
 
 Run: `python -m benchmarks.bench_large [--moves 1e6,5e6,10e6] [--cc 1e6] [--check 1e6]
 [--dir /tmp/pathcheck-large]`. The files are written in chunks (no program is held in memory).

@@ -1,11 +1,12 @@
 """Orientation along a 5-axis path on `samples/impeller/passage.apt` (issue #20): the planner of
-`pathcheck --reorient` (least-turn shortest path, then seed 004's MB-spline fairing) against seed
-002's greedy smoothing on the same feasible sets (the job's own: real tool, machine reach,
-`[five_axis]` config), each posture's axes turned into the machine's rotary words as the post
-chooses them (`Chain.words_for_axes`); per planner the total rotary motion (degrees), the peak
-angular velocity (deg/mm) and acceleration (deg/mm²) over the CC path, and whether every pose is
-feasible by the judge. Then the feasible sets' rate (CC points/s, `bench_feasible.rate`) with the
-job's grid and the whole `--reorient` job's time. Run: `python -m benchmarks.bench_posture`."""
+`pathcheck --reorient` (least-turn shortest path, then the MB-spline fairing of Hwang et al. 2011)
+against the greedy smoothing of Jun, Lee and Cha (2002) on the same feasible sets (the job's own:
+real tool, machine reach, `[five_axis]` config), each posture's axes turned into the machine's
+rotary words as the post chooses them (`Chain.words_for_axes`); per planner the total rotary motion
+(degrees), the peak angular velocity (deg/mm) and acceleration (deg/mm²) over the CC path, and
+whether every pose is feasible by the judge. Then the feasible sets' rate (CC points/s,
+`bench_feasible.rate`) with the job's grid and the whole `--reorient` job's time. Run: `python -m
+benchmarks.bench_posture`."""
 
 from __future__ import annotations
 
@@ -21,8 +22,8 @@ JOB = ROOT / "samples" / "impeller" / "passage.apt"
 
 def compare(checked) -> list[tuple[str, object, bool]]:
     """(planner, `PostureMetrics` of its rotary words, all poses feasible) for the CAM, the
-    shortest path, shortest path + MB-spline and seed 002's greedy smoothing, on the first
-    re-oriented operation of a `check_program(..., reorient=True)` result."""
+    shortest path, shortest path + MB-spline and the greedy smoothing of Jun, Lee and Cha (2002),
+    on the first re-oriented operation of a `check_program(..., reorient=True)` result."""
     from checker.five_axis.plan import candidates, rotary_metrics
     from checker.five_axis.posture import greedy_smoothing
 
@@ -35,7 +36,7 @@ def compare(checked) -> list[tuple[str, object, bool]]:
     for name, axes in (("CAM (hub normal)", plan.cam_axis),
                        ("shortest path", plan.planned.axis),
                        ("shortest path + MB-spline (written)", plan.chosen.axis),
-                       ("seed 002 greedy smoothing", greedy.axis)):
+                       ("greedy smoothing (Jun, Lee and Cha)", greedy.axis)):
         out.append((name, rotary_metrics(chain, plan, axes),
                     bool(plan.feasible_at(every, axes).all())))
     return out

@@ -39,7 +39,7 @@ KEEP_VERSIONS = 4  # kernel folders of the most recent versions of the sources k
 KERNELS_ENV = "PATHCHECK_KERNELS"  # "host" (tuned to this CPU) or "portable" (x86-64-v3)
 HOST_MARK = "host-kernels"  # in a cache folder: `pathcheck warm` compiled this CPU's kernels
 PORTABLE_STAMP = "STAMP"  # in the shipped kernels: the sources, numba and Python they are for
-PORTABLE_CPU = "x86-64-v3"  # LLVM's name; numba's "generic" x86-64 (SSE2) ran the engine 0.6x
+PORTABLE_CPU = "x86-64-v3"  # LLVM's name (AVX2, FMA); numba's "generic" x86-64 is far slower
 # what a CPU must have to run x86-64-v3 code (the flags of Linux's /proc/cpuinfo; "abm": lzcnt)
 _V3_FLAGS = frozenset(("avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "abm", "movbe", "xsave",
                        "cx16", "lahf_lm", "popcnt", "sse4_1", "sse4_2", "ssse3"))

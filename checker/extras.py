@@ -10,7 +10,7 @@ from checker.errors import PathcheckError
 
 def require(module: str, extra: str, what: str) -> None:
     """Check that the top-level `module`, which the optional dependencies `extra` provide for
-    `what`, is installed, without importing it (OpenCASCADE takes 0.5-2 s to import, and the
+    `what`, is installed, without importing it (OpenCASCADE is slow to import, and the
     STEP/IGES reader imports it in its own process)."""
     if find_spec(module) is None:
         raise PathcheckError(

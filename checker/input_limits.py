@@ -3,7 +3,7 @@ a coordinate beyond any machine's travel is an error naming the line, not a 100-
 positions a program expands into (arcs in chords, rotary turns in steps) are bounded in total;
 inputs whose memory grows with their size beyond what streaming removes (the records a CL file
 keeps as objects, the poses of a check, the CC points of an allowable search) are refused
-beyond a bound, in one line naming the file and the bound (README, "Job sizes and memory").
+beyond a bound, in one line naming the file and the bound (docs/formats.md, "Job sizes and memory").
 Bounds on part files live in `checker.geometry.limits`."""
 
 from __future__ import annotations

@@ -66,13 +66,13 @@ def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
     `output` the G-code to write; `b_range` (degrees) the B range searched for 4-axis
     operations; `reorient` plans B for 3-axis operations too and re-orients multi-axis ones by
     `strategy` ("allowable": inside the feasible sets, `five_axis.plan`; "contact-order":
-    flat-end and bull-nose cutters at seed 003's contact order, `five_axis.contact_plan`; it
-    changes multi-axis operations only, 4-axis ones are planned by the allowable engine);
-    `part_transform` moves a part exported in another frame (`geometry.transform`);
-    `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's);
-    `on_findings` what posting does when the program as written has findings or points
-    without a feasible B (`posting.post_checked`: refuse raises `posting.PostRefusedError`);
-    `stock` the stock and the fixtures to check the written program against (`checker.stock`);
+    flat-end and bull-nose cutters at the contact order of Liu et al. (n.d.),
+    `five_axis.contact_plan`; it changes multi-axis operations only, 4-axis ones are planned by the
+    allowable engine); `part_transform` moves a part exported in another frame
+    (`geometry.transform`); `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default:
+    the job's); `on_findings` what posting does when the program as written has findings or points
+    without a feasible B (`posting.post_checked`: refuse raises `posting.PostRefusedError`); `stock`
+    the stock and the fixtures to check the written program against (`checker.stock`);
     `machine_clearance` (mm) checks the machine's solids along the motion (`checker.collide`)."""
     t0 = time.perf_counter()
     with step("read the CL file"):

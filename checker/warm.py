@@ -1,14 +1,14 @@
 """Compile the kernels once per install, into the per-user cache (`checker.cache`). Two
 processes compile at once: the refinement's step kernel (first, so that the other process
-finds it cached when it gets there: 84 -> 64 s on 2 cores), the exact tool-vs-triangle depth
+finds it cached when it gets there, which shortens the whole), the exact tool-vs-triangle depth
 (`checker.mesh`: a tool over a few triangles, its allowable size there) and the orientation
 along a 4-axis path; and the allowable-cutter engine (`checker.engine`: CC points of the
 warm-up part; the best-B scan's coarse engine runs the same kernels). Then the bundled warm-up
 job (the demo job: the 4-axis compressor sample with a ball D12, 90 CC points, flagged) is
 checked and posted as `pathcheck JOB -o JOB.nc` does, loading those and compiling what is
 left. The engine also runs on many CC points with one axis, for the kernels' threaded variants,
-which a large job takes: without them the compressor sample's first run after `warm` compiled
-six kernels (21.8 s instead of 14, peak 566 MB instead of 490). Afterwards neither job compiles
+which a large job takes (without them a large job's first run after `warm` compiles them).
+Afterwards neither job compiles
 anything; a job that needs more (a flat end-mill's contour search) compiles those few on its
 first run.
 

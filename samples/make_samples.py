@@ -504,7 +504,7 @@ def build_impeller(folder: Path) -> dict:
     return {"part": part, "passes": passes, "cutter": cutter, "goto": (n,)}
 
 
-# ---- flank milling (seed 001: a hyperbolic-paraboloid wall, cylinder D10) --------------------
+# ---- flank milling (Gong and Wang 2009: a hyperbolic-paraboloid wall, cylinder D10) ---------
 def build_flank(folder: Path) -> dict:
     """hypar.json (the wall y = x z / 100, x in [-30, 30], z in [0, 30], exact bilinear) and
     hypar.apt (a 5-axis flank pass of CUTTER/10,0,5,0,0,0,40 by the naive rule: axis along the

@@ -1,4 +1,4 @@
-"""Flat-end positioning by the order of contact (seed 003; checker/five_axis/curvature.py,
+"""Flat-end positioning by the order of contact (Liu et al. n.d.; checker/five_axis/curvature.py,
 contact_order.py; docs/MATH.md §11) on analytic surfaces as exact NURBS: a spherical bowl
 (rational), a torus trough (rational) and a paraboloid z = (x^2/a + y^2/b)/2 (polynomial).
 

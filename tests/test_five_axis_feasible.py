@@ -206,7 +206,8 @@ def test_boundary_against_a_brute_force_scan(folder):
 
 def test_cusp_of_a_flat_end_mill_is_the_cutting_ellipse():
     """On a plane at tilt 0 the profile is the ellipse of semi-axes R and b = R sin(lead)
-    (seed 002 eq. 1), whose cusp for a step-over w is b (1 - sqrt(1 - w^2 / (4 R^2)))."""
+    (Jun, Lee and Cha 2002, eq. 1), whose cusp for a step-over w is b (1 - sqrt(1 - w^2 / (4
+    R^2)))."""
     from checker.cutter import parse_cutter
     from checker.five_axis.cusp import cusp_heights
 

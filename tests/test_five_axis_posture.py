@@ -1,7 +1,7 @@
 """The 5-axis posture planners (checker/five_axis/posture.py) against independent answers: the
 least total turn through per-point feasible intervals is a linear programme (scipy's HiGHS);
-seed 002's greedy smoothing traced by hand; the fairing's feasibility; the metrics on closed
-forms."""
+the greedy smoothing of Jun, Lee and Cha (2002) traced by hand; the fairing's feasibility; the
+metrics on closed forms."""
 
 import numpy as np
 import pytest

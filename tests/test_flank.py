@@ -1,4 +1,4 @@
-"""Flank milling (seed 001, Gong and Wang 2009, docs/MATH.md §12): the envelope of a cutter of
+"""Flank milling (Gong and Wang 2009, docs/MATH.md §12): the envelope of a cutter of
 revolution along a 5-axis pass, its error to the design surface along the envelope's normal,
 the least-squares axis trajectory and `pathcheck flank`."""
 
@@ -58,13 +58,13 @@ def test_hyperbolic_paraboloid_before_and_after():
     overcuts at both ends of every ruling (the classical single-offset error); the axis
     trajectory optimised by least squares brings it under a micrometre.
 
-    Seed 001 (Gong and Wang 2009) as stored in /work/shared/seeds/001_*.txt stops in §2.2,
+    The copy of Gong and Wang (2009) the project read stops in §2.2,
     before its examples, so the paper's reported magnitudes could not be read there; the
     table below gives this implementation's numbers (mm) for the record:
 
     | path                     | max overcut | max undercut |  rms   |
     | naive (axis on ruling)   |   ~0.050    |    ~0.000    | ~0.023 |
-    | least squares (seed 001) |   <0.001    |    <0.001    | <0.0003|
+    | least squares (G&W 2009) |   <0.001    |    <0.001    | <0.0003|
     """
     wall = hyperbolic_paraboloid(30.0, 30.0, 100.0)
     cutter = parse_cutter(CYLINDER)

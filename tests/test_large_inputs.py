@@ -1,6 +1,6 @@
 """Large inputs: the CL reader keeps arrays, not an object per GOTO (memory a move measured by
 tracemalloc), `info` counts from them, and what cannot be streamed is refused beyond a bound in
-one line naming the file and the bound (README, "Job sizes and memory")."""
+one line naming the file and the bound (docs/formats.md, "Job sizes and memory")."""
 
 from __future__ import annotations
 

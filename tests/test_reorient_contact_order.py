@@ -6,9 +6,9 @@ cutter on the 5-axis trunnion linuxcnc-xyzac-trt. The CAM leans the tool by a le
 for the meridian (10 and 6 degrees: the heel digs in 2R behind the contact, MATH §11.4) and
 writes its contact points as NX does (`$$ cx,cy,cz`), so CL -> CC starts at them and the poses
 that gouge behind are still contact rows. Re-oriented: no finding left, every contact pose is
-seed 003's (its lead raised by the judge and the machine's reach) or its fairing, accepted by
-an independent judge; the flat end's strip is wider than a ball's; the posted program reads
-back within 1e-4; a ball cutter is a one-line usage error (exit 2)."""
+the pose of Liu et al. (n.d.) (its lead raised by the judge and the machine's reach) or its fairing,
+accepted by an independent judge; the flat end's strip is wider than a ball's; the posted program
+reads back within 1e-4; a ball cutter is a one-line usage error (exit 2)."""
 
 from __future__ import annotations
 
@@ -112,7 +112,7 @@ def test_the_findings_at_the_cam_axes_are_gone(reoriented):
         assert findings_in(op.counts_cam) > 0 and findings_in(op.counts) == 0
         co = op.contact_order
         assert op.feasible_grid is None and co is not None
-        assert co.method == "contact order (seed 003), then MB-spline fairing"
+        assert co.method == "contact order (Liu et al.), then MB-spline fairing"
         assert co.infeasible_points == 0 and co.cam_infeasible_points == co.points
         assert co.points >= 25 and co.raised_points >= 0.9 * co.points
         assert co.order == [0, 0, 0, co.points]  # third order everywhere
@@ -120,7 +120,7 @@ def test_the_findings_at_the_cam_axes_are_gone(reoriented):
         assert co.width_min > 5.0 * co.ball_width_max
 
 
-def test_every_axis_is_seed_003s_pose_or_its_fairing(reoriented):
+def test_every_axis_is_the_contact_order_pose_or_its_fairing(reoriented):
     """contact_order_axes again, with a judge and a reach made here: the planned posture is its
     pose at every contact row; the written (faired) axis is that pose where the fairing left it
     (the segments' ends at least) and elsewhere near it, accepted by an independent judge (GJK
@@ -158,7 +158,7 @@ def test_every_axis_is_seed_003s_pose_or_its_fairing(reoriented):
         np.testing.assert_allclose(plan.lead[kept], want.lead[kept], atol=1e-6)
         np.testing.assert_allclose(plan.tilt[kept], want.tilt[kept], atol=1e-6)
         # the fairing moves an axis less than the largest turn between consecutive poses of
-        # seed 003 in its segment
+        # the contact-order pose (Liu et al.) in its segment
         turn = np.arccos(np.clip(np.einsum("ij,ij->i", plan.chosen.axis, want.axes), -1, 1))
         step = np.arccos(np.clip(np.einsum("ij,ij->i", want.axes[1:], want.axes[:-1]), -1, 1))
         segment = np.cumsum(plan.starts)

@@ -1,5 +1,7 @@
-"""The README's commands, run as a newcomer runs them: from the clone's root, with the virtual
-environment `make setup` built activated (`.venv/bin` first on PATH).
+"""The commands of README.md and of the reference pages in docs/, run as a newcomer runs them:
+from the clone's root, with the virtual environment `make setup` built activated (`.venv/bin`
+first on PATH). The pages run in the order of `PAGES` (README.md first: later pages use what
+its blocks wrote, as a reader who followed it has), each block's commands in the page's order.
 
 - a ```sh block: every command runs and must exit 0, or the code its comment names
   (`# exit 1`); `export NAME=VALUE` holds for the block's later commands; a command ending in
@@ -11,7 +13,7 @@ environment `make setup` built activated (`.venv/bin` first on PATH).
 - ```text blocks are examples for another site (a cluster, a CAM server) and are not run.
 
     python tools/readme.py            # run every block and compare (what tests/test_readme.py does)
-    python tools/readme.py --write    # run every block and record the console outputs in README.md
+    python tools/readme.py --write    # run every block and record the console outputs in the pages
 """
 
 from __future__ import annotations
@@ -29,6 +31,10 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 README = REPO / "README.md"
+DOCS = REPO / "docs"
+# the command pages in the order a reader meets the commands in the README; any other page after
+COMMAND_ORDER = ("check", "info", "allowable", "map", "check-gcode", "flank", "serve", "batch",
+                 "report", "view", "store", "warm")
 _FENCE = re.compile(r"^```(\w*)\s*$")
 _EXIT = re.compile(r"#.*\bexit (\d+)\b")
 _BACKGROUND = re.compile(r"&(?=\s*(#.*)?$)")  # the `&` that ends a command line
@@ -54,17 +60,28 @@ class Command:
 
 @dataclass
 class Block:
-    """A fenced block of README.md: its kind (sh or console), first and last line (1-based,
-    the fences excluded) and its commands."""
+    """A fenced block of a page: its kind (sh or console), first and last line (1-based, the
+    fences excluded), its commands and the page it is on."""
 
     kind: str
     first: int
     last: int
     commands: list[Command]
+    page: Path = README
 
     @property
     def name(self) -> str:
-        return f"README.md:{self.first}"
+        return f"{self.page.relative_to(REPO)}:{self.first}"
+
+
+def pages() -> list[Path]:
+    """README.md, then the command pages (docs/commands/, `COMMAND_ORDER` first), then the other
+    pages of docs/: every page whose sh and console blocks run."""
+    commands = sorted((DOCS / "commands").glob("*.md"),
+                      key=lambda p: (COMMAND_ORDER.index(p.stem) if p.stem in COMMAND_ORDER
+                                     else len(COMMAND_ORDER), p.name))
+    others = sorted(p for p in DOCS.rglob("*.md") if p.parent != DOCS / "commands")
+    return [README, *commands, *others]
 
 
 def _command(text: str) -> Command:
@@ -95,8 +112,8 @@ def _joined(lines: list[str]) -> list[tuple[int, str]]:
     return out
 
 
-def blocks(text: str) -> list[Block]:
-    """The sh and console blocks of the README's text."""
+def blocks(text: str, page: Path = README) -> list[Block]:
+    """The sh and console blocks of a page's text."""
     lines = text.splitlines()
     found: list[Block] = []
     i = 0
@@ -113,7 +130,7 @@ def blocks(text: str) -> list[Block]:
             cmds = [_command(t) for _, t in _joined(body)
                     if t.strip() and not t.lstrip().startswith("#")
                     and not t.lstrip().startswith(NOT_RUN)]
-            found.append(Block(kind, i + 2, j, cmds))
+            found.append(Block(kind, i + 2, j, cmds, page))
         elif kind == "console":
             cmds = []
             for _, t in _joined(body):
@@ -121,7 +138,7 @@ def blocks(text: str) -> list[Block]:
                     cmds.append(_command(t[2:]))
                 elif cmds:
                     cmds[-1].recorded.append(t)
-            found.append(Block(kind, i + 2, j, cmds))
+            found.append(Block(kind, i + 2, j, cmds, page))
         i = j + 1
     return found
 
@@ -158,12 +175,12 @@ class Outcome:
     def problem(self, kind: str) -> str | None:
         if self.code != self.command.exit_code:
             tail = "\n".join(self.output[-15:])
-            return (f"`{self.command.text}` exited {self.code}, the README says "
+            return (f"`{self.command.text}` exited {self.code}, the page says "
                     f"{self.command.exit_code}:\n{tail}")
         if "Traceback (most recent call last)" in "\n".join(self.output):
             return f"`{self.command.text}` printed a traceback"
         if kind == "console" and normalised(self.output) != normalised(self.command.recorded):
-            return (f"`{self.command.text}` printed something else than the README records; "
+            return (f"`{self.command.text}` printed something else than the page records; "
                     "regenerate with `python tools/readme.py --write` and read the diff")
         return None
 
@@ -214,7 +231,8 @@ def run_block(block: Block, env: dict[str, str]) -> list[Outcome]:
 
 
 def write_outputs(text: str, results: dict[int, list[Outcome]]) -> str:
-    """README text with each console block's outputs replaced by the ones just printed."""
+    """A page's text with each console block's outputs (by first line) replaced by the ones
+    just printed."""
     lines = text.splitlines()
     for block in sorted(blocks(text), key=lambda b: -b.first):
         if block.kind != "console" or block.first not in results:
@@ -230,22 +248,23 @@ def write_outputs(text: str, results: dict[int, list[Outcome]]) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true",
-                        help="record the console outputs of this run in README.md")
+                        help="record the console outputs of this run in the pages")
     args = parser.parse_args(argv)
-    text = README.read_text()
     failures = 0
-    results: dict[int, list[Outcome]] = {}
     with tempfile.TemporaryDirectory(prefix="pathcheck-readme-") as tmp:
         env = environment(Path(tmp) / "results.sqlite")
-        for block in blocks(text):
-            results[block.first] = outcomes = run_block(block, env)
-            for outcome in outcomes:
-                problem = outcome.problem("sh" if args.write else block.kind)
-                print(f"{block.name}: {problem}" if problem
-                      else f"{block.name}: ok  {outcome.command.text}")
-                failures += problem is not None
-    if args.write:
-        README.write_text(write_outputs(text, results))
+        for page in pages():
+            text = page.read_text()
+            results: dict[int, list[Outcome]] = {}
+            for block in blocks(text, page):
+                results[block.first] = outcomes = run_block(block, env)
+                for outcome in outcomes:
+                    problem = outcome.problem("sh" if args.write else block.kind)
+                    print(f"{block.name}: {problem}" if problem
+                          else f"{block.name}: ok  {outcome.command.text}")
+                    failures += problem is not None
+            if args.write and results:
+                page.write_text(write_outputs(text, results))
     return 1 if failures else 0
 
 

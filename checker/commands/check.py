@@ -147,7 +147,7 @@ def record(doc, store_path: Path | None = None) -> None:
               help="with --reorient, the planner of multi-axis operations: allowable (inside "
                    "each pose's feasible set, nearest the CAM's axis, least turn) or "
                    "contact-order (flat-end and bull-nose finishing at the highest-order "
-                   "contact, seed 003); 3-axis and 4-axis operations are planned as before")
+                   "contact, Liu et al.); 3-axis and 4-axis operations get their B either way")
 @click.option("--part-transform", default=None, metavar="RX,RY,RZ,DX,DY,DZ|3x4",
               help="place a part exported in another frame: rotations about X, Y, Z (degrees) "
                    "then an offset (mm), or a 3x4 matrix row by row")

@@ -1,6 +1,6 @@
 """`pathcheck flank JOB.apt --part PART [--cutter ...] [--optimise] [-o improved.apt]
 [--json FILE|-] [--picture FILE.png]`: the envelope of a flank-milling pass against its design
-surface (seed 001), per pose and per move the largest overcut and undercut, and the
+surface (Gong and Wang 2009), per pose and per move the largest overcut and undercut, and the
 least-squares improved path."""
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ def _text(doc, worst: int) -> list[str]:
 @click.option("--heights", "count", type=click.IntRange(3, 400), default=25, show_default=True,
               help="heights along the cutter's side where the grazing curve is sampled")
 @click.option("--optimise", is_flag=True, help="adjust the tool axis trajectory by least "
-              "squares (seed 001) and judge the improved path")
+              "squares (Gong and Wang 2009) and judge the improved path")
 @opt.output_option("write the improved path (with --optimise) as an APT-CL file")
 @opt.json_option("the flank document")
 @click.option("--picture", type=click.Path(dir_okay=False, path_type=Path), default=None,

@@ -1,12 +1,13 @@
 """The best orientation per CC point inside its feasible region (docs/MATH.md §10.4), by a
 stated objective (a score, larger is better): `allowable_objective` (the largest allowable
-cutter at that axis, the engine) or `cusp_objective` (seed 002: the least cusp height for a
-step-over). Scores within `flat` of the best are a tie, broken by the angle to a reference axis
-(the CAM's, else the normal): where the objective does not depend on the orientation (a ball's
+cutter at that axis, the engine) or `cusp_objective` (Jun, Lee and Cha 2002: the least cusp height
+for a step-over). Scores within `flat` of the best are a tie, broken by the angle to a reference
+axis (the CAM's, else the normal): where the objective does not depend on the orientation (a ball's
 cusp on its sphere, a size fixed by the curvature) the answer is the feasible axis nearest the
-reference. Candidates: the feasible grid nodes and the boundary crossings (seed 002, property 3:
-the optimum often lies on the boundary); the best is refined by a compass search in (lead, tilt)
-that only steps to feasible orientations, all points together. Radians, part frame, mm."""
+reference. Candidates: the feasible grid nodes and the boundary crossings (Jun, Lee and Cha 2002,
+property 3: the optimum often lies on the boundary); the best is refined by a compass search in
+(lead, tilt) that only steps to feasible orientations, all points together. Radians, part frame,
+mm."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""Flat-end and bull-nose positioning by the order of contact (seed 003; docs/MATH.md §11).
+"""Flat-end and bull-nose positioning by the order of contact (Liu et al. n.d.; docs/MATH.md §11).
 
-Seed 003 puts the cutter's circle in contact with the surface to the highest order: with
+Liu et al. (n.d.) put the cutter's circle in contact with the surface to the highest order: with
 `Phi(theta) = F(circle(theta))` (seed eq. 3-4, `F = 0` the surface), `Phi' = Phi'' = Phi''' = 0`
 at the contact (eqs. 5-7). Here the curve is the cutter's *effective* circle seen along the feed
 (the bottom circle of radius `R` projected along the feed `f` onto the (`s`, `n`) plane: an
@@ -193,16 +193,16 @@ def contact_order_axes(part, cutter, cc: np.ndarray, normals: np.ndarray, feeds:
                        scallop: float = 0.01, min_lead: float = math.radians(1.0),
                        max_lead: float = math.radians(60.0),
                        lead_step: float = math.radians(0.5)) -> ContactPlan:
-    """Tool axes for flat-end (or bull-nose) finishing by seed 003's contact order at CC points
-    `cc (N, 3)` with unit normals `normals (N, 3)` (out of the material) and feed directions
-    `feeds (N, 3)`, on surfaces `cc_surface (N,)` of `part` at parameters `cc_uv (N, 2)`:
+    """Tool axes for flat-end (or bull-nose) finishing by the contact order of Liu et al. (n.d.) at
+    CC points `cc (N, 3)` with unit normals `normals (N, 3)` (out of the material) and feed
+    directions `feeds (N, 3)`, on surfaces `cc_surface (N,)` of `part` at parameters `cc_uv (N, 2)`:
     the pose of highest-order contact (`contact`) of the bottom circle (bull-nose: the corner
-    centres' circle against the parallel surface), across the feed. `judge`
-    (`poses.PoseJudge`, the real tool with holder on the part's triangles; None: no check)
-    then checks every pose; a rejected pose has its lead raised by `lead_step` (rad) at a time,
-    tilt kept, until the judge accepts it or `max_lead`: a larger lead curves the effective
-    ellipse more (`sin(lead) / R` at tilt 0) and lifts the heel, so it clears a concave section
-    and the part behind the tool. `scallop` (mm) sets the widths reported."""
+    centres' circle against the parallel surface), across the feed. `judge` (`poses.PoseJudge`, the
+    real tool with holder on the part's triangles; None: no check) then checks every pose; a
+    rejected pose has its lead raised by `lead_step` (rad) at a time, tilt kept, until the judge
+    accepts it or `max_lead`: a larger lead curves the effective ellipse more (`sin(lead) / R` at
+    tilt 0) and lifts the heel, so it clears a concave section and the part behind the tool.
+    `scallop` (mm) sets the widths reported."""
     if cutter.ball_family or not cutter.flat_bottomed:
         raise ValueError("contact-order positioning needs a flat-end or bull-nose cutter")
     cc = np.asarray(cc, dtype=float).reshape(-1, 3)

@@ -1,6 +1,7 @@
 """The contact-order planner of one multi-axis operation (`--reorient --strategy
 contact-order`; docs/MATH.md §11.4, §13): flat-end and bull-nose finishing with the tool axis
-of seed 003's highest-order contact at every contact row, smoothed by seed 004's fairing.
+of the highest-order contact (Liu et al. n.d.) at every contact row, smoothed by the MB-spline
+fairing (Hwang et al. 2011).
 
 The contact rows, their CC points, normals, feed directions, surfaces and (u, v), the judge
 (the real tool with holder) and the machine's reach are those of the allowable planner
@@ -21,7 +22,7 @@ from checker.five_axis.contact_order import contact_order_axes
 from checker.five_axis.plan import FivePlan, finish_plan, operation_setting
 from checker.five_axis.posture import Posture
 
-METHOD = "contact order (seed 003)"
+METHOD = "contact order (Liu et al.)"
 
 
 def plan_contact_order(job, rows: np.ndarray, op_rows: np.ndarray, cutter, tolerance: float,

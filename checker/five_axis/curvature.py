@@ -8,10 +8,10 @@ the height along the normal `n` (out of the material, towards the tool), the sur
     Z = -(k1 X^2 + k2 Y^2) / 2 + (a X^3 + 3 b X^2 Y + 3 c X Y^2 + d Y^3) / 6 + O(4),
 
 `k1 >= k2` in the convention of `checker.geometry.evaluate.Curvatures` (positive: convex as
-the tool sees it). Seed 003 eq. 12 writes the same expansion to second order (`f_xx`, `f_xy`,
-`f_yy`; here `f_xy = 0` by the choice of frame). The cubic coefficients are the derivatives of
-the principal curvatures (bending towards the tool, `-k1`, `-k2`) along the principal
-directions: `a = d(-k1)/dX`, `b = d(-k1)/dY`, `c = d(-k2)/dX`, `d = d(-k2)/dY`."""
+the tool sees it). Liu et al. (n.d., eq. 12) write the same expansion to second order (`f_xx`,
+`f_xy`, `f_yy`; here `f_xy = 0` by the choice of frame). The cubic coefficients are the derivatives
+of the principal curvatures (bending towards the tool, `-k1`, `-k2`) along the principal directions:
+`a = d(-k1)/dX`, `b = d(-k1)/dY`, `c = d(-k2)/dX`, `d = d(-k2)/dY`."""
 
 from __future__ import annotations
 
@@ -52,7 +52,7 @@ class LocalSurface(NamedTuple):
 
     def offset(self, r: float) -> LocalSurface:
         """The parallel surface `r` mm towards the tool (the bull-nose's corner-centre surface,
-        seed 003 §5, Fig. 3): the same normal and principal directions, curvatures
+        Liu et al. n.d., §5, Fig. 3): the same normal and principal directions, curvatures
         `k / (1 + r k)`, and cubic terms divided by `(1 + r k_i)^2 (1 + r k_j)` (the derivative
         of `k_i` along `d_j`, with arc length scaled by `1 + r k_j` there)."""
         m1, m2 = 1.0 + r * self.k1, 1.0 + r * self.k2

@@ -1,11 +1,12 @@
-"""Seed 002's cusp height at a tool orientation (docs/MATH.md §10.3): the effective cutting
-profile is the cutter seen along the feed direction, i.e. the lower boundary of its projection
-onto the (s, n) plane of the CC frame (the cutting ellipse of a flat end-mill's bottom, seed 002
-eq. 1, with the side's silhouette), and the cusp between this pass and the next one, a step-over
-to either side with the same orientation, is the height of the material left between them above
-the surface (seed 002 eqs. 3 and 9: the larger of the left and right cusps). The surface across
-the feed is its osculating parabola (normal curvature `curvature` along s; 0: the tangent plane)
-and the neighbour pass is this profile moved along s and lifted onto it. mm, part frame."""
+"""The cusp height of Jun, Lee and Cha (2002) at a tool orientation (docs/MATH.md §10.3): the
+effective cutting profile is the cutter seen along the feed direction, i.e. the lower boundary of
+its projection onto the (s, n) plane of the CC frame (the cutting ellipse of a flat end-mill's
+bottom, Jun, Lee and Cha 2002 eq. 1, with the side's silhouette), and the cusp between this pass and
+the next one, a step-over to either side with the same orientation, is the height of the material
+left between them above the surface (Jun, Lee and Cha 2002, eqs. 3 and 9: the larger of the left and
+right cusps). The surface across the feed is its osculating parabola (normal curvature `curvature`
+along s; 0: the tangent plane) and the neighbour pass is this profile moved along s and lifted onto
+it. mm, part frame."""
 
 from __future__ import annotations
 

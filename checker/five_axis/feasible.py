@@ -2,9 +2,10 @@
 within the machine's limits, every pose judged by the check's verdict rule in one batched call,
 then the boundary refined on every grid edge between a feasible and an infeasible node by
 bisection, all edges of all points together (one batched call per halving), to a stated angle
-tolerance. This is seed 002's C-space with its coarse grid and boundary search; the boundary is
-found on the grid's lines (the crossings), not traced by turning left and right on a fine grid.
-A feasible island or gap narrower than the grid step can be missed. Radians, part frame."""
+tolerance. This is the C-space of Jun, Lee and Cha (2002) with its coarse grid and boundary search;
+the boundary is found on the grid's lines (the crossings), not traced by turning left and right on a
+fine grid. A feasible island or gap narrower than the grid step can be missed. Radians, part
+frame."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""Re-orienting one multi-axis operation (docs/MATH.md §10, §13; seeds 002 and 004): the tool axis
-along its cutting poses chosen inside each CC point's feasible set, smooth, and near the CAM's
-where it may.
+"""Re-orienting one multi-axis operation (docs/MATH.md §10, §13; Jun, Lee and Cha 2002; Hwang et al.
+2011): the tool axis along its cutting poses chosen inside each CC point's feasible set, smooth, and
+near the CAM's where it may.
 
 Per contact row of the operation (a feed move whose tool touches the part, CL -> CC as the
 4-axis plan does it): the CC point, its normal and the feed direction (the next CC point of the
@@ -10,12 +10,12 @@ verdict rule) and the machine's reach as the `machine` mask (`machine_reach`: ax
 makes within its rotary limits, outside a cone about its singular direction). Candidates: the
 grid's nodes plus the CAM's own axis (so that a feasible CAM pose is kept exactly, not moved to
 the nearest node); score = minus the angle to the CAM's axis (cheap: a ball's cusp does not
-depend on the orientation; seed 002's greedy smoothing then takes, per feasible region, the
-axis nearest the CAM's). The least-turn chain (`posture.shortest_posture`, the CAM's axis
-preferred, a turn limit per mm), then seed 004's MB-spline fairing with the judge as the oracle.
-A contact row is a feed move whose CAM tip is the tip touching its contact (within
-`five_axis.contact_gap` mm): a move in the air is not one, one that also buries the tool's body
-elsewhere is.
+depend on the orientation; the greedy smoothing of Jun, Lee and Cha (2002) then takes, per feasible
+region, the axis nearest the CAM's). The least-turn chain (`posture.shortest_posture`, the CAM's
+axis preferred, a turn limit per mm), then the MB-spline fairing of Hwang et al. (2011) with the
+judge as the oracle. A contact row is a feed move whose CAM tip is the tip touching its contact
+(within `five_axis.contact_gap` mm): a move in the air is not one, one that also buries the tool's
+body elsewhere is.
 
 The other rows of the operation (approach, retract, rapids, feed moves in the air) follow their
 nearest contact row as the 4-axis plan makes them follow: their offset from that row's CAM tip
@@ -232,8 +232,8 @@ def plan_operation(job, rows: np.ndarray, op_rows: np.ndarray, cutter, tolerance
 
 def finish_plan(job, st: Setting, op_rows: np.ndarray, cutter, planned: Posture, cfg, *,
                 region: FeasibleRegion | None = None, contact: object = None) -> FivePlan:
-    """Seed 004's MB-spline fairing of a planned posture with `st.feasible_at` as the oracle,
-    the tips that touch the contacts at the chosen axes (the CAM tip's offset from its
+    """The MB-spline fairing (Hwang et al. 2011) of a planned posture with `st.feasible_at` as the
+    oracle, the tips that touch the contacts at the chosen axes (the CAM tip's offset from its
     touching tip kept, turned with the axis) and every row of the operation following its
     nearest contact row; `region` the feasible sets (allowable planner), `contact` the
     contact-order poses (`contact_order.ContactPlan`)."""

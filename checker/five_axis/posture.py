@@ -7,11 +7,11 @@ feasible, and a score per axis, larger better, e.g. the allowable cutter size):
   CAM's own, by default); at most `max_turn_per_mm * ds` radians of turn over a path step of
   length ds (mm). Rows where a new segment starts (after a
   rapid or an operation change) carry no turn cost and no turn limit.
-- `mb_spline_fairing`: seed 004 (Hwang et al. 2011): the posture vectors' end points taken as the
+- `mb_spline_fairing`: Hwang et al. (2011): the posture vectors' end points taken as the
   control points of a uniform cubic B-spline (C2), sampled again at the same parameters, which
   passes between them; where the faired axis is not feasible it is blended back towards the
   planned axis (which is) until every axis is feasible.
-- `greedy_smoothing`: seed 002 (Jun, Lee and Cha 2002), Algorithm II: the local optimum of each
+- `greedy_smoothing`: Jun, Lee and Cha (2002), Algorithm II: the local optimum of each
   feasible region (connected on the grid); forward smoothing from the first point's best and
   backward smoothing from the last point's, each step taking the local optimum nearest to the
   previous choice; the pass with the smaller total C-distance wins.
@@ -150,8 +150,8 @@ def mb_spline_fairing(planned: Posture, feasible_at: Callable[[np.ndarray, np.nd
                                                               np.ndarray], *,
                       passes: int = 6, starts: np.ndarray | None = None,
                       max_blend_halvings: int = 6) -> Posture:
-    """Seed 004's continuity control on a planned posture: `passes` B-spline fairings of the
-    axes' end points (unit length, so the end points are the axes), each followed by
+    """The continuity control of Hwang et al. (2011) on a planned posture: `passes` B-spline
+    fairings of the axes' end points (unit length, so the end points are the axes), each followed by
     `feasible_at(rows, axes) -> (K,) bool` on the changed rows; an infeasible faired axis is
     blended back towards the axis before that pass (halving the step up to
     `max_blend_halvings` times, then kept as it was). Every axis of the result is feasible
@@ -238,9 +238,9 @@ def _greedy(axes, optima, count, fallback, first, backward):  # pragma: no cover
 
 
 def greedy_smoothing(cand: Candidates, preferred: np.ndarray) -> Posture:
-    """Seed 002's Algorithm II (see the module docstring): the C-distance is the turn between
-    the unit axes (the paper's Euclidean distance in (α, β) is the same to first order and does
-    not depend on the local frame). Points without a feasible axis keep `preferred`."""
+    """Algorithm II of Jun, Lee and Cha (2002) (see the module docstring): the C-distance is the
+    turn between the unit axes (the paper's Euclidean distance in (α, β) is the same to first order
+    and does not depend on the local frame). Points without a feasible axis keep `preferred`."""
     optima, count = _local_optima(cand)
     axes = np.ascontiguousarray(cand.axes, dtype=float)
     score = np.asarray(cand.score, float)
@@ -252,7 +252,7 @@ def greedy_smoothing(cand: Candidates, preferred: np.ndarray) -> Posture:
     fwd, c_fwd = _greedy(axes, safe, count, pref, first, False)
     bwd, c_bwd = _greedy(axes, safe, count, pref, first, True)
     axis = fwd if c_fwd <= c_bwd else bwd
-    return Posture(axis, count > 0, "seed 002 greedy smoothing")
+    return Posture(axis, count > 0, "greedy smoothing (Jun, Lee and Cha)")
 
 
 class PostureMetrics(NamedTuple):

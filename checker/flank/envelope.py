@@ -1,5 +1,5 @@
-"""The grazing (characteristic) curves of a cutter of revolution along a `ToolMotion` (seed 001
-§2; docs/MATH.md §12.2): per height z above the tip the angle(s) phi where the surface
+"""The grazing (characteristic) curves of a cutter of revolution along a `ToolMotion` (Gong and
+Wang 2009 §2; docs/MATH.md §12.2): per height z above the tip the angle(s) phi where the surface
 velocity is tangent, n . v = 0, which is `A cos(phi) + B sin(phi) = C` in closed form. The
 envelope surface is the union of the grazing curves over t. Part frame, mm."""
 

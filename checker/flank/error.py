@@ -1,5 +1,5 @@
-"""The error between the envelope and the design surface along the envelope's normal (seed 001
-§2.1, definition B; docs/MATH.md §12.3): from each grazing point p with the cutter's outward
+"""The error between the envelope and the design surface along the envelope's normal (Gong and Wang
+2009 §2.1, definition B; docs/MATH.md §12.3): from each grazing point p with the cutter's outward
 normal n, the line p + s n meets the surface at s; the error is e = -s, so e > 0 is an overcut
 (the envelope lies inside the material, beyond the design surface) and e < 0 an undercut
 (material left). Part frame, mm."""

@@ -1,9 +1,9 @@
-"""Seed 001's optimisation (§2.2-2.3; docs/MATH.md §12.4): the tool-axis trajectory surface,
-given by the axis' lower and upper points B_i, T_i at each pose, is moved by least squares to
-bring the envelope onto the design surface: residuals the envelope's errors along its normal
-at the heights and path samples where the first envelope meets the surface, plus a smoothness
-term (second differences of B and T along the path) and a small pull to the start (the axis'
-slide along itself and its spin change nothing). Part frame, mm."""
+"""The optimisation of Gong and Wang (2009, §2.2-2.3; docs/MATH.md §12.4): the tool-axis trajectory
+surface, given by the axis' lower and upper points B_i, T_i at each pose, is moved by least squares
+to bring the envelope onto the design surface: residuals the envelope's errors along its normal at
+the heights and path samples where the first envelope meets the surface, plus a smoothness term
+(second differences of B and T along the path) and a small pull to the start (the axis' slide along
+itself and its spin change nothing). Part frame, mm."""
 
 from __future__ import annotations
 

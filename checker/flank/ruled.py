@@ -1,5 +1,5 @@
-"""The naive flank poses of a ruled surface (the starting path of seed 001's optimisation):
-the tool axis along the ruling, offset along the surface normal at the ruling's middle by the
+"""The naive flank poses of a ruled surface (the starting path of the optimisation of Gong and Wang
+2009): the tool axis along the ruling, offset along the surface normal at the ruling's middle by the
 cutter's radius there, the tip a margin below the ruling's lower end. Part frame, mm."""
 
 from __future__ import annotations

@@ -15,20 +15,17 @@ of an interval change when the bound stands in for it (a lower sample only moves
 that the refinement of the ends replaces, which only feasible sizes steer); an end's probe
 whose bound is below the level is on the infeasible side. Every answer is the one without the
 bound. (The golden section gains
-nothing from it: its probes lie near the top, where the bound is seldom below the point a
-probe is compared with; about 4 % of them on the compressor job, 6 % with `coarse_fn`, which
-costs 70 % of `fn`. Brent's parabolic steps save only ~19 % of its rows there: A(B) is a
-minimum over test points, often with a kink or several small maxima in the bracket, so they
-fall back to golden steps and end at other local maxima, lower on some rows. What does pay is
-tracking where the size is limited: near the top of A(B) the limiting points move little, so
-the section runs on the sizes refined from them, at a fifth of the engine's cost, and the
-engine confirms the result (`_golden_tracked`). The interval ends are of two kinds on the
-compressor job: about half where the CC point turns away from the axis, A(B) near its top up
-to there and 0 past it, which the closed-form edge (`edge_fn`) settles with one probe; the
-others mostly where A(B) falls off smoothly, which probes either side of where the parabola
-through the last three feasible B meets the level settle in a round or two: 18,900 probes
-instead of the five bisection rounds' 33,600, 14,600 engine rows instead of 20,500 (the line
-through the last two: 23,900 and 17,200).)
+little from it: its probes lie near the top, where the bound is seldom below the point a
+probe is compared with. Brent's parabolic steps do not suit it either: A(B) is a minimum over
+test points, often with a kink or several small maxima in the bracket, so they fall back to
+golden steps and end at other local maxima. What pays is tracking where the size is limited:
+near the top of A(B) the limiting points move little, so the section runs on the sizes refined
+from them, far cheaper than the engine, and the engine confirms the result
+(`_golden_tracked`). The interval ends are of two kinds: where the CC point turns away from the
+axis, A(B) near its top up to there and 0 past it, which the closed-form edge (`edge_fn`)
+settles with one probe; and where A(B) falls off smoothly, which probes either side of where
+the parabola through the last three feasible B meets the level settle in a round or two, in
+fewer probes than bisection. CHANGELOG.md has the measured counts.)
 (docs/MATH.md §7.1, §5.3)
 """
 

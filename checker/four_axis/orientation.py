@@ -6,7 +6,7 @@ Two methods, reported side by side:
   + `w_original * |B - B_original|`, with the machine's B limits and at most `max_db_per_mm * ds`
   degrees of change over a path step of length ds. The transition minimum is an L1 distance
   transform over a sliding window (monotone deques), so a step costs O(K), not O(K^2).
-- `greedy_smoothing`: seed 002 (Jun, Lee, Cha), Algorithm II: forward smoothing from the first
+- `greedy_smoothing`: Jun, Lee and Cha (2002), Algorithm II: forward smoothing from the first
   point's optimum and backward smoothing from the last point's, each step taking the local optimum
   (one per feasible interval) nearest to the previous choice; the pass with the smaller total
   C-distance wins.
@@ -93,9 +93,9 @@ def _nearest(values: np.ndarray, b: float) -> float:
 def greedy_smoothing(
     optima: list[np.ndarray], b_best: np.ndarray
 ) -> tuple[Orientation, Orientation]:
-    """Seed 002, Algorithm II. `optima[i]`: local optima of point i's feasible intervals (empty:
-    infeasible, then its best B stands in). `b_best`: (N,) best B per point, the starting choices.
-    Returns (winner, loser) of the forward and backward passes."""
+    """Jun, Lee and Cha (2002), Algorithm II. `optima[i]`: local optima of point i's feasible
+    intervals (empty: infeasible, then its best B stands in). `b_best`: (N,) best B per point, the
+    starting choices. Returns (winner, loser) of the forward and backward passes."""
     b_best = np.asarray(b_best, dtype=float)
     feasible = np.array([len(o) > 0 for o in optima], dtype=bool)
     lists = [o if len(o) else np.array([b_best[i]]) for i, o in enumerate(optima)]

@@ -1,5 +1,5 @@
-"""Nearest points in 3-D: a k-d tree over (N, 3) points, mm (pykdtree, which imports in ~1 ms
-where scipy.spatial takes ~0.2 s of every command's start), with scipy's cKDTree conventions:
+"""Nearest points in 3-D: a k-d tree over (N, 3) points, mm (pykdtree, which imports at once where
+scipy.spatial adds a noticeable part of every command's start), with scipy's cKDTree conventions:
 integer indices, and a missing neighbour (k > N) at index N and distance inf."""
 
 from __future__ import annotations

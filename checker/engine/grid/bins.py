@@ -20,14 +20,13 @@ on the circle is tested in its own frame through D from the lattice grid of its 
 its B; only an axis that 64 rows share exactly (the scan's columns, the golden section's first
 probes) may use an exact grid. As every row is tested in its own frame, the lattice's step
 changes the time and the memory, never a result: a coarser one builds and keeps fewer grids
-and widens each row's disc by the larger turn to its bin's axis. Measured from 2 to 8
-degrees, the same outputs: the compressor job 13.5 -> 12.3-13.0 s, peak 490 -> 411 MB; the
-impeller passage 2.1-2.3 -> 1.7-2.0 s; `benchmarks.bench_engine_axes` unchanged. A single grid in
+and widens each row's disc by the larger turn to its bin's axis (`benchmarks.bench_engine_axes`
+and the 4-axis benchmark measure the choice; CHANGELOG.md has the numbers). A single grid in
 the table's frame (z along Y) would also serve every B, but each row's axis is then
 perpendicular to the grid's z: a row's region covers a strip across the grid instead of a
-disc, which needs a traversal with a third cell dimension; building a grid costs about 3 ms
-against seconds of evaluations in the sweeps, so the lattice keeps the sweeps' discs as tight
-as before and costs only memory.
+disc, which needs a traversal with a third cell dimension; building a grid is cheap against the
+evaluations in the sweeps, so the lattice keeps the sweeps' discs tight and costs only memory.
+(docs/MATH.md §5)
 """
 
 from __future__ import annotations
@@ -94,7 +93,7 @@ def part_tops(tp: TestPoints, Q: np.ndarray) -> np.ndarray:
     """(N,) height of the highest test point in each row's tool frame `Q (N, 3, 3)`, mm: the
     maximum over the vertices of the points' convex hull (cached; all points when the hull is
     flat), or over all points for a few rows before the hull is known (about as fast as the
-    hull for ~100 rows, and `allowable` then never imports scipy.spatial: 0.2 s)."""
+    hull for ~100 rows, and `allowable` then never imports scipy.spatial, a slow import)."""
     cache = tp.cache("engine.grid.bins")
     ext = cache.get("extreme")
     if ext is None and len(Q) * len(tp.points) <= _HULL_AFTER:

@@ -15,9 +15,8 @@ import numpy as np
 
 from checker.engine.grid.family import FamilyBounds
 
-# below this many rows a kernel runs serially (the thread start-up costs more); 16 rather than
-# 64: the compressor job 0.96x (its many small axis bins threaded), the mould and the impeller
-# passage unchanged, the same outputs
+# below this many rows a kernel runs serially (the thread start-up costs more than the rows);
+# small enough that a 4-axis job's many small axis bins still run threaded
 SERIAL_ROWS = 16
 _EPS_MM = 1e-9  # mm added to a tilted search disc against rounding
 _CULL_EPS_MM = 1e-6  # mm by which a cell's box must miss a region to be skipped

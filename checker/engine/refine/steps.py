@@ -22,9 +22,8 @@ as the steps converge); only exact values are ever reported. The model's value
 (`_model_value`) is inlined at its seven sites (a call passed the whole model, about a hundred
 words, for every value), each site compiling the cutter's kernels again. The kernels that
 allocate nothing are compiled without numba's reference counting (`_nrt=False`): with it, every
-array a call passes or unpacks from a tuple is counted up and down atomically, which took ~17 %
-of a call on one thread and more on two (both threads count the same arrays).
-(docs/MATH.md §6)"""
+array a call passes or unpacks from a tuple is counted up and down atomically, a cost that grows
+with the threads counting the same arrays. (docs/MATH.md §6)"""
 
 from __future__ import annotations
 
