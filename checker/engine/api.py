@@ -32,7 +32,7 @@ from checker.engine.scan.bound import warm_bounds
 from checker.engine.scan.contour import ContourSeeds
 from checker.engine.scan.search import binned_scan
 from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes, size_args
-from checker.engine.verdict import verdicts
+from checker.engine.advice import verdicts
 from checker.errors import PathcheckError
 from checker.geometry.evaluate import evaluate_mixed
 from checker.geometry.inverse import invert_points
