@@ -265,10 +265,10 @@ def _boom(*_args, **_kwargs):
 
 
 def test_an_internal_error_exits_3_with_its_traceback_logged(job, tmp_path, monkeypatch, capsys):
-    import checker.apt.info
+    import checker.apt.toolpath_info
 
     monkeypatch.setenv("PATHCHECK_LOG_DIR", str(tmp_path / "logs"))
-    monkeypatch.setattr(checker.apt.info, "describe_toolpath", _boom)
+    monkeypatch.setattr(checker.apt.toolpath_info, "describe_toolpath", _boom)
     with pytest.raises(SystemExit) as ended:
         main(["info", str(job)])
     assert ended.value.code == EXIT_INTERNAL == 3
@@ -284,12 +284,12 @@ def test_an_internal_error_exits_3_with_its_traceback_logged(job, tmp_path, monk
 
 
 def test_out_of_memory_is_one_line_and_exit_2(job, monkeypatch, capsys):
-    import checker.apt.info
+    import checker.apt.toolpath_info
 
     def _huge(*_args, **_kwargs):
         raise MemoryError("Unable to allocate 28.4 PiB for an array")
 
-    monkeypatch.setattr(checker.apt.info, "describe_toolpath", _huge)
+    monkeypatch.setattr(checker.apt.toolpath_info, "describe_toolpath", _huge)
     with pytest.raises(SystemExit) as ended:
         main(["info", str(job)])
     assert ended.value.code == EXIT_INPUT

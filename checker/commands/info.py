@@ -36,7 +36,7 @@ def info(file: Path, json_out: Path | None) -> None:
         _show(doc, format_part_info(doc), json_out)
         return
     from checker.apt import read_cl
-    from checker.apt.info import describe_toolpath, format_toolpath_info
+    from checker.apt.toolpath_info import describe_toolpath, format_toolpath_info
     from checker.errors import PathcheckError
     from checker.progress import step
 
