@@ -28,7 +28,7 @@ def info(file: Path, json_out: Path | None) -> None:
 
     prepare_outputs([("--json", json_out, "info JSON")], [("the file", file)])
     if file.suffix.lower() in PART_SUFFIXES:
-        from checker.geometry.info import describe_part, format_part_info
+        from checker.geometry.part_info import describe_part, format_part_info
         from checker.progress import step
 
         with step("read the part"):  # a STEP or IGES file: seconds in OpenCASCADE
