@@ -13,7 +13,7 @@ from checker.b_axis import axis_for_b
 from checker.cutter import parse_cutter
 from checker.engine import allowable
 from checker.engine.grid.bins import _BIN_DEG, _OWN_GRID_ROWS, axis_bins, part_tops
-from checker.engine.grid.frames import tool_rotation, tool_rotations
+from checker.engine.grid.rotations import tool_rotation, tool_rotations
 from checker.geometry.sampling import TestPoints
 
 SAMPLE = "samples/compressor/compressor"

@@ -80,7 +80,7 @@ _ROTATE = textwrap.dedent("""
 
     import checker
     from checker.cache import kernels_compiled
-    from checker.engine.grid.frames import rotate_rows
+    from checker.engine.grid.rotations import rotate_rows
 
     q = np.array([[[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]])
     with kernels_compiled() as compiled:

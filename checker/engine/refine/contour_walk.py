@@ -19,7 +19,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from checker.engine.grid.frames import heights, row_height
+from checker.engine.grid.rotations import heights, row_height
 from checker.engine.refine.best import RowBest
 from checker.engine.refine.objective import (
     CONTOUR_STEPS,
