@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 from verdict_counts import findings_in
 
 from checker.apt import read_cl
-from checker.five_axis.frames import axes_from_angles
+from checker.five_axis.lead_tilt import axes_from_angles
 from checker.five_axis.plan import (
     contact_segments,
     feed_directions,

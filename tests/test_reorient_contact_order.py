@@ -25,7 +25,7 @@ from checker.apt import read_cl
 from checker.cli import main
 from checker.cutter import parse_cutter
 from checker.five_axis.contact_order import contact_order_axes
-from checker.five_axis.frames import axes_from_angles, local_frames
+from checker.five_axis.lead_tilt import axes_from_angles, local_frames
 from checker.five_axis.plan import feed_directions, machine_reach
 from checker.five_axis.poses import PoseJudge
 from checker.geometry.evaluate import evaluate

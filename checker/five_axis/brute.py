@@ -13,7 +13,7 @@ from typing import NamedTuple
 import numpy as np
 
 from checker.five_axis.feasible import FeasibleRegion, Machine, feasible_at
-from checker.five_axis.frames import local_frames
+from checker.five_axis.lead_tilt import local_frames
 
 
 class BruteCheck(NamedTuple):
