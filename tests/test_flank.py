@@ -16,7 +16,7 @@ from checker.flank.envelope import axis_frame, grazing, profile
 from checker.flank.error import envelope_error
 from checker.flank.motion import ToolMotion
 from checker.flank.optimise import optimise_axis
-from checker.flank.results import FlankDocument
+from checker.flank.error_document import FlankDocument
 from checker.flank.ruled import hyperbolic_paraboloid, naive_poses
 from checker.geometry.primitives import flat_patch, nurbs_cylinder
 

@@ -14,7 +14,7 @@ from checker.flank.error import envelope_error, foot_points
 from checker.flank.motion import ToolMotion
 from checker.flank.optimise import optimise_axis
 from checker.flank.path import flank_pass
-from checker.flank.results import FlankDocument, Optimisation, flank_result
+from checker.flank.error_document import FlankDocument, Optimisation, flank_result
 from checker.part import Part
 from checker.toolpath import ToolPath
 
