@@ -53,7 +53,7 @@ class FourAxisConfig(_Section):
 
 
 class FiveAxisConfig(_Section):
-    """Re-orienting multi-axis operations (`checker.five_axis.plan`); angles in degrees."""
+    """Re-orienting multi-axis operations (`checker.five_axis.reorient`); angles in degrees."""
 
     grid_step_deg: PositiveFloat = 10.0
     lead_limit_deg: float = Field(60.0, gt=0, lt=90)

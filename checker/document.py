@@ -237,7 +237,7 @@ def _five_points(program) -> dict[int, dict]:
 def _rotary_motion(p, chain) -> tuple[float | None, float | None]:
     """Total motion of the machine's rotary words (degrees) along a multi-axis plan's contact
     points at its chosen axes and at the CAM's (None without a 5-axis chain)."""
-    from checker.five_axis.plan import rotary_metrics
+    from checker.five_axis.reorient import rotary_metrics
 
     if chain is None:
         return None, None

@@ -123,7 +123,7 @@ class VerdictCounts(_Model):
 
 class FeasibleGrid(_Model):
     """The (lead, tilt) grid of a re-oriented multi-axis operation's feasible sets and how its
-    axis was chosen (`checker.five_axis.plan`)."""
+    axis was chosen (`checker.five_axis.reorient`)."""
 
     leads: list[float] = Field(description="grid leads, degrees")
     tilts: list[float] = Field(description="grid tilts, degrees")

@@ -223,7 +223,7 @@ def _five_plan(job, o: int, cutter, tolerance: float, strategy: str):
     """The 5-axis plan of multi-axis operation o by `strategy` ("allowable": `five_axis.plan`,
     "contact-order": `five_axis.contact_plan`), or None."""
     from checker.five_axis.contact_plan import plan_contact_order
-    from checker.five_axis.plan import plan_operation
+    from checker.five_axis.reorient import plan_operation
 
     op_rows = np.flatnonzero(job.m.op == o)
     # the job's 5-axis motion carries the machine's chain (None: fewer than two rotary axes)

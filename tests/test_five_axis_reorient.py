@@ -1,4 +1,4 @@
-"""`pathcheck JOB.apt --reorient` on multi-axis jobs (`checker.five_axis.plan`, issue #20): the
+"""`pathcheck JOB.apt --reorient` on multi-axis jobs (`checker.five_axis.reorient`, issue #20): the
 impeller sample has findings at the CAM's axes and none after re-orientation; every written
 contact pose is feasible by an independent judge (GJK depths) and reachable by the machine away
 from its singular direction; the results document carries each point's lead, tilt and feasible
@@ -18,7 +18,7 @@ from verdict_counts import findings_in
 
 from checker.apt import read_cl
 from checker.five_axis.lead_tilt import axes_from_angles
-from checker.five_axis.plan import (
+from checker.five_axis.reorient import (
     contact_segments,
     feed_directions,
     least_rotation,

@@ -26,7 +26,7 @@ from checker.cli import main
 from checker.cutter import parse_cutter
 from checker.five_axis.contact_order import contact_order_axes
 from checker.five_axis.lead_tilt import axes_from_angles, local_frames
-from checker.five_axis.plan import feed_directions, machine_reach
+from checker.five_axis.reorient import feed_directions, machine_reach
 from checker.five_axis.poses import PoseJudge
 from checker.geometry.evaluate import evaluate
 from checker.job import check_program
