@@ -171,7 +171,7 @@ def _holder_clearance(job, w, cutters: dict, verdicts: np.ndarray) -> np.ndarray
     """Per pose: at holder hits, the stick-out that clears the holder (mm; advice, from the
     part's triangle vertices), nan elsewhere."""
     from checker.four_axis.holder import check_holder
-    from checker.four_axis.plan import holder_of
+    from checker.four_axis.over_b import holder_of
 
     out = np.full(len(verdicts), np.nan)
     hit = np.flatnonzero(verdicts == "holder")
