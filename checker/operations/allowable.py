@@ -14,7 +14,7 @@ from checker.b_axis import check_b_range
 from checker.config import Config
 from checker.engine import AllowableResult, allowable
 from checker.engine.allowable_output import allowable_document
-from checker.four_axis.job import best_b_points
+from checker.four_axis.b_plan import best_b_points
 from checker.geometry.sampling import TestPoints, sample_part
 from checker.part import Part
 from checker.progress import step
