@@ -14,7 +14,7 @@ from checker.config import Config, default_config
 from checker.engine.grid.bins import part_tops
 from checker.engine.grid.family import family_bounds
 from checker.engine.grid.rotations import group_axes, rotate_rows, tool_rotations
-from checker.engine.refine.best import RowBest, sampled
+from checker.engine.refine.row_best import RowBest, sampled
 from checker.engine.refine.contour_walk import along_contours
 from checker.engine.refine.limits import curvature_limit
 from checker.engine.refine.rings import ring_evaluations, ring_radii, ring_starts

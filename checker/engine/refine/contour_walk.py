@@ -20,7 +20,7 @@ import numba as nb
 import numpy as np
 
 from checker.engine.grid.rotations import heights, row_height
-from checker.engine.refine.best import RowBest
+from checker.engine.refine.row_best import RowBest
 from checker.engine.refine.objective import (
     CONTOUR_STEPS,
     Objective,
