@@ -23,7 +23,7 @@ from checker.collide.section import add_to_document, machine_section
 from checker.config import Config
 from checker.document import build_document, stock_document
 from checker.errors import PathcheckError
-from checker.five_axis.motion import MachineMotion
+from checker.five_axis.machine_motion import MachineMotion
 from checker.geometry import find_part_beside, load_part
 from checker.geometry.sampling import sample_part
 from checker.geometry.tessellate import part_triangles

@@ -20,7 +20,7 @@ import numpy as np
 from checker import verdict as vd
 from checker.b_axis import axis_for_b, b_for_axis, rotate_about_y
 from checker.errors import PathcheckError
-from checker.five_axis.motion import machine_path
+from checker.five_axis.machine_motion import machine_path
 from checker.four_axis.b_plan import plan_b
 from checker.geometry.contact import cl_to_cc, contact_from_toolpath
 from checker.mesh.tool import tool_pieces
