@@ -14,7 +14,7 @@ import pytest
 from checker.cutter import parse_cutter
 from checker.flank.envelope import axis_frame, grazing, profile
 from checker.flank.error import envelope_error
-from checker.flank.motion import ToolMotion
+from checker.flank.spline_motion import ToolMotion
 from checker.flank.optimise import optimise_axis
 from checker.flank.error_document import FlankDocument
 from checker.flank.ruled import hyperbolic_paraboloid, naive_poses
