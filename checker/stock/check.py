@@ -22,7 +22,7 @@ from checker.progress import step
 from checker.results import MoveEngagement, StockFinding, StockOperation, StockResult, VerdictCounts
 from checker.stock.dexels import Dexels
 from checker.stock.fixtures import Fixture, load_fixture
-from checker.stock.motion import sweep_items
+from checker.stock.removal_items import sweep_items
 from checker.stock.request import StockRequest
 from checker.toolpath import MotionArrays
 from checker.verify import ProgramMotion, tool_depths
@@ -223,7 +223,7 @@ def _against_stock(job, program: _Program, motion: ProgramMotion, cutters: dict,
 def _remove(stock: Dexels, program: _Program, motion: ProgramMotion, step_mm: float,
             out_dir: Path | None, design) -> _Removed:
     """Cut `stock` by every operation in program order (`checker.stock.removal.remove` on the
-    items of `checker.stock.motion.sweep_items`): what each move removed, and each
+    items of `checker.stock.removal_items.sweep_items`): what each move removed, and each
     operation's summary (its stock written to `out_dir`, compared by `design`)."""
     from checker.stock.removal import remove
 
