@@ -35,7 +35,7 @@ from checker.postproc.kinematics import Chain
 from checker.postproc.post import machine_for_toolpath
 from checker.progress import step
 from checker.results import ResultsDocument
-from checker.stock.check import check_stock
+from checker.stock.stock_check import check_stock
 from checker.stock.request import StockRequest
 from checker.tolerance import operation_tolerances
 
