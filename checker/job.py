@@ -35,8 +35,8 @@ from checker.postproc.kinematics import Chain
 from checker.postproc.post import machine_for_toolpath
 from checker.progress import step
 from checker.results import ResultsDocument
-from checker.stock.stock_check import check_stock
 from checker.stock.request import StockRequest
+from checker.stock.stock_check import check_stock
 from checker.tolerance import operation_tolerances
 
 _AXIS_TOL = 1e-9  # axes equal to this are one axis (an indexed operation)

@@ -12,10 +12,10 @@ six kernels (21.8 s instead of 14, peak 566 MB instead of 490). Afterwards neith
 anything; a job that needs more (a flat end-mill's contour search) compiles those few on its
 first run.
 
-`pathcheck warm` compiles for this CPU and marks the cache folder so (`kernel_cache.HOST_MARK`: later
-processes take these kernels instead of the portable ones a wheel ships); `make wheel` builds the
-portable ones the same way for `kernel_cache.PORTABLE_CPU` (`build_portable`, run as
-`python -m checker.warm --portable FOLDER` on a CPU that runs that code)."""
+`pathcheck warm` compiles for this CPU and marks the cache folder so (`kernel_cache.HOST_MARK`:
+later processes take these kernels instead of the portable ones a wheel ships); `make wheel` builds
+the portable ones the same way for `kernel_cache.PORTABLE_CPU` (`build_portable`, run as `python -m
+checker.warm --portable FOLDER` on a CPU that runs that code)."""
 
 from __future__ import annotations
 

@@ -18,13 +18,13 @@ from verdict_counts import findings_in
 
 from checker.apt import read_cl
 from checker.five_axis.lead_tilt import axes_from_angles
+from checker.five_axis.poses import PoseJudge
 from checker.five_axis.reorient import (
     contact_segments,
     feed_directions,
     least_rotation,
     machine_reach,
 )
-from checker.five_axis.poses import PoseJudge
 from checker.job import check_program, check_toolpath
 from checker.posting import post_checked
 from checker.postproc.kinematics import Chain

@@ -1,8 +1,8 @@
 """The kernel cache follows the sources: numba checks a cached kernel against the text of its
 own file only, so a kernel that calls a kernel of another file keeps that one's old code when
 only the other file changes. The cache folder is keyed by a hash of all the sources
-(`checker.kernel_cache.source_key`): shown here with real numba on a two-file package, whose caller's
-answer follows the callee's edit only because the folder changed."""
+(`checker.kernel_cache.source_key`): shown here with real numba on a two-file package, whose
+caller's answer follows the callee's edit only because the folder changed."""
 
 from __future__ import annotations
 
@@ -200,5 +200,6 @@ def test_portable_kernels_of_other_sources_or_for_other_cpus_are_not_used(tmp_pa
         assert (folder / "checker" / "k.nbi").is_file() == (shipped_stamp == stamp)
         kernel_cache._choose_kernels(folder)
         assert os.environ.pop("PATHCHECK_KERNELS") == ("portable" if portable else "host")
-        assert os.environ.pop("NUMBA_CPU_NAME", None) == (kernel_cache.PORTABLE_CPU if portable else None)
+        expected_cpu = kernel_cache.PORTABLE_CPU if portable else None
+        assert os.environ.pop("NUMBA_CPU_NAME", None) == expected_cpu
         assert os.environ.pop("NUMBA_CPU_FEATURES", None) == ("" if portable else None)

@@ -12,8 +12,8 @@ import pytest
 
 from checker import input_limits
 from checker.apt import read_cl, read_cl_text
-from checker.apt.toolpath_info import describe_toolpath
 from checker.apt.read import BLOCK_BYTES
+from checker.apt.toolpath_info import describe_toolpath
 from checker.cc_csv import read_cc_csv
 from checker.cli import main
 from checker.errors import PathcheckError

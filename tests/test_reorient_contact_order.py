@@ -26,8 +26,8 @@ from checker.cli import main
 from checker.cutter import parse_cutter
 from checker.five_axis.contact_order import contact_order_axes
 from checker.five_axis.lead_tilt import axes_from_angles, local_frames
-from checker.five_axis.reorient import feed_directions, machine_reach
 from checker.five_axis.poses import PoseJudge
+from checker.five_axis.reorient import feed_directions, machine_reach
 from checker.geometry.evaluate import evaluate
 from checker.job import check_program
 from checker.posting import post_checked

@@ -14,8 +14,8 @@ from brokers import running_broker
 from checker import engine
 from checker import job as job_module
 from checker.config import default_config
-from checker.service.part_cache import PartCache
 from checker.service.ops import WorkerState
+from checker.service.part_cache import PartCache
 from checker.service.recorder import NullRecorder
 from checker.service.replies import AllowablePoint
 from checker.service.worker import handle

@@ -11,13 +11,14 @@ from typing import NamedTuple
 import numpy as np
 
 from checker.config import Config, default_config
+from checker.engine.advice import verdicts
 from checker.engine.grid.bins import part_tops
 from checker.engine.grid.family import family_bounds
 from checker.engine.grid.rotations import group_axes, rotate_rows, tool_rotations
-from checker.engine.refine.row_best import RowBest, sampled
 from checker.engine.refine.contour_walk import along_contours
 from checker.engine.refine.limits import curvature_limit
 from checker.engine.refine.rings import ring_evaluations, ring_radii, ring_starts
+from checker.engine.refine.row_best import RowBest, sampled
 from checker.engine.refine.starts import (
     ON_SURFACE,
     Starts,
@@ -32,7 +33,6 @@ from checker.engine.scan.bound import warm_bounds
 from checker.engine.scan.contour import ContourSeeds
 from checker.engine.scan.search import binned_scan
 from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes, size_args
-from checker.engine.advice import verdicts
 from checker.errors import PathcheckError
 from checker.geometry.evaluate import evaluate_mixed
 from checker.geometry.inverse import invert_points

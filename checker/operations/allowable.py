@@ -55,7 +55,7 @@ def allowable_at_points(sampled: SampledPart, cutter, cc: np.ndarray, normals: n
                         cached: bool = False) -> dict[str, Any]:
     """The largest cutter of `cutter`'s family at each CC point `cc (N, 3)` with unit normals
     `normals (N, 3)` and unit tool axis `axis (3,)`: the document `{cutter, method, points,
-    timing}` (`engine.allowable_output.allowable_document`); with `b_range` (degrees, checked against
+    timing}` (`allowable_output.allowable_document`); with `b_range` (degrees, checked against
     the config) every point also gets `b_best`, `allowable_at_best` and `b_feasible`. `cached`:
     the part was loaded before (its load and sample times count 0)."""
     check_b_request(b_range, config)
