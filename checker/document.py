@@ -26,6 +26,7 @@ from checker.results import (
     Summary,
     VerdictCounts,
 )
+from checker.results import verdict_counts as counts
 from checker.tool_library import largest_standard
 
 _WORST = 10
@@ -41,12 +42,6 @@ def _opt(x) -> float | None:
 
 def _vec(v) -> tuple[float, float, float] | None:
     return tuple(float(x) for x in v) if v is not None and np.isfinite(v).all() else None
-
-
-def counts(verdicts) -> VerdictCounts:
-    """Counts by verdict."""
-    v = np.asarray(list(verdicts), dtype=object)
-    return VerdictCounts(**{k: int((v == k).sum()) for k in VerdictCounts.model_fields})
 
 
 class _Advice:

@@ -10,8 +10,10 @@ Units: mm and degrees in the part frame (inch jobs: see `job.units`, numbers sta
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Literal
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from checker import verdict
@@ -119,6 +121,12 @@ class VerdictCounts(_Model):
     crash: int = 0
     inaccessible: int = 0
     machine: int = 0
+
+
+def verdict_counts(verdicts: Iterable[str]) -> VerdictCounts:
+    """How many of `verdicts` (strings of VERDICTS) are each verdict."""
+    v = np.asarray(list(verdicts), dtype=object)
+    return VerdictCounts(**{k: int((v == k).sum()) for k in VerdictCounts.model_fields})
 
 
 class FeasibleGrid(_Model):
