@@ -34,6 +34,7 @@ def summary_view(doc):
     of the program that is written)."""
     from rich.table import Table
 
+    from checker.commands.terminal import fixed
     from checker.cutter import parse_cutter
     from checker.results import machine_line, stock_line
 
@@ -68,8 +69,8 @@ def summary_view(doc):
         for op in doc.operations:
             c = op.counts
             b = "-" if op.b_written is None else (
-                f"{op.b_written[0]:.3f}" if op.b_written[0] == op.b_written[1]
-                else f"{op.b_written[0]:.1f}..{op.b_written[1]:.1f}")
+                fixed(op.b_written[0], 3) if op.b_written[0] == op.b_written[1]
+                else f"{fixed(op.b_written[0], 1)}..{fixed(op.b_written[1], 1)}")
             t.add_row(str(op.index + 1), short_cutter(op.cutter), op.axis_class,
                       op.handling, b, f"{op.tolerance:.4f}",
                       str(c.gouge + c.interference + c.holder + c.crash))
@@ -81,8 +82,8 @@ def summary_view(doc):
         for f in s.worst:
             where = f.point if f.point is not None else f.tip
             t.add_row(str(f.line), "CL" if f.kind == "cl" else f.kind, f.verdict,
-                      f"{f.depth or 0:.4f}", "-" if f.b is None else f"{f.b:.3f}",
-                      ", ".join(f"{x:.3f}" for x in where))
+                      f"{f.depth or 0:.4f}", "-" if f.b is None else fixed(f.b, 3),
+                      ", ".join(fixed(x, 3) for x in where))
         out.append(t)
     if j.part is None:
         return out

@@ -1,0 +1,43 @@
+"""The terminal summary's tables print a B or a coordinate that rounds to zero as `0.000`, never
+`-0.000` (a 3-axis operation's B computed from its +z axis is -0.0)."""
+
+from __future__ import annotations
+
+import io
+
+from rich.console import Console
+from synthetic_results import synthetic_document
+
+from checker.commands.check import summary_view
+from checker.commands.terminal import fixed
+from checker.results import OperationResult
+
+
+def _text(doc) -> str:
+    out = io.StringIO()
+    console = Console(file=out, width=200, no_color=True)
+    for part in summary_view(doc):
+        console.print(part)
+    return out.getvalue()
+
+
+def test_fixed_never_prints_a_negative_zero():
+    assert [fixed(v, 3) for v in (-0.0, -0.0004, 0.0004, -0.0005001, 1.25, -2.5)] == [
+        "0.000", "0.000", "0.000", "-0.001", "1.250", "-2.500"]
+    assert fixed(-0.04, 1) == "0.0" and fixed(-0.06, 1) == "-0.1"
+
+
+def test_three_axis_b_prints_unsigned_in_the_tables():
+    doc = synthetic_document(3, n=9, four_axis=False)
+    assert doc.summary.worst, "the synthetic job has findings"
+    op = OperationResult(index=0, name="floor", cutter="CUTTER/12,6", axis_class="3-axis",
+                         handling="re-oriented", b_written=[-0.0, -0.0], tolerance=0.02,
+                         tolerance_source="config", counts=doc.summary.counts)
+    worst = [f.model_copy(update={"b": -0.0, "tip": (-0.0, 1.0, -0.0001)})
+             for f in doc.summary.worst]
+    doc = doc.model_copy(update={"operations": [op],
+                                 "summary": doc.summary.model_copy(update={"worst": worst})})
+    text = _text(doc)
+    assert "-0.000" not in text and "-0.0 " not in text
+    rows = [line for line in text.splitlines() if line.count("│") >= 5]
+    assert any("0.000" in r for r in rows), text
