@@ -125,7 +125,7 @@ def _engine_advice(job, program, o, c, rows, tips, axes, out: _Advice) -> None:
     out.cc[rows], out.normal[rows], out.cc_surface[rows] = con.cc, con.normal, con.surface
     out.size[rows], out.limiting[rows] = res.size, res.limiting_point
     out.limiting_surface[rows], out.margin[rows] = res.limiting_surface, res.margin
-    out.inaccessible[rows] = res.verdict == "inaccessible"
+    out.inaccessible[rows] = res.advice == "inaccessible"
     if plan is not None:
         o_ = plan.orientations
         at = np.searchsorted(rows, plan.rows)
