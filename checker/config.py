@@ -50,6 +50,7 @@ class FourAxisConfig(_Section):
     dp_weight_original: float = Field(0.1, ge=0)
     max_db_per_mm: PositiveFloat = 5.0
     axis_j_tolerance: PositiveFloat = 1e-6
+    greedy_baseline: bool = False
 
 
 class FiveAxisConfig(_Section):

@@ -200,7 +200,8 @@ def _orientation(job, program) -> Orientation | None:
     b_cam = cam_b(job)
     return Orientation(
         dp_total_rotation=total_rotation(program.b[np.isfinite(program.b)]),
-        greedy_total_rotation=sum(float(p.orientations.greedy.total_rotation) for p in plans),
+        greedy_total_rotation=None if any(p.orientations.greedy is None for p in plans) else
+        sum(float(p.orientations.greedy.total_rotation) for p in plans),
         original_total_rotation=total_rotation(b_cam[np.isfinite(b_cam)]),
         infeasible_points=sum(int((~p.orientations.chosen.feasible).sum()) for p in plans))
 

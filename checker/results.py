@@ -220,7 +220,9 @@ class Orientation(_Model):
     """Total rotary motion of the chosen orientations, degrees."""
 
     dp_total_rotation: float
-    greedy_total_rotation: float
+    greedy_total_rotation: float | None = Field(
+        None, description="the greedy smoothing of Jun, Lee and Cha (2002) inside the planned "
+        "operations, degrees; only when the config's `four_axis.greedy_baseline` asks for it")
     original_total_rotation: float
     infeasible_points: int
 

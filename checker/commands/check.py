@@ -53,9 +53,11 @@ def summary_view(doc):
         head += f"\nat the CAM's own angles: {_counts_line(s.counts_cam)}"
     if doc.orientation is not None:
         o = doc.orientation
+        greedy = ("" if o.greedy_total_rotation is None
+                  else f"greedy {o.greedy_total_rotation:.1f} deg, ")
         head += (f"\nrotary motion: chosen {o.dp_total_rotation:.1f} deg (shortest path), "
-                 f"greedy {o.greedy_total_rotation:.1f} deg, CAM {o.original_total_rotation:.1f}"
-                 f" deg; {o.infeasible_points} points with no feasible B")
+                 f"{greedy}CAM {o.original_total_rotation:.1f} deg; {o.infeasible_points} "
+                 "points with no feasible B")
     head += "\n" + stock_line(doc.stock, doc.job.stated_stock)
     if doc.machine is not None:
         head += "\n" + machine_line(doc.machine)
