@@ -7,28 +7,15 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from geomdl import BSpline, exchange
+from summary_text import summary_text
 
 from checker.cli import cli
-from checker.commands.check import summary_view
 from checker.config import default_config
 from checker.job import check_job
 
 COMPRESSOR = "samples/compressor/compressor_small.apt"
 COMPRESSOR_D12 = "samples/compressor/compressor_small_d12.apt"
 FINDINGS = ("gouge", "interference", "holder", "crash")
-
-
-def cli_summary(doc) -> str:
-    """The terminal summary's text (`pathcheck JOB`)."""
-    import io
-
-    from rich.console import Console
-
-    out = io.StringIO()
-    console = Console(file=out, width=200, no_color=True)
-    for part in summary_view(doc):
-        console.print(part)
-    return out.getvalue()
 
 
 def _greedy_asked():
@@ -111,7 +98,7 @@ def test_written_b_lies_in_the_feasible_intervals(small_d12):
 def test_the_greedy_smoothing_is_planned_only_when_asked(small, small_d12):
     assert small.orientation.greedy_total_rotation is None
     assert small_d12.orientation.greedy_total_rotation is None
-    assert "greedy" not in cli_summary(small_d12)
+    assert "greedy" not in summary_text(small_d12)
 
 
 def test_shortest_path_never_moves_more_than_the_greedy_smoothing(repo, small_d12):
@@ -122,7 +109,7 @@ def test_shortest_path_never_moves_more_than_the_greedy_smoothing(repo, small_d1
     assert o.dp_total_rotation == pytest.approx(small_d12.orientation.dp_total_rotation,
                                                 abs=1e-9)  # asking changes nothing else
     assert asked.summary.counts == small_d12.summary.counts
-    assert "greedy" in cli_summary(asked)
+    assert "greedy" in summary_text(asked)
     written = np.array([p.b for p in _cl(small_d12)])
     assert small_d12.orientation.dp_total_rotation == pytest.approx(
         np.abs(np.diff(written)).sum(), abs=1e-6)

@@ -3,22 +3,11 @@
 
 from __future__ import annotations
 
-import io
-
-from rich.console import Console
+from summary_text import summary_text
 from synthetic_results import synthetic_document
 
-from checker.commands.check import summary_view
 from checker.commands.terminal import fixed
 from checker.results import OperationResult
-
-
-def _text(doc) -> str:
-    out = io.StringIO()
-    console = Console(file=out, width=200, no_color=True)
-    for part in summary_view(doc):
-        console.print(part)
-    return out.getvalue()
 
 
 def test_fixed_never_prints_a_negative_zero():
@@ -37,7 +26,7 @@ def test_three_axis_b_prints_unsigned_in_the_tables():
              for f in doc.summary.worst]
     doc = doc.model_copy(update={"operations": [op],
                                  "summary": doc.summary.model_copy(update={"worst": worst})})
-    text = _text(doc)
+    text = summary_text(doc)
     assert "-0.000" not in text and "-0.0 " not in text
     rows = [line for line in text.splitlines() if line.count("│") >= 5]
     assert any("0.000" in r for r in rows), text

@@ -144,7 +144,6 @@ class _Verdicts:
             verdict[worse], depth[worse], against)
 
 
-
 @dataclass
 class _Removed:
     """Per pose (the move that reaches it) what each piece removed (`checker.stock.removal`:
