@@ -123,6 +123,11 @@ class VerdictCounts(_Model):
     machine: int = 0
 
 
+def findings_in(counts: VerdictCounts) -> int:
+    """How many of `counts` are findings (`checker.verdict.FINDINGS`)."""
+    return sum(getattr(counts, v) for v in verdict.FINDINGS)
+
+
 def verdict_counts(verdicts: Iterable[str]) -> VerdictCounts:
     """How many of `verdicts` (strings of VERDICTS) are each verdict."""
     v = np.asarray(list(verdicts), dtype=object)

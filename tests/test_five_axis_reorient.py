@@ -14,7 +14,6 @@ import math
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
-from verdict_counts import findings_in
 
 from checker.apt import read_cl
 from checker.five_axis.lead_tilt import axes_from_angles
@@ -31,6 +30,7 @@ from checker.postproc.kinematics import Chain
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode
 from checker.postproc.replay import part_motions, toolpath_of
+from checker.results import findings_in
 
 ROUND_TRIP = 1e-4  # mm and rad
 

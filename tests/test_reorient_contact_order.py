@@ -19,7 +19,6 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 from test_contact_order import torus_trough
-from verdict_counts import findings_in
 
 from checker.apt import read_cl
 from checker.cli import main
@@ -34,6 +33,7 @@ from checker.posting import post_checked
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode
 from checker.postproc.replay import part_motions
+from checker.results import findings_in
 
 MACHINE = "linuxcnc-xyzac-trt"
 CUTTERS = (("CUTTER/10", 10.0), ("CUTTER/16,3", 6.0))  # the CAM's leads, degrees: too small

@@ -7,7 +7,7 @@ from summary_text import summary_text
 from synthetic_results import synthetic_document
 
 from checker.commands.terminal import fixed
-from checker.results import OperationResult
+from checker.results import OperationResult, VerdictCounts, findings_in
 
 
 def test_fixed_never_prints_a_negative_zero():
@@ -30,3 +30,17 @@ def test_three_axis_b_prints_unsigned_in_the_tables():
     assert "-0.000" not in text and "-0.0 " not in text
     rows = [line for line in text.splitlines() if line.count("│") >= 5]
     assert any("0.000" in r for r in rows), text
+
+
+def test_the_operations_findings_column_counts_every_finding_verdict():
+    """A machine finding is a finding (`checker.verdict.FINDINGS`): the operations table counts
+    it with the gouges, interferences, holder hits and crashes."""
+    doc = synthetic_document(4, n=9, four_axis=False)
+    counts = VerdictCounts(ok=5, gouge=1, crash=2, machine=3, within_tolerance=4)
+    assert findings_in(counts) == 6
+    op = OperationResult(index=0, name="floor", cutter="CUTTER/12,6", axis_class="3-axis",
+                         handling="re-oriented", b_written=None, tolerance=0.02,
+                         tolerance_source="config", counts=counts)
+    rows = [line.split("│") for line in summary_text(doc.model_copy(
+        update={"operations": [op]})).splitlines() if "re-oriented" in line]
+    assert len(rows) == 1 and rows[0][-2].strip() == "6", rows

@@ -36,7 +36,7 @@ def summary_view(doc):
 
     from checker.commands.terminal import fixed
     from checker.cutter import parse_cutter
-    from checker.results import machine_line, stock_line
+    from checker.results import findings_in, machine_line, stock_line
 
     s, j = doc.summary, doc.job
     var = parse_cutter(j.cutter).size_symbol
@@ -75,7 +75,7 @@ def summary_view(doc):
                 else f"{fixed(op.b_written[0], 1)}..{fixed(op.b_written[1], 1)}")
             t.add_row(str(op.index + 1), short_cutter(op.cutter), op.axis_class,
                       op.handling, b, f"{op.tolerance:.4f}",
-                      str(c.gouge + c.interference + c.holder + c.crash))
+                      str(findings_in(c)))
         out.append(t)
     if s.worst:
         t = Table(title="worst findings")
