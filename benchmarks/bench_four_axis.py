@@ -11,6 +11,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from checker.config import default_config
 from checker.job import check_job
 
 JOB = Path(__file__).resolve().parents[1] / "samples" / "compressor" / "compressor.apt"
@@ -20,7 +21,10 @@ def main() -> None:
     job = Path(sys.argv[1]) if len(sys.argv) > 1 else JOB
     with tempfile.TemporaryDirectory() as tmp:
         t = time.perf_counter()
-        doc = check_job(job, output=Path(tmp) / "out.nc", on_findings="comment")
+        cfg = default_config()  # with the greedy smoothing of Jun, Lee and Cha (2002) to compare
+        cfg = cfg.model_copy(update={"four_axis": cfg.four_axis.model_copy(
+            update={"greedy_baseline": True})})
+        doc = check_job(job, output=Path(tmp) / "out.nc", on_findings="comment", config=cfg)
         wall = time.perf_counter() - t
     s, o = doc.summary, doc.orientation
     print(f"{job.name}: {s.cl_points} poses at CL records, {s.poses_checked} poses checked "

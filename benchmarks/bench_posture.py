@@ -24,8 +24,8 @@ def compare(checked) -> list[tuple[str, object, bool]]:
     """(planner, `PostureMetrics` of its rotary words, all poses feasible) for the CAM, the
     shortest path, shortest path + MB-spline and the greedy smoothing of Jun, Lee and Cha (2002),
     on the first re-oriented operation of a `check_program(..., reorient=True)` result."""
-    from checker.five_axis.plan import candidates, rotary_metrics
     from checker.five_axis.posture import greedy_smoothing
+    from checker.five_axis.reorient import candidates, rotary_metrics
 
     plan = next(iter(checked.program.fives.values()))
     chain = checked.job.motion.chain
@@ -45,8 +45,8 @@ def compare(checked) -> list[tuple[str, object, bool]]:
 def main() -> None:
     from benchmarks.bench_feasible import rate
     from checker.apt import read_cl
-    from checker.five_axis.plan import machine_reach
     from checker.five_axis.poses import PoseJudge
+    from checker.five_axis.reorient import machine_reach
     from checker.job import check_program
 
     toolpath = read_cl(JOB)

@@ -17,8 +17,8 @@ from pathlib import Path
 
 from checker.config import default_config
 from checker.report import build_report
-from checker.report.synthetic import synthetic_document
 from checker.store import ResultsStore
+from tests.synthetic_results import synthetic_document
 
 
 def _cpu_s() -> float:

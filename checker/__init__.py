@@ -2,9 +2,9 @@
 orientation, verdicts, results store and report. Units: mm and radians inside unless stated.
 
 Importing the package points numba's cache of compiled kernels at a per-user folder
-(`cache.cache_dir`), so that kernels are compiled once per install, not once per checkout."""
+(`kernel_cache.cache_dir`), so that kernels are compiled once per install, not once per checkout."""
 
-from checker.cache import use_kernel_cache
+from checker.kernel_cache import use_kernel_cache
 
 __version__ = "0.1.0"
 

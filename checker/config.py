@@ -50,10 +50,11 @@ class FourAxisConfig(_Section):
     dp_weight_original: float = Field(0.1, ge=0)
     max_db_per_mm: PositiveFloat = 5.0
     axis_j_tolerance: PositiveFloat = 1e-6
+    greedy_baseline: bool = False
 
 
 class FiveAxisConfig(_Section):
-    """Re-orienting multi-axis operations (`checker.five_axis.plan`); angles in degrees."""
+    """Re-orienting multi-axis operations (`checker.five_axis.reorient`); angles in degrees."""
 
     grid_step_deg: PositiveFloat = 10.0
     lead_limit_deg: float = Field(60.0, gt=0, lt=90)

@@ -26,6 +26,7 @@ from checker.results import (
     Summary,
     VerdictCounts,
 )
+from checker.results import verdict_counts as counts
 from checker.tool_library import largest_standard
 
 _WORST = 10
@@ -41,12 +42,6 @@ def _opt(x) -> float | None:
 
 def _vec(v) -> tuple[float, float, float] | None:
     return tuple(float(x) for x in v) if v is not None and np.isfinite(v).all() else None
-
-
-def counts(verdicts) -> VerdictCounts:
-    """Counts by verdict."""
-    v = np.asarray(list(verdicts), dtype=object)
-    return VerdictCounts(**{k: int((v == k).sum()) for k in VerdictCounts.model_fields})
 
 
 class _Advice:
@@ -130,7 +125,7 @@ def _engine_advice(job, program, o, c, rows, tips, axes, out: _Advice) -> None:
     out.cc[rows], out.normal[rows], out.cc_surface[rows] = con.cc, con.normal, con.surface
     out.size[rows], out.limiting[rows] = res.size, res.limiting_point
     out.limiting_surface[rows], out.margin[rows] = res.limiting_surface, res.margin
-    out.inaccessible[rows] = res.verdict == "inaccessible"
+    out.inaccessible[rows] = res.advice == "inaccessible"
     if plan is not None:
         o_ = plan.orientations
         at = np.searchsorted(rows, plan.rows)
@@ -171,7 +166,7 @@ def _holder_clearance(job, w, cutters: dict, verdicts: np.ndarray) -> np.ndarray
     """Per pose: at holder hits, the stick-out that clears the holder (mm; advice, from the
     part's triangle vertices), nan elsewhere."""
     from checker.four_axis.holder import check_holder
-    from checker.four_axis.plan import holder_of
+    from checker.four_axis.over_b import holder_of
 
     out = np.full(len(verdicts), np.nan)
     hit = np.flatnonzero(verdicts == "holder")
@@ -205,7 +200,8 @@ def _orientation(job, program) -> Orientation | None:
     b_cam = cam_b(job)
     return Orientation(
         dp_total_rotation=total_rotation(program.b[np.isfinite(program.b)]),
-        greedy_total_rotation=sum(float(p.orientations.greedy.total_rotation) for p in plans),
+        greedy_total_rotation=None if any(p.orientations.greedy is None for p in plans) else
+        sum(float(p.orientations.greedy.total_rotation) for p in plans),
         original_total_rotation=total_rotation(b_cam[np.isfinite(b_cam)]),
         infeasible_points=sum(int((~p.orientations.chosen.feasible).sum()) for p in plans))
 
@@ -237,7 +233,7 @@ def _five_points(program) -> dict[int, dict]:
 def _rotary_motion(p, chain) -> tuple[float | None, float | None]:
     """Total motion of the machine's rotary words (degrees) along a multi-axis plan's contact
     points at its chosen axes and at the CAM's (None without a 5-axis chain)."""
-    from checker.five_axis.plan import rotary_metrics
+    from checker.five_axis.reorient import rotary_metrics
 
     if chain is None:
         return None, None

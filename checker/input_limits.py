@@ -4,7 +4,7 @@ positions a program expands into (arcs in chords, rotary turns in steps) are bou
 inputs whose memory grows with their size beyond what streaming removes (the records a CL file
 keeps as objects, the poses of a check, the CC points of an allowable search) are refused
 beyond a bound, in one line naming the file and the bound (docs/formats.md, "Job sizes and memory").
-Bounds on part files live in `checker.geometry.limits`."""
+Bounds on part files live in `checker.geometry.part_limits`."""
 
 from __future__ import annotations
 

@@ -23,7 +23,7 @@ from checker.collide.section import add_to_document, machine_section
 from checker.config import Config
 from checker.document import build_document, stock_document
 from checker.errors import PathcheckError
-from checker.five_axis.motion import MachineMotion
+from checker.five_axis.machine_motion import MachineMotion
 from checker.geometry import find_part_beside, load_part
 from checker.geometry.sampling import sample_part
 from checker.geometry.tessellate import part_triangles
@@ -35,8 +35,8 @@ from checker.postproc.kinematics import Chain
 from checker.postproc.post import machine_for_toolpath
 from checker.progress import step
 from checker.results import ResultsDocument
-from checker.stock.check import check_stock
 from checker.stock.request import StockRequest
+from checker.stock.stock_check import check_stock
 from checker.tolerance import operation_tolerances
 
 _AXIS_TOL = 1e-9  # axes equal to this are one axis (an indexed operation)

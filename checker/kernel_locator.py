@@ -1,11 +1,11 @@
 """Where numba keeps each compiled kernel of pathcheck's own files: under numba's cache folder
-(`cache.use_kernel_cache` sets it), at the file's path inside the installation (e.g.
-`checker/engine/refine/`), not at a hash of the absolute folder it was installed in as numba's
-own locators do. So a wheel installed elsewhere, another checkout or another venv with the same
-sources (the same `cache.source_key` folder) loads the kernels compiled once; numba still checks
-each file's content (its source stamp is a hash of the text). numba imports this module by name
-(`NUMBA_CACHE_LOCATOR_CLASSES`) when it first caches a kernel, so commands that compile nothing
-do not import numba for it."""
+(`kernel_cache.use_kernel_cache` sets it), at the file's path inside the installation (e.g.
+`checker/engine/refine/`), not at a hash of the absolute folder it was installed in as numba's own
+locators do. So a wheel installed elsewhere, another checkout or another venv with the same sources
+(the same `kernel_cache.source_key` folder) loads the kernels compiled once; numba still checks each
+file's content (its source stamp is a hash of the text). numba imports this module by name
+(`NUMBA_CACHE_LOCATOR_CLASSES`) when it first caches a kernel, so commands that compile nothing do
+not import numba for it."""
 
 from __future__ import annotations
 

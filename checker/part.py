@@ -146,7 +146,7 @@ class Part:
     def bbox(self) -> np.ndarray:
         """(2, 3) [min, max] corners in mm of the kept (trimmed) part, from an evaluated grid."""
         if self._bbox is None:
-            from checker.geometry.info import part_bbox
+            from checker.geometry.part_info import part_bbox
 
             self._bbox = part_bbox(self)
         return self._bbox

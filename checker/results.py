@@ -10,8 +10,10 @@ Units: mm and degrees in the part frame (inch jobs: see `job.units`, numbers sta
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Literal
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from checker import verdict
@@ -121,9 +123,20 @@ class VerdictCounts(_Model):
     machine: int = 0
 
 
+def findings_in(counts: VerdictCounts) -> int:
+    """How many of `counts` are findings (`checker.verdict.FINDINGS`)."""
+    return sum(getattr(counts, v) for v in verdict.FINDINGS)
+
+
+def verdict_counts(verdicts: Iterable[str]) -> VerdictCounts:
+    """How many of `verdicts` (strings of VERDICTS) are each verdict."""
+    v = np.asarray(list(verdicts), dtype=object)
+    return VerdictCounts(**{k: int((v == k).sum()) for k in VerdictCounts.model_fields})
+
+
 class FeasibleGrid(_Model):
     """The (lead, tilt) grid of a re-oriented multi-axis operation's feasible sets and how its
-    axis was chosen (`checker.five_axis.plan`)."""
+    axis was chosen (`checker.five_axis.reorient`)."""
 
     leads: list[float] = Field(description="grid leads, degrees")
     tilts: list[float] = Field(description="grid tilts, degrees")
@@ -212,7 +225,9 @@ class Orientation(_Model):
     """Total rotary motion of the chosen orientations, degrees."""
 
     dp_total_rotation: float
-    greedy_total_rotation: float
+    greedy_total_rotation: float | None = Field(
+        None, description="the greedy smoothing of Jun, Lee and Cha (2002) inside the planned "
+        "operations, degrees; only when the config's `four_axis.greedy_baseline` asks for it")
     original_total_rotation: float
     infeasible_points: int
 

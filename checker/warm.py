@@ -1,4 +1,4 @@
-"""Compile the kernels once per install, into the per-user cache (`checker.cache`). Two
+"""Compile the kernels once per install, into the per-user cache (`checker.kernel_cache`). Two
 processes compile at once: the refinement's step kernel (first, so that the other process
 finds it cached when it gets there, which shortens the whole), the exact tool-vs-triangle depth
 (`checker.mesh`: a tool over a few triangles, its allowable size there) and the orientation
@@ -12,10 +12,10 @@ Afterwards neither job compiles
 anything; a job that needs more (a flat end-mill's contour search) compiles those few on its
 first run.
 
-`pathcheck warm` compiles for this CPU and marks the cache folder so (`cache.HOST_MARK`: later
-processes take these kernels instead of the portable ones a wheel ships); `make wheel` builds the
-portable ones the same way for `cache.PORTABLE_CPU` (`build_portable`, run as
-`python -m checker.warm --portable FOLDER` on a CPU that runs that code)."""
+`pathcheck warm` compiles for this CPU and marks the cache folder so (`kernel_cache.HOST_MARK`:
+later processes take these kernels instead of the portable ones a wheel ships); `make wheel` builds
+the portable ones the same way for `kernel_cache.PORTABLE_CPU` (`build_portable`, run as `python -m
+checker.warm --portable FOLDER` on a CPU that runs that code)."""
 
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from checker.cache import (
+from checker.kernel_cache import (
     HOST_MARK,
     KERNELS_ENV,
     PORTABLE_CPU,
@@ -143,7 +143,7 @@ def _check_warm_up_job() -> None:
 
 def _compile_all(folder: Path, kernels: str) -> None:
     """Compile the families (two processes at once), then the warm-up job (a third), into the
-    numba cache `folder`, for this CPU (`kernels` "host") or `cache.PORTABLE_CPU`
+    numba cache `folder`, for this CPU (`kernels` "host") or `kernel_cache.PORTABLE_CPU`
     ("portable")."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(folder), **{KERNELS_ENV: kernels})
 
@@ -168,8 +168,8 @@ def warm_kernels() -> tuple[Path, float]:
 
 
 def build_portable(out: Path) -> float:
-    """The portable kernels (`cache.PORTABLE_CPU`) of these sources in the new folder `out`,
-    stamped with what they serve (`cache.portable_stamp`): seconds taken. The warm-up runs
+    """The portable kernels (`kernel_cache.PORTABLE_CPU`) of these sources in the new folder `out`,
+    stamped with what they serve (`kernel_cache.portable_stamp`): seconds taken. The warm-up runs
     them, so this CPU must run them."""
     if not runs_portable():
         raise SystemExit(f"building the portable kernels needs a CPU that runs {PORTABLE_CPU} "

@@ -20,8 +20,8 @@ import numpy as np
 from checker import verdict as vd
 from checker.b_axis import axis_for_b, b_for_axis, rotate_about_y
 from checker.errors import PathcheckError
-from checker.five_axis.motion import machine_path
-from checker.four_axis.job import plan_b
+from checker.five_axis.machine_motion import machine_path
+from checker.four_axis.b_plan import plan_b
 from checker.geometry.contact import cl_to_cc, contact_from_toolpath
 from checker.mesh.tool import tool_pieces
 from checker.moves import RAPID, START, Moves, machine_moves
@@ -223,7 +223,7 @@ def _five_plan(job, o: int, cutter, tolerance: float, strategy: str):
     """The 5-axis plan of multi-axis operation o by `strategy` ("allowable": `five_axis.plan`,
     "contact-order": `five_axis.contact_plan`), or None."""
     from checker.five_axis.contact_plan import plan_contact_order
-    from checker.five_axis.plan import plan_operation
+    from checker.five_axis.reorient import plan_operation
 
     op_rows = np.flatnonzero(job.m.op == o)
     # the job's 5-axis motion carries the machine's chain (None: fewer than two rotary axes)

@@ -110,7 +110,7 @@ def _check(part: Part, c, idx: np.ndarray, truth: np.ndarray) -> None:
         res = allowable(tp, part, c, cc, n, **kw)
         err = np.abs(res.size - truth)
         assert err.max() < TOL, (kw.keys(), res.size[err >= TOL], truth[err >= TOL])
-        assert np.all(res.verdict != "inaccessible")
+        assert np.all(res.advice != "inaccessible")
 
 
 @pytest.mark.parametrize("cut", CUTTERS)

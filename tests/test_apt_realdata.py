@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from checker.apt import read_cl, write_apt
-from checker.apt.info import describe_toolpath
+from checker.apt.toolpath_info import describe_toolpath
 from checker.cli import main
 
 NX = "mech491-nx-clsf"

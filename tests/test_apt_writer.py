@@ -7,7 +7,7 @@ import io
 import pytest
 
 from checker.apt import read_cl, read_cl_text, write_apt
-from checker.apt.writer import apt_text, format_value
+from checker.apt.write import apt_text, format_value
 from checker.errors import PathcheckError
 
 SOURCE = """PARTNO/WRITER, TEST

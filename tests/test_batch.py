@@ -9,14 +9,14 @@ from pathlib import Path
 import numba
 import pytest
 from requires import require_extra
+from synthetic_results import synthetic_document
 
 from checker.batch import find_jobs, run_batch, run_one
 from checker.cli import main
 from checker.errors import PathcheckError
-from checker.report.synthetic import synthetic_document
 from checker.store import ResultsStore
 
-SYNTHETIC = "checker.report.synthetic:synthetic_job"
+SYNTHETIC = "synthetic_results:synthetic_job"
 REPO = Path(__file__).resolve().parents[1]
 
 
@@ -126,7 +126,7 @@ def crash_on_seed_2(apt_path: str):
     """A job function whose process dies on the job with seed 2 (a segfault in an engine)."""
     import os
 
-    from checker.report.synthetic import synthetic_job
+    from synthetic_results import synthetic_job
 
     if Path(apt_path).read_text().split()[0] == "2":
         os._exit(3)
@@ -199,8 +199,7 @@ def threads_job(apt_path: str):
     """Records the numba threads and the Dask worker of the task beside the job, then runs it."""
     import numba
     from distributed import get_worker
-
-    from checker.report.synthetic import synthetic_job
+    from synthetic_results import synthetic_job
 
     Path(apt_path + ".ran").write_text(f"{numba.get_num_threads()} {get_worker().address}")
     return synthetic_job(apt_path)

@@ -87,7 +87,7 @@ def test_without_the_collision_library_the_error_names_the_extra(root, monkeypat
     from checker.errors import PathcheckError
     from checker.service import ops
     from checker.service import protocol as p
-    from checker.service.cache import PartCache
+    from checker.service.part_cache import PartCache
 
     real = checker.extras.find_spec
     monkeypatch.setattr(checker.extras, "find_spec",

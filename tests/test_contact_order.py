@@ -41,7 +41,7 @@ from checker.five_axis.contact_order import (
     flat_width,
 )
 from checker.five_axis.curvature import local_surface
-from checker.five_axis.frames import axes_from_angles, local_frames
+from checker.five_axis.lead_tilt import axes_from_angles, local_frames
 from checker.five_axis.poses import PoseJudge
 from checker.geometry.evaluate import evaluate
 from checker.geometry.sampling import sample_part

@@ -13,7 +13,7 @@ from checker.b_axis import axis_for_b
 from checker.cutter import parse_cutter
 from checker.engine import allowable
 from checker.engine.grid.bins import _BIN_DEG, _OWN_GRID_ROWS, axis_bins, part_tops
-from checker.engine.grid.frames import tool_rotation, tool_rotations
+from checker.engine.grid.rotations import tool_rotation, tool_rotations
 from checker.geometry.sampling import TestPoints
 
 SAMPLE = "samples/compressor/compressor"
@@ -85,7 +85,7 @@ def _assert_same(res, singles, rows):
     np.testing.assert_allclose(res.size[rows], size, atol=SAME, rtol=0)
     point = np.array([r.limiting_point[0] for r in singles])
     np.testing.assert_allclose(res.limiting_point[rows], point, atol=SAME_POINT, rtol=0)
-    assert list(res.verdict[rows]) == [r.verdict[0] for r in singles]
+    assert list(res.advice[rows]) == [r.advice[0] for r in singles]
 
 
 def test_part_tops_equal_the_highest_point(compressor):
@@ -108,7 +108,7 @@ def test_part_tops_of_a_flat_point_set():
 
 @pytest.mark.parametrize("cut", ["CUTTER/6,3", "CUTTER/6,1", "CUTTER/6,0"])
 def test_distinct_axes_at_once_equal_one_axis_at_a_time(compressor, cut):
-    """The CAM's own 4-axis axes (all different): sizes, limiting points and verdicts of one
+    """The CAM's own 4-axis axes (all different): sizes, limiting points and advice of one
     call with every axis equal those of a call per row (a grid built for that row's axis)."""
     part, tp, con, axes = compressor
     cutter = parse_cutter(cut)
@@ -153,7 +153,7 @@ def test_four_axis_rows_close_in_b_across_bins_agree_with_direct(compressor):
 def test_small_first_trial_gives_the_same_answer_from_fewer_candidates(compressor, monkeypatch):
     """(CC point, B) rows far from the CAM's B: the scan's small first trial (scan.search.scan
     `first`) finds the same seeds (refinement starts) and bit-identical sizes, limiting points
-    and verdicts as a start at the nearest points' upper bound, with fewer kernel evaluations."""
+    and advice as a start at the nearest points' upper bound, with fewer kernel evaluations."""
     import checker.engine.api as api
 
     part, tp, con, _ = compressor
@@ -176,6 +176,6 @@ def test_small_first_trial_gives_the_same_answer_from_fewer_candidates(compresso
         np.testing.assert_array_equal(a, b)
     np.testing.assert_array_equal(res.size, ref.size)
     np.testing.assert_array_equal(res.limiting_point, ref.limiting_point)
-    np.testing.assert_array_equal(res.verdict, ref.verdict)
+    np.testing.assert_array_equal(res.advice, ref.advice)
     assert np.isfinite(res.size).sum() > len(idx) // 2
     assert res.evaluations.sum() < 0.8 * ref.evaluations.sum()

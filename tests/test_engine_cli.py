@@ -58,9 +58,9 @@ def test_allowable_json(bowl_files, tmp_path):
     assert len(doc["points"]) == 3
     for p in doc["points"]:
         assert set(p) >= {"index", "cc", "normal", "allowable", "limiting_point",
-                          "limiting_surface", "verdict"}
+                          "limiting_surface", "advice"}
         assert abs(p["allowable"] - RHO) < 1e-4
-        assert p["verdict"] == "ok" and p["limiting_surface"] == 0
+        assert p["advice"] == "fits" and p["limiting_surface"] == 0
     assert "allowable r" in run.stdout
 
 
@@ -72,7 +72,8 @@ def test_allowable_pso_method(bowl_files, tmp_path):
     assert run.returncode == 0, run.stderr
     doc = json.loads(out.read_text())
     assert doc["method"] == "pso"
-    assert all(abs(p["allowable"] - RHO) < 1e-3 and p["verdict"] == "gouge" for p in doc["points"])
+    assert all(abs(p["allowable"] - RHO) < 1e-3 and p["advice"] == "too_large_near"
+               for p in doc["points"])
 
 
 def test_map_pictures_and_json(bowl_files, tmp_path):

@@ -48,8 +48,8 @@ def test_bowl(cut):
     truth = np.full(12, rho) if c.kind == "ball" else (rho - c.r) * np.sin(phi)
     assert np.abs(res.size - truth).max() < TOL
     assert np.allclose(np.linalg.norm(res.limiting_point - [0, 0, rho], axis=1), rho, atol=1e-6)
-    expect = np.where(c.size > truth + 1e-3, "gouge", "ok")
-    assert (res.verdict == expect).all()
+    expect = np.where(c.size > truth + 1e-3, "too_large_near", "fits")
+    assert (res.advice == expect).all()
 
 
 @pytest.mark.parametrize("cut", ["CUTTER/10,5", "CUTTER/12,2", "CUTTER/10"])
@@ -80,16 +80,16 @@ def test_wall_beside_tilted_floor_is_interference(cut):
     assert np.abs(res.size - truth).max() < TOL
     assert (res.limiting_surface == 1).all()
     assert np.allclose(res.limiting_point[:, 0], x_wall)
-    assert (res.verdict == "interference").all()
+    assert (res.advice == "too_large_far").all()
     smaller = allowable(tp, part, c.with_size(truth - 0.01), cc, n, cc_surface=np.zeros(2, int))
-    assert (smaller.verdict == "ok").all()
+    assert (smaller.advice == "fits").all()
 
 
 def test_normal_facing_away_is_inaccessible():
     part, _ = bowl(20.0)
     tp = sample_part(part)
     res = allowable(tp, part, parse_cutter("CUTTER/10,5"), [[0, 0, 0]], [[0, 0, -1.0]])
-    assert res.verdict[0] == "inaccessible" and res.size[0] == 0.0
+    assert res.advice[0] == "inaccessible" and res.size[0] == 0.0
 
 
 def test_any_tool_axis_rotated_bowl():

@@ -15,7 +15,7 @@ from engine_parts import free_form
 from scipy.optimize import brentq, minimize_scalar
 
 from checker.cutter import parse_cutter
-from checker.engine.grid.frames import rotate_rows, tool_rotations
+from checker.engine.grid.rotations import rotate_rows, tool_rotations
 from checker.engine.refine.limits import curvature_limit
 from checker.engine.sizes import RowFrame, horizontal_e
 from checker.geometry.evaluate import evaluate_mixed

@@ -26,7 +26,7 @@ from engine_oracle import _row_min
 from checker.b_axis import axis_for_b
 from checker.cutter import parse_cutter
 from checker.engine import allowable
-from checker.engine.grid.frames import tool_rotations
+from checker.engine.grid.rotations import tool_rotations
 from checker.geometry import load_part
 from checker.geometry.evaluate import evaluate
 from checker.geometry.sampling import sample_part

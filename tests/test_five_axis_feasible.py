@@ -8,13 +8,13 @@ import math
 
 import numpy as np
 import pytest
+from feasible_brute import brute_force_check
 from five_axis_parts import channel, channel_contacts, half_pipe, tool
 
 from checker.config import default_config
-from checker.five_axis.best import allowable_objective, best_orientation, cusp_objective
-from checker.five_axis.brute import brute_force_check
+from checker.five_axis.best_orientation import allowable_objective, best_orientation, cusp_objective
 from checker.five_axis.feasible import feasible_region
-from checker.five_axis.frames import angles_from_axes, axes_from_angles, local_frames
+from checker.five_axis.lead_tilt import angles_from_axes, axes_from_angles, local_frames
 from checker.five_axis.poses import PoseJudge
 from checker.geometry.sampling import sample_part
 from checker.geometry.tessellate import part_triangles

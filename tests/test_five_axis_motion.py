@@ -1,4 +1,4 @@
-"""Multi-axis moves as the machine makes them (`checker.five_axis.motion`): the pose at a
+"""Multi-axis moves as the machine makes them (`checker.five_axis.machine_motion`): the pose at a
 fraction of a move is the machine's forward kinematics of linearly interpolated joints
 (checked against closed forms written from the machine files), and the travel bound is never
 exceeded by the true motion of a tool point (dense sampling), on table-table, head-table and
@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from checker.five_axis.motion import MachineMotion
+from checker.five_axis.machine_motion import MachineMotion
 from checker.postproc.kinematics import Chain
 from checker.postproc.machine import load_machine
 

@@ -1,4 +1,4 @@
-"""`pathcheck JOB.apt --reorient` on multi-axis jobs (`checker.five_axis.plan`, issue #20): the
+"""`pathcheck JOB.apt --reorient` on multi-axis jobs (`checker.five_axis.reorient`, issue #20): the
 impeller sample has findings at the CAM's axes and none after re-orientation; every written
 contact pose is feasible by an independent judge (GJK depths) and reachable by the machine away
 from its singular direction; the results document carries each point's lead, tilt and feasible
@@ -15,23 +15,23 @@ import math
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
-from verdict_counts import findings_in
 
 from checker.apt import read_cl
-from checker.five_axis.frames import axes_from_angles
-from checker.five_axis.plan import (
+from checker.five_axis.lead_tilt import axes_from_angles
+from checker.five_axis.poses import PoseJudge
+from checker.five_axis.reorient import (
     contact_segments,
     feed_directions,
     least_rotation,
     machine_reach,
 )
-from checker.five_axis.poses import PoseJudge
 from checker.job import check_program, check_toolpath
 from checker.posting import post_checked
 from checker.postproc.kinematics import Chain
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode
 from checker.postproc.replay import part_motions, toolpath_of
+from checker.results import findings_in
 
 ROUND_TRIP = 1e-4  # mm and rad
 

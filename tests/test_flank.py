@@ -14,10 +14,10 @@ import pytest
 from checker.cutter import parse_cutter
 from checker.flank.envelope import axis_frame, grazing, profile
 from checker.flank.error import envelope_error
-from checker.flank.motion import ToolMotion
+from checker.flank.error_document import FlankDocument
 from checker.flank.optimise import optimise_axis
-from checker.flank.results import FlankDocument
 from checker.flank.ruled import hyperbolic_paraboloid, naive_poses
+from checker.flank.spline_motion import ToolMotion
 from checker.geometry.primitives import flat_patch, nurbs_cylinder
 
 CYLINDER = "CUTTER/10,0,5,0,0,0,40"  # flat end-mill D10, flutes 40 mm

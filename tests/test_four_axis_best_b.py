@@ -8,7 +8,7 @@ import pytest
 from checker.b_axis import axis_for_b, b_for_axis, check_b_range, check_four_axis
 from checker.errors import PathcheckError
 from checker.four_axis.best_b import END_TOLERANCE, best_b
-from checker.four_axis.plan import facing_edges
+from checker.four_axis.over_b import facing_edges
 
 
 def _two_peaks(rows: np.ndarray, b: np.ndarray) -> np.ndarray:

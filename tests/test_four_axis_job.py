@@ -7,13 +7,22 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from geomdl import BSpline, exchange
+from summary_text import summary_text
 
 from checker.cli import cli
+from checker.config import default_config
 from checker.job import check_job
 
 COMPRESSOR = "samples/compressor/compressor_small.apt"
 COMPRESSOR_D12 = "samples/compressor/compressor_small_d12.apt"
 FINDINGS = ("gouge", "interference", "holder", "crash")
+
+
+def _greedy_asked():
+    """The default config asking for the greedy smoothing beside the shortest path."""
+    cfg = default_config()
+    return cfg.model_copy(update={"four_axis": cfg.four_axis.model_copy(
+        update={"greedy_baseline": True})})
 
 
 @pytest.fixture(scope="module")
@@ -86,10 +95,21 @@ def test_written_b_lies_in_the_feasible_intervals(small_d12):
             p.allowable_at_best >= p.allowable - 1e-6
 
 
-def test_shortest_path_never_moves_more_than_the_greedy_smoothing(small, small_d12):
-    for doc in (small, small_d12):
-        o = doc.orientation
-        assert o.dp_total_rotation <= o.greedy_total_rotation
+def test_the_greedy_smoothing_is_planned_only_when_asked(small, small_d12):
+    assert small.orientation.greedy_total_rotation is None
+    assert small_d12.orientation.greedy_total_rotation is None
+    assert "greedy" not in summary_text(small_d12)
+
+
+def test_shortest_path_never_moves_more_than_the_greedy_smoothing(repo, small_d12):
+    asked = check_job(repo / COMPRESSOR_D12, config=_greedy_asked())
+    o = asked.orientation
+    assert o.greedy_total_rotation is not None
+    assert o.dp_total_rotation <= o.greedy_total_rotation
+    assert o.dp_total_rotation == pytest.approx(small_d12.orientation.dp_total_rotation,
+                                                abs=1e-9)  # asking changes nothing else
+    assert asked.summary.counts == small_d12.summary.counts
+    assert "greedy" in summary_text(asked)
     written = np.array([p.b for p in _cl(small_d12)])
     assert small_d12.orientation.dp_total_rotation == pytest.approx(
         np.abs(np.diff(written)).sum(), abs=1e-6)
@@ -194,7 +214,7 @@ def test_holder_hit_reports_the_stickout_that_clears_it(tmp_path):
 def test_full_compressor_path_is_clean_and_the_shortest_path_moves_less(repo):
     """The 2 x 41 x 41 sample job as in thesis chapter 5: clean at every pose and along every
     move at the CAM's B; the shortest path through the feasible B moves less than the CAM."""
-    doc = check_job(repo / "samples/compressor/compressor.apt")
+    doc = check_job(repo / "samples/compressor/compressor.apt", config=_greedy_asked())
     assert len(_cl(doc)) == 2 * 41 * 41  # the approach plunges do not touch: no contact
     assert doc.summary.status == "ok"
     o = doc.orientation

@@ -12,7 +12,7 @@ import pytest
 from checker.config import default_config
 from checker.cutter import parse_cutter
 from checker.four_axis.best_b import best_b
-from checker.four_axis.plan import OverB, allowable_over_b
+from checker.four_axis.over_b import OverB, allowable_over_b
 from checker.geometry import load_part
 from checker.geometry.contact import cl_to_cc
 from checker.geometry.sampling import sample_part
@@ -130,7 +130,7 @@ def test_bounds_hold_and_skipping_changes_no_answer(passage, cutter_text):
     """`bound_over_b` never lies below the coarse engine's size (at every point and B of a
     2-degree scan), and the search that skips rows by it gives the same best B, size there and
     feasible intervals as the one that evaluates every row."""
-    from checker.four_axis.plan import bound_over_b, coarse_config
+    from checker.four_axis.over_b import bound_over_b, coarse_config
 
     part, tp, con = passage
     cfg = default_config()

@@ -130,7 +130,7 @@ def test_missing_file_is_a_part_error(tmp_path):
 
 
 def test_describe_geomdl_part(container):
-    from checker.geometry.info import describe_part, format_part_info
+    from checker.geometry.part_info import describe_part, format_part_info
 
     path, surfs = container
     d = describe_part(path)

@@ -19,7 +19,7 @@ from OCP.TopoDS import TopoDS
 
 from checker.geometry import load_part
 from checker.geometry.evaluate import evaluate
-from checker.geometry.info import describe_part, format_part_info
+from checker.geometry.part_info import describe_part, format_part_info
 from checker.geometry.sampling import sample_part
 
 

@@ -148,8 +148,8 @@ def test_unit_normals_do_not_overflow():
 @pytest.fixture(scope="module")
 def state():
     from checker.config import default_config
-    from checker.service.cache import PartCache
     from checker.service.ops import WorkerState
+    from checker.service.part_cache import PartCache
 
     return WorkerState(config=default_config(), cache=PartCache(1 << 30))
 

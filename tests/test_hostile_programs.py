@@ -20,9 +20,9 @@ from pathlib import Path
 import pytest
 
 from checker.cli import EXIT_INPUT, EXIT_INTERNAL, main
-from checker.report.synthetic import synthetic_document
 from checker.store import ResultsStore
 from tests.hostile import MOULD, REPO, SMALL_JOB, assert_sane, run_pathcheck, small_job
+from tests.synthetic_results import synthetic_document
 
 GCODE_HEAD = "G21 G90 G17\nG0 X0 Y0 Z5\nG1 Z0 F100\n"
 
@@ -194,7 +194,7 @@ def test_a_store_on_a_full_disk_is_one_note_and_the_batch_goes_on(tmp_path):
     full = 40_000  # the store opens (its 32 KB shared-memory file fits), no record fits
     assert max(p.stat().st_size for p in tmp_path.glob("results.sqlite*")) < full
     run = run_pathcheck(["batch", str(folder), "--workers", "1", "--job-function",
-                         "checker.report.synthetic:synthetic_job"], cwd=tmp_path,
+                         "tests.synthetic_results:synthetic_job"], cwd=tmp_path,
                         preexec=_file_size_limit(full))
     assert run.code == 1, run.why()  # the jobs' own results: findings
     assert "Traceback" not in run.stderr and "cannot rollback" not in run.stderr, run.why()
@@ -209,7 +209,7 @@ def test_a_store_on_a_full_disk_is_one_note_and_the_batch_goes_on(tmp_path):
 def kill_on_seed_2(apt_path: str):
     """A batch job function whose worker is killed (SIGKILL, as the OOM killer does) on the
     job with seed 2."""
-    from checker.report.synthetic import synthetic_job
+    from tests.synthetic_results import synthetic_job
 
     if Path(apt_path).read_text().split()[0] == "2":
         os.kill(os.getpid(), signal.SIGKILL)
@@ -265,10 +265,10 @@ def _boom(*_args, **_kwargs):
 
 
 def test_an_internal_error_exits_3_with_its_traceback_logged(job, tmp_path, monkeypatch, capsys):
-    import checker.apt.info
+    import checker.apt.toolpath_info
 
     monkeypatch.setenv("PATHCHECK_LOG_DIR", str(tmp_path / "logs"))
-    monkeypatch.setattr(checker.apt.info, "describe_toolpath", _boom)
+    monkeypatch.setattr(checker.apt.toolpath_info, "describe_toolpath", _boom)
     with pytest.raises(SystemExit) as ended:
         main(["info", str(job)])
     assert ended.value.code == EXIT_INTERNAL == 3
@@ -284,12 +284,12 @@ def test_an_internal_error_exits_3_with_its_traceback_logged(job, tmp_path, monk
 
 
 def test_out_of_memory_is_one_line_and_exit_2(job, monkeypatch, capsys):
-    import checker.apt.info
+    import checker.apt.toolpath_info
 
     def _huge(*_args, **_kwargs):
         raise MemoryError("Unable to allocate 28.4 PiB for an array")
 
-    monkeypatch.setattr(checker.apt.info, "describe_toolpath", _huge)
+    monkeypatch.setattr(checker.apt.toolpath_info, "describe_toolpath", _huge)
     with pytest.raises(SystemExit) as ended:
         main(["info", str(job)])
     assert ended.value.code == EXIT_INPUT
@@ -304,7 +304,7 @@ def test_a_check_on_a_full_disk_is_one_note_not_a_failure(tmp_path):
     _store_with(tmp_path, 1)
     script = ("import resource, sys\n"
               "from checker.commands.check import record\n"
-              "from checker.report.synthetic import synthetic_document\n"
+              "from tests.synthetic_results import synthetic_document\n"
               "doc = synthetic_document(1, n=60, four_axis=False, path='a.apt')\n"
               "resource.setrlimit(resource.RLIMIT_FSIZE, (40_000, 40_000))\n"
               "record(doc)\n")

@@ -1,8 +1,8 @@
 """The kernel cache follows the sources: numba checks a cached kernel against the text of its
 own file only, so a kernel that calls a kernel of another file keeps that one's old code when
 only the other file changes. The cache folder is keyed by a hash of all the sources
-(`checker.cache.source_key`): shown here with real numba on a two-file package, whose caller's
-answer follows the callee's edit only because the folder changed."""
+(`checker.kernel_cache.source_key`): shown here with real numba on a two-file package, whose
+caller's answer follows the callee's edit only because the folder changed."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import textwrap
 
 import pytest
 
-from checker.cache import runs_portable, source_key
+from checker.kernel_cache import runs_portable, source_key
 
 _CALLEE = "import numba\n\n@numba.njit(cache=True)\ndef f(x):\n    return x + {}\n"
 _CALLER = textwrap.dedent("""
@@ -53,7 +53,7 @@ def test_a_callers_kernel_follows_its_callees_edit_only_with_the_source_key(tmp_
 
 
 def test_the_kernels_are_cached_per_version_of_the_sources(tmp_path, monkeypatch):
-    from checker.cache import kernel_cache_dir
+    from checker.kernel_cache import kernel_cache_dir
 
     monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
     monkeypatch.setenv("PATHCHECK_CACHE_DIR", str(tmp_path))
@@ -62,7 +62,7 @@ def test_the_kernels_are_cached_per_version_of_the_sources(tmp_path, monkeypatch
 
 
 def test_only_the_newest_versions_kernels_are_kept(tmp_path):
-    from checker.cache import KEEP_VERSIONS, prune_versions
+    from checker.kernel_cache import KEEP_VERSIONS, prune_versions
 
     for age in range(KEEP_VERSIONS + 2):
         folder = tmp_path / f"v{age}"
@@ -79,8 +79,8 @@ _ROTATE = textwrap.dedent("""
     import numpy as np
 
     import checker
-    from checker.cache import kernels_compiled
-    from checker.engine.grid.frames import rotate_rows
+    from checker.kernel_cache import kernels_compiled
+    from checker.engine.grid.rotations import rotate_rows
 
     q = np.array([[[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]])
     with kernels_compiled() as compiled:
@@ -115,7 +115,7 @@ def test_a_kernel_compiled_in_one_install_serves_another_install_of_the_same_sou
     assert first == "[[-2.0, 1.0, 3.0]] ['_rotate_indexed']\n"
     assert second == "[[-2.0, 1.0, 3.0]] []\n", "the second install compiled again"
     cached = tmp_path / "cache" / "numba" / source_key() / "checker" / "engine" / "grid"
-    assert any(cached.glob("frames._rotate_indexed-*.nbi"))
+    assert any(cached.glob("rotations._rotate_indexed-*.nbi"))
 
 
 def _install(tmp_path, name: str):
@@ -153,7 +153,7 @@ def test_portable_kernels_shipped_in_the_package_serve_a_new_cache_until_warm(tm
     stamp of the sources they serve; an install's first process seeds its new cache folder
     with them and loads them (compiling nothing) until `pathcheck warm` has marked the folder
     (cache.HOST_MARK): then it compiles for this CPU, which the portable kernels do not serve."""
-    from checker.cache import HOST_MARK, PORTABLE_STAMP, portable_stamp
+    from checker.kernel_cache import HOST_MARK, PORTABLE_STAMP, portable_stamp
 
     build = _install(tmp_path, "build")
     shipped = tmp_path / "shipped"
@@ -175,30 +175,31 @@ def test_portable_kernels_of_other_sources_or_for_other_cpus_are_not_used(tmp_pa
     """Shipped kernels stamped for other sources (or another numba, Python or CPU) neither seed
     a new folder nor make the process compile for the portable CPU; nor do kernels for the
     right sources on a CPU without AVX2 (its /proc/cpuinfo flags)."""
-    from checker import cache
+    from checker import kernel_cache
 
     shipped = tmp_path / "kernels"
     (shipped / "checker").mkdir(parents=True)
     (shipped / "checker" / "k.nbi").write_text("x")
-    monkeypatch.setattr(cache, "resource", lambda *parts: tmp_path.joinpath(*parts))
+    monkeypatch.setattr(kernel_cache, "resource", lambda *parts: tmp_path.joinpath(*parts))
     for var in ("PATHCHECK_KERNELS", "NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES"):
         monkeypatch.delenv(var, raising=False)
-    flags = "flags\t\t: " + " ".join(sorted(cache._V3_FLAGS)) + " sse2\n"
+    flags = "flags\t\t: " + " ".join(sorted(kernel_cache._V3_FLAGS)) + " sse2\n"
     cpuinfo = tmp_path / "cpuinfo"
-    runs = cache.runs_portable
-    stamp = cache.portable_stamp()
+    runs = kernel_cache.runs_portable
+    stamp = kernel_cache.portable_stamp()
     for name, shipped_stamp, cpu_flags, portable in (
             ("other-sources", "0123456789ab" + stamp[12:], flags, False),
-            ("other-cpu", stamp.replace(cache.PORTABLE_CPU, "generic"), flags, False),
+            ("other-cpu", stamp.replace(kernel_cache.PORTABLE_CPU, "generic"), flags, False),
             ("no-avx2", stamp, flags.replace(" avx2", ""), False),
             ("these", stamp, flags, True)):
-        (shipped / cache.PORTABLE_STAMP).write_text(shipped_stamp + "\n")
+        (shipped / kernel_cache.PORTABLE_STAMP).write_text(shipped_stamp + "\n")
         cpuinfo.write_text("processor\t: 0\n" + cpu_flags)
-        monkeypatch.setattr(cache, "runs_portable", lambda: runs(cpuinfo))
+        monkeypatch.setattr(kernel_cache, "runs_portable", lambda: runs(cpuinfo))
         folder = tmp_path / name
-        cache._seed(folder)
+        kernel_cache._seed(folder)
         assert (folder / "checker" / "k.nbi").is_file() == (shipped_stamp == stamp)
-        cache._choose_kernels(folder)
+        kernel_cache._choose_kernels(folder)
         assert os.environ.pop("PATHCHECK_KERNELS") == ("portable" if portable else "host")
-        assert os.environ.pop("NUMBA_CPU_NAME", None) == (cache.PORTABLE_CPU if portable else None)
+        expected_cpu = kernel_cache.PORTABLE_CPU if portable else None
+        assert os.environ.pop("NUMBA_CPU_NAME", None) == expected_cpu
         assert os.environ.pop("NUMBA_CPU_FEATURES", None) == ("" if portable else None)

@@ -12,8 +12,8 @@ import pytest
 
 from checker import input_limits
 from checker.apt import read_cl, read_cl_text
-from checker.apt.info import describe_toolpath
 from checker.apt.read import BLOCK_BYTES
+from checker.apt.toolpath_info import describe_toolpath
 from checker.cc_csv import read_cc_csv
 from checker.cli import main
 from checker.errors import PathcheckError
@@ -145,7 +145,7 @@ def test_an_allowable_search_in_chunks_is_the_search_whole(monkeypatch):
     chunked = op.allowable_at_points(part, cutter, cc, normals, axis, config)
     assert len(chunked["points"]) == len(cc) > 7
     for a, b in zip(whole["points"], chunked["points"], strict=True):
-        assert (a["verdict"], a["limiting_surface"]) == (b["verdict"], b["limiting_surface"])
+        assert (a["advice"], a["limiting_surface"]) == (b["advice"], b["limiting_surface"])
         assert (a["allowable"] is None) == (b["allowable"] is None)
         if a["allowable"] is not None:
             assert abs(a["allowable"] - b["allowable"]) <= 1e-9 * max(1.0, a["allowable"])

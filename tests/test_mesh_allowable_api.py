@@ -30,7 +30,7 @@ def test_allowable_on_a_mesh_is_the_distance_to_the_wall():
     np.testing.assert_allclose(res.size, 8.0 - x, atol=1e-3)
     # a r = 5 ball 2 mm from the wall does not fit (a mesh has no surfaces to tell a gouge from
     # an interference by)
-    assert list(res.verdict) == ["ok", "ok", "ok", "gouge"]
+    assert list(res.advice) == ["fits", "fits", "fits", "too_large_near"]
     down = allowable(sample_part(part), part, parse_cutter("CUTTER/10,5"), cc, up, -up)
-    assert (down.size == 0).all() and set(down.verdict) == {"inaccessible"}
+    assert (down.size == 0).all() and set(down.advice) == {"inaccessible"}
     assert res.margin[0] == pytest.approx(18.0 - 5.0, abs=1e-3)

@@ -12,8 +12,8 @@ import sys
 
 from checker.config import default_config
 from checker.postproc.header import read_verdict
-from checker.service.cache import PartCache
 from checker.service.ops import WorkerState
+from checker.service.part_cache import PartCache
 from checker.service.recorder import NullRecorder
 from checker.service.worker import handle
 from checker.store import ResultsStore

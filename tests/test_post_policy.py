@@ -237,8 +237,8 @@ def test_part_beside_the_job_whatever_the_case(jobs, tmp_path):
 
 def test_service_check_refuses_or_posts_as_asked(jobs):
     from checker.config import default_config
-    from checker.service.cache import PartCache
     from checker.service.ops import WorkerState
+    from checker.service.part_cache import PartCache
     from checker.service.recorder import NullRecorder
     from checker.service.worker import handle
 

@@ -19,21 +19,21 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 from test_contact_order import torus_trough
-from verdict_counts import findings_in
 
 from checker.apt import read_cl
 from checker.cli import main
 from checker.cutter import parse_cutter
 from checker.five_axis.contact_order import contact_order_axes
-from checker.five_axis.frames import axes_from_angles, local_frames
-from checker.five_axis.plan import feed_directions, machine_reach
+from checker.five_axis.lead_tilt import axes_from_angles, local_frames
 from checker.five_axis.poses import PoseJudge
+from checker.five_axis.reorient import feed_directions, machine_reach
 from checker.geometry.evaluate import evaluate
 from checker.job import check_program
 from checker.posting import post_checked
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode
 from checker.postproc.replay import part_motions
+from checker.results import findings_in
 
 MACHINE = "linuxcnc-xyzac-trt"
 CUTTERS = (("CUTTER/10", 10.0), ("CUTTER/16,3", 6.0))  # the CAM's leads, degrees: too small

@@ -14,6 +14,7 @@ from html.parser import HTMLParser
 import numpy as np
 import pytest
 from PIL import Image
+from synthetic_results import synthetic_document
 
 from checker.cli import main
 from checker.errors import PathcheckError
@@ -28,7 +29,6 @@ from checker.report.pictures import (
     paint_map,
 )
 from checker.report.standard import per_region, standard_cutters
-from checker.report.synthetic import synthetic_document
 from checker.report.trends import DAY_S, compare, nights
 from checker.store import ResultsStore, point_arrays
 from checker.verdict import FINDINGS

@@ -12,11 +12,11 @@ import subprocess
 import numpy as np
 import pytest
 from PIL import Image
+from synthetic_results import synthetic_document
 
 from checker.config import default_config
 from checker.report import build_report
 from checker.report.pictures import FONT_PT
-from checker.report.synthetic import synthetic_document
 from checker.store import ResultsStore
 from checker.verdict import FINDINGS
 

@@ -339,7 +339,7 @@ def test_an_internal_error_answers_internal_with_the_id_and_logs_the_traceback(
     """A bug in an op (here injected by the test into the op table) is an `internal` reply
     with the request's id; the traceback goes to the service log; the worker goes on."""
     from checker.service import ops, protocol
-    from checker.service.cache import PartCache
+    from checker.service.part_cache import PartCache
     from checker.service.recorder import NullRecorder
     from checker.service.worker import handle
 

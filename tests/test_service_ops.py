@@ -14,8 +14,8 @@ from brokers import running_broker
 from checker import engine
 from checker import job as job_module
 from checker.config import default_config
-from checker.service.cache import PartCache
 from checker.service.ops import WorkerState
+from checker.service.part_cache import PartCache
 from checker.service.recorder import NullRecorder
 from checker.service.replies import AllowablePoint
 from checker.service.worker import handle
@@ -68,7 +68,7 @@ def test_allowable_matches_the_library_and_caches_the_part(state, mould_rows):
     assert [p.index for p in points] == [0, 1, 2, 3]
     got = np.array([np.inf if p.allowable is None else p.allowable for p in points])
     np.testing.assert_allclose(got, direct.size, atol=1e-6)  # the document rounds to 1e-6
-    assert [p.verdict for p in points] == [str(v) for v in direct.verdict]
+    assert [p.advice for p in points] == [str(v) for v in direct.advice]
     np.testing.assert_allclose([p.cc for p in points], mould_rows[:, :3], atol=1e-6)
     finite = np.isfinite(direct.size)
     np.testing.assert_allclose(
@@ -107,13 +107,13 @@ def _plane() -> dict:
 
 def test_a_plane_never_limits_a_ball_or_a_bull_nose(state):
     """Analytic: on a plane with the axis along the normal nothing limits the cutter, so the
-    allowable size is unbounded (null) and the verdict ok."""
+    allowable size is unbounded (null) and the cutter fits."""
     rows = [[x, y, 0.0, 0.0, 0.0, 1.0] for x, y in [(0, 0), (10, -5), (-20, 30)]]
     for cutter in ("CUTTER/10", "CUTTER/12,3"):
         reply = _call(state, op="allowable", part={"geomdl": _plane()}, cc=rows, cutter=cutter)
         assert reply["ok"], reply
         assert [p["allowable"] for p in reply["points"]] == [None, None, None]
-        assert {p["verdict"] for p in reply["points"]} == {"ok"}
+        assert {p["advice"] for p in reply["points"]} == {"fits"}
         assert all(p["limiting_point"] is None for p in reply["points"])
 
 

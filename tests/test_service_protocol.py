@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from checker.errors import PathcheckError
 from checker.service import protocol as p
-from checker.service.cache import CachedPart, PartCache, deep_nbytes, file_key, json_key
+from checker.service.part_cache import CachedPart, PartCache, deep_nbytes, file_key, json_key
 from checker.service.recorder import NullRecorder, StoreRecorder, open_recorder
 from checker.store import ResultsStore
 

@@ -22,8 +22,8 @@ from checker.cutter import parse_cutter
 from checker.mesh.tool import tool_pieces
 from checker.moves import FEED, machine_moves
 from checker.stock.dexels import Dexels
-from checker.stock.motion import sweep_items
 from checker.stock.removal import remove
+from checker.stock.removal_items import sweep_items
 from checker.toolpath import MotionArrays
 
 STEP = 0.02          # mm between the oracle's poses

@@ -9,11 +9,11 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 import pytest
+from synthetic_results import synthetic_document
 
 from checker.cli import main
 from checker.errors import PathcheckError
 from checker.report import build_report
-from checker.report.synthetic import synthetic_document
 from checker.store import MIGRATIONS, SCHEMA_VERSION, ResultsStore, point_arrays
 
 

@@ -4,7 +4,8 @@ request row with the message."""
 
 from __future__ import annotations
 
-from checker.report.synthetic import synthetic_document
+from synthetic_results import synthetic_document
+
 from checker.service import recorder
 from checker.store import ResultsStore
 

@@ -276,8 +276,9 @@ def test_the_machined_stock_is_coloured_by_its_deviation_to_the_design(tmp_path)
 
 def test_report_links_the_views_written_beside_it(tmp_path):
     """A job whose `JOB.view.html` is beside the report gets a link to it; the others none."""
+    from synthetic_results import synthetic_document
+
     from checker.report import build_report
-    from checker.report.synthetic import synthetic_document
     from checker.store import ResultsStore
 
     now = 1_790_000_000.0

@@ -42,7 +42,7 @@ def browser(tmp_path_factory):
 
 def _view(tmp_path_factory, job: Path, **options):
     from checker.job import check_job
-    from checker.view.page import write_view
+    from checker.view.viewer_page import write_view
 
     if not job.is_file():
         pytest.skip(f"{job} not present")

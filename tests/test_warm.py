@@ -17,10 +17,10 @@ def test_the_warm_up_job_is_the_demo_job(repo):
 
 def test_warm_compiles_for_this_cpu_and_marks_the_folder(tmp_path, monkeypatch):
     """`pathcheck warm` compiles for this CPU ("host") into the kernel cache folder, then marks
-    it (cache.HOST_MARK) so that later processes take these kernels instead of the portable
+    it (kernel_cache.HOST_MARK) so that later processes take these kernels instead of the portable
     ones; the portable build compiles for the generic CPU and stamps what it serves."""
     from checker import warm
-    from checker.cache import HOST_MARK, PORTABLE_STAMP, portable_stamp
+    from checker.kernel_cache import HOST_MARK, PORTABLE_STAMP, portable_stamp
 
     calls = []
     monkeypatch.setattr(warm, "_compile_all", lambda folder, kernels: calls.append(

@@ -34,7 +34,7 @@ python3 -m venv "$work/venv"
 "$work/venv/bin/pip" install --quiet --no-compile "$work"/dist/pathcheck-*.whl >"$work/pip.log" 2>&1 \
     || { cat "$work/pip.log"; exit 1; }
 pc="$work/venv/bin/pathcheck"
-kernels=$("$repo/.venv/bin/python" -c "from checker.cache import kernel_cache_dir; print(kernel_cache_dir())")
+kernels=$("$repo/.venv/bin/python" -c "from checker.kernel_cache import kernel_cache_dir; print(kernel_cache_dir())")
 cd "$work"
 export PATHCHECK_STORE="$work/results.sqlite"
 
@@ -52,7 +52,7 @@ first=$(seconds $(($(date +%s%N) - start)))
     || { cat first-compiled.log; echo "wheel-check: the jobs on the portable kernels failed" >&2; exit 1; }
 import sys
 
-from checker.cache import kernels_compiled
+from checker.kernel_cache import kernels_compiled
 from checker.job import check_job
 
 with kernels_compiled() as compiled:
@@ -76,7 +76,7 @@ site=$("$work/venv/bin/python" -c "import checker, os; print(os.path.dirname(che
     || { cat compiled.log; echo "wheel-check: the jobs after warm failed" >&2; exit 1; }
 import sys
 
-from checker.cache import kernels_compiled
+from checker.kernel_cache import kernels_compiled
 from checker.job import check_job
 
 with kernels_compiled() as compiled:

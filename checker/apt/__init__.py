@@ -7,6 +7,6 @@
 from __future__ import annotations
 
 from checker.apt.read import is_cl_file, read_cl, read_cl_text
-from checker.apt.writer import write_apt
+from checker.apt.write import write_apt
 
 __all__ = ["is_cl_file", "read_cl", "read_cl_text", "write_apt"]

@@ -9,7 +9,7 @@ from collections import Counter
 
 import numpy as np
 
-from checker.apt import frames as fr
+from checker.apt import coordinate_systems as fr
 from checker.apt.lexer import MAX_ABS
 from checker.errors import PathcheckError
 from checker.input_limits import MAX_COORDINATE_MM

@@ -75,8 +75,8 @@ def machine_moves(machine, motion, lines: np.ndarray, cutters: dict, path: str |
                   tolerance: float) -> MachineMoves:
     """The program positions of `motion`'s poses on `machine`: its own (`motion.path`) when
     the check ran the joints linearly, else the words the post would choose for the poses'
-    axes (`checker.five_axis.motion.MachineMotion`)."""
-    from checker.five_axis.motion import MachineMotion
+    axes (`checker.five_axis.machine_motion.MachineMotion`)."""
+    from checker.five_axis.machine_motion import MachineMotion
     from checker.postproc.kinematics import Chain
 
     moves = motion.moves

@@ -58,7 +58,7 @@ def allowable(part_path, cc_path, cutter_text, units, tool_name, tool_library, a
     from checker.commands.outputs import prepare_outputs
     from checker.commands.terminal import text_console
     from checker.config import load_config
-    from checker.engine.document import allowable_table
+    from checker.engine.allowable_output import allowable_table
     from checker.geometry import load_part
     from checker.operations.allowable import allowable_at_points, check_b_request, sampled_part
 

@@ -34,8 +34,9 @@ def summary_view(doc):
     of the program that is written)."""
     from rich.table import Table
 
+    from checker.commands.terminal import fixed
     from checker.cutter import parse_cutter
-    from checker.results import machine_line, stock_line
+    from checker.results import findings_in, machine_line, stock_line
 
     s, j = doc.summary, doc.job
     var = parse_cutter(j.cutter).size_symbol
@@ -52,9 +53,11 @@ def summary_view(doc):
         head += f"\nat the CAM's own angles: {_counts_line(s.counts_cam)}"
     if doc.orientation is not None:
         o = doc.orientation
+        greedy = ("" if o.greedy_total_rotation is None
+                  else f"greedy {o.greedy_total_rotation:.1f} deg, ")
         head += (f"\nrotary motion: chosen {o.dp_total_rotation:.1f} deg (shortest path), "
-                 f"greedy {o.greedy_total_rotation:.1f} deg, CAM {o.original_total_rotation:.1f}"
-                 f" deg; {o.infeasible_points} points with no feasible B")
+                 f"{greedy}CAM {o.original_total_rotation:.1f} deg; {o.infeasible_points} "
+                 "points with no feasible B")
     head += "\n" + stock_line(doc.stock, doc.job.stated_stock)
     if doc.machine is not None:
         head += "\n" + machine_line(doc.machine)
@@ -68,11 +71,11 @@ def summary_view(doc):
         for op in doc.operations:
             c = op.counts
             b = "-" if op.b_written is None else (
-                f"{op.b_written[0]:.3f}" if op.b_written[0] == op.b_written[1]
-                else f"{op.b_written[0]:.1f}..{op.b_written[1]:.1f}")
+                fixed(op.b_written[0], 3) if op.b_written[0] == op.b_written[1]
+                else f"{fixed(op.b_written[0], 1)}..{fixed(op.b_written[1], 1)}")
             t.add_row(str(op.index + 1), short_cutter(op.cutter), op.axis_class,
                       op.handling, b, f"{op.tolerance:.4f}",
-                      str(c.gouge + c.interference + c.holder + c.crash))
+                      str(findings_in(c)))
         out.append(t)
     if s.worst:
         t = Table(title="worst findings")
@@ -81,8 +84,8 @@ def summary_view(doc):
         for f in s.worst:
             where = f.point if f.point is not None else f.tip
             t.add_row(str(f.line), "CL" if f.kind == "cl" else f.kind, f.verdict,
-                      f"{f.depth or 0:.4f}", "-" if f.b is None else f"{f.b:.3f}",
-                      ", ".join(f"{x:.3f}" for x in where))
+                      f"{f.depth or 0:.4f}", "-" if f.b is None else fixed(f.b, 3),
+                      ", ".join(fixed(x, 3) for x in where))
         out.append(t)
     if j.part is None:
         return out

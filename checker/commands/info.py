@@ -28,7 +28,7 @@ def info(file: Path, json_out: Path | None) -> None:
 
     prepare_outputs([("--json", json_out, "info JSON")], [("the file", file)])
     if file.suffix.lower() in PART_SUFFIXES:
-        from checker.geometry.info import describe_part, format_part_info
+        from checker.geometry.part_info import describe_part, format_part_info
         from checker.progress import step
 
         with step("read the part"):  # a STEP or IGES file: seconds in OpenCASCADE
@@ -36,7 +36,7 @@ def info(file: Path, json_out: Path | None) -> None:
         _show(doc, format_part_info(doc), json_out)
         return
     from checker.apt import read_cl
-    from checker.apt.info import describe_toolpath, format_toolpath_info
+    from checker.apt.toolpath_info import describe_toolpath, format_toolpath_info
     from checker.errors import PathcheckError
     from checker.progress import step
 

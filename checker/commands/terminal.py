@@ -22,6 +22,13 @@ def text_console(*, stderr: bool = False):
     return Console(stderr=stderr, soft_wrap=True, width=PIPE_WIDTH, no_color=True)
 
 
+def fixed(value: float, decimals: int) -> str:
+    """`value` with `decimals` places for a table; a value that rounds to zero prints unsigned
+    (`0.000`, never `-0.000`: a 3-axis operation's B is -0.0 when computed from its axis)."""
+    text = f"{value:.{decimals}f}"
+    return text[1:] if text.startswith("-") and float(text) == 0.0 else text
+
+
 class TerminalView:
     """A `checker.progress.View` on stderr; `quiet` and `verbose` are set by the options before
     the first step. Nested steps are rows of one bar display, gone when the outer step ends."""

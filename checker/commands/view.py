@@ -54,7 +54,7 @@ def write_after_check(view_out: Path | None, doc, *, toolpath=None, cutter=None,
         return
     from checker.errors import PathcheckError, printable
     from checker.progress import step
-    from checker.view.page import write_view
+    from checker.view.viewer_page import write_view
 
     try:
         with step("write the 3-D view"):
@@ -95,7 +95,7 @@ def view(results: Path, output: Path | None, machine: str | None,
     from checker.errors import PathcheckError
     from checker.progress import step
     from checker.results import ResultsDocument
-    from checker.view.page import write_view
+    from checker.view.viewer_page import write_view
 
     output = output if output is not None else results.with_suffix(".html")
     prepare_outputs([("-o", output, "3-D view")], [("RESULTS", results), ("--config", config_path)])

@@ -1,5 +1,5 @@
 """The allowable-cutter engine: global search with sound pruning, batched local refinement in
-(u, v), the thesis's PSO baseline, verdicts."""
+(u, v), the thesis's PSO baseline, the advice."""
 
 from checker.engine.api import AllowableResult, allowable
 

@@ -1,6 +1,7 @@
 """`allowable(...)`: the allowable cutter size at many CC points (any tool axes). The inputs
 checked, the rows' tool frames (grid/), the global scan with sound pruning over the test points
-(scan/), the batched local refinement in (u, v) from its starts (refine/), verdicts.
+(scan/), the batched local refinement in (u, v) from its starts (refine/), the advice for the
+real cutter (advice.py).
 (docs/MATH.md §3.7, §5, §6)"""
 
 from __future__ import annotations
@@ -11,13 +12,14 @@ from typing import NamedTuple
 import numpy as np
 
 from checker.config import Config, default_config
+from checker.engine.advice import advice
 from checker.engine.grid.bins import part_tops
 from checker.engine.grid.family import family_bounds
-from checker.engine.grid.frames import group_axes, rotate_rows, tool_rotations
-from checker.engine.refine.best import RowBest, sampled
+from checker.engine.grid.rotations import group_axes, rotate_rows, tool_rotations
 from checker.engine.refine.contour_walk import along_contours
 from checker.engine.refine.limits import curvature_limit
 from checker.engine.refine.rings import ring_evaluations, ring_radii, ring_starts
+from checker.engine.refine.row_best import RowBest, sampled
 from checker.engine.refine.starts import (
     ON_SURFACE,
     Starts,
@@ -32,7 +34,6 @@ from checker.engine.scan.bound import warm_bounds
 from checker.engine.scan.contour import ContourSeeds
 from checker.engine.scan.search import binned_scan
 from checker.engine.sizes import RowFrame, horizontal_e, pair_sizes, size_args
-from checker.engine.verdict import verdicts
 from checker.errors import PathcheckError
 from checker.geometry.evaluate import evaluate_mixed
 from checker.geometry.inverse import invert_points
@@ -54,14 +55,15 @@ _NEAR_ITERATIONS = 2  # refinement steps of `sizes_near` (it starts at minima of
 class AllowableResult:
     """Per CC row (N,): `size` allowable size in the cutter's variable (R for flat, bull-nose
     and APT, r for ball and tapered ball), mm, inf = unbounded; `limiting_point (N, 3)` part
-    frame, mm (nan if none); `limiting_surface` (-1 if none); `limiting_uv (N, 2)`; `verdict`
-    for the real cutter; `margin` = size - real size (mm); `evaluations` of the imaginary size."""
+    frame, mm (nan if none); `limiting_surface` (-1 if none); `limiting_uv (N, 2)`; `advice`
+    for the real cutter (`checker.engine.advice.ADVICE`); `margin` = size - real size (mm);
+    `evaluations` of the imaginary size."""
 
     size: np.ndarray
     limiting_point: np.ndarray
     limiting_surface: np.ndarray
     limiting_uv: np.ndarray
-    verdict: np.ndarray
+    advice: np.ndarray
     margin: np.ndarray
     evaluations: np.ndarray
 
@@ -161,7 +163,7 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
     material) and tool axes `axes (N, 3)` or (3,) (tip -> spindle), all part frame, mm. The
     minimum over all test points of every surface, refined in (u, v) to the true minimum.
     `cc_surface (N,)`, `cc_uv (N, 2)`: the CC point's own surface and parameters (better
-    curvature limit; else the nearest test point's surface is used for the verdict). `toward
+    curvature limit; else the nearest test point's surface is used for the advice). `toward
     (N, 3)`: a direction from the CC point towards the tool axis (from the CL data) for normals
     along the axis. `method`: "exact" (this engine) or "pso" (thesis baseline, `seed`).
     `hint (N,)`: sizes expected (mm, e.g. at a nearby axis; nan: none): a first trial of the
@@ -206,11 +208,11 @@ def allowable(test_points: TestPoints, part: Part, cutter, cc, normals, axes=(0.
     lim_p[unbounded], lim_s[unbounded], lim_uv[unbounded] = np.nan, -1, np.nan
     dist = np.linalg.norm(lim_p - cc, axis=1)
     real = float(cutter.size)
-    verdict = verdicts(size, real, cfg.check.tolerance, faces_away, (lim_s == own) & (lim_s >= 0),
-                       np.where(np.isfinite(dist), dist, np.inf),
-                       cfg.check.gouge_neighbourhood * 0.5 * float(cutter.d))
+    said = advice(size, real, cfg.check.tolerance, faces_away, (lim_s == own) & (lim_s >= 0),
+                  np.where(np.isfinite(dist), dist, np.inf),
+                  cfg.check.gouge_neighbourhood * 0.5 * float(cutter.d))
     size[faces_away] = 0.0
-    return AllowableResult(size, lim_p, lim_s, lim_uv, verdict, size - real, evals)
+    return AllowableResult(size, lim_p, lim_s, lim_uv, said, size - real, evals)
 
 
 def upper_bounds(test_points: TestPoints, part: Part, cutter, cc, normals, axes, *,
@@ -287,7 +289,7 @@ def _on_mesh(part: Part, cutter, cc: np.ndarray, normals: np.ndarray, axes: np.n
              cfg: Config) -> AllowableResult:
     """A mesh part: the allowable size by the exact triangle tests (`mesh.allowable_on_mesh`,
     bisection on the size, up to the part's diagonal: larger is unbounded); no limiting point
-    (the bisection gives none); verdicts by the same rule as on surfaces, every limit counted
+    (the bisection gives none); the advice by the same rule as on surfaces, every limit counted
     on the CC point's own surface (a mesh has no surfaces to tell them apart)."""
     from checker.mesh import MeshIndex
     from checker.mesh.depth import allowable_on_mesh
@@ -306,10 +308,10 @@ def _on_mesh(part: Part, cutter, cc: np.ndarray, normals: np.ndarray, axes: np.n
         size[ok] = allowable_on_mesh(index, cutter, cc[ok], normals[ok], axes[ok],
                                      tol=max(cfg.check.tolerance, 1e-6), s_max=cap)
     nowhere = np.full((n, 3), np.nan)
-    verdict = verdicts(size, float(cutter.size), cfg.check.tolerance, faces_away,
-                       np.ones(n, bool), np.zeros(n), 0.0)
+    said = advice(size, float(cutter.size), cfg.check.tolerance, faces_away,
+                  np.ones(n, bool), np.zeros(n), 0.0)
     return AllowableResult(size, nowhere, np.full(n, -1, dtype=np.int64),
-                           np.full((n, 2), np.nan), verdict, size - float(cutter.size),
+                           np.full((n, 2), np.nan), said, size - float(cutter.size),
                            np.zeros(n, dtype=np.int64))
 
 

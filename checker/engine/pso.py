@@ -12,8 +12,8 @@ import numpy as np
 from scipy.optimize import minimize
 
 from checker.config import EngineConfig
-from checker.engine.refine.best import RowBest
 from checker.engine.refine.objective import Objective
+from checker.engine.refine.row_best import RowBest
 from checker.engine.sizes import RowFrame
 from checker.part import Part
 

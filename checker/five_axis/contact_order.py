@@ -36,7 +36,7 @@ from typing import NamedTuple
 import numpy as np
 
 from checker.five_axis.curvature import LocalSurface, local_surface
-from checker.five_axis.frames import angles_from_axes, axes_from_angles, local_frames
+from checker.five_axis.lead_tilt import angles_from_axes, axes_from_angles, local_frames
 
 _NEWTON = 40
 

@@ -19,8 +19,8 @@ import math
 import numpy as np
 
 from checker.five_axis.contact_order import contact_order_axes
-from checker.five_axis.plan import FivePlan, finish_plan, operation_setting
 from checker.five_axis.posture import Posture
+from checker.five_axis.reorient import FivePlan, finish_plan, operation_setting
 
 METHOD = "contact order (Liu et al.)"
 

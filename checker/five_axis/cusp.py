@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.five_axis.frames import Frames
+from checker.five_axis.lead_tilt import Frames
 from checker.mesh import tool_pieces
 
 _ROWS = 512      # rows per block (the profile samples of a block are held at once)

@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from checker.five_axis.frames import Frames, axes_from_angles, local_frames
+from checker.five_axis.lead_tilt import Frames, axes_from_angles, local_frames
 
 LIMIT = math.radians(60.0)     # default |lead|, |tilt| limit
 STEP = math.radians(5.0)       # default coarse grid step

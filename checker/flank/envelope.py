@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.cutter import Cutter
-from checker.flank.motion import MotionState
+from checker.flank.spline_motion import MotionState
 
 
 def profile(cutter: Cutter, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

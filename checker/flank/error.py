@@ -12,7 +12,7 @@ import numpy as np
 
 from checker.cutter import Cutter
 from checker.flank.envelope import grazing
-from checker.flank.motion import ToolMotion
+from checker.flank.spline_motion import ToolMotion
 from checker.geometry.evaluate import evaluate
 from checker.geometry.inverse import invert_points
 from checker.geometry.nearest import PointTree

@@ -15,7 +15,7 @@ from scipy.sparse import lil_matrix
 
 from checker.cutter import Cutter
 from checker.flank.error import ErrorField, envelope_error
-from checker.flank.motion import ToolMotion
+from checker.flank.spline_motion import ToolMotion
 from checker.part import Surface
 
 REACH = 2  # a pose's points move the spline this many moves away, as far as the Jacobian sees

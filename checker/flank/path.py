@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from checker.apt.writer import apt_text
+from checker.apt.write import apt_text
 from checker.errors import PathcheckError
 from checker.toolpath import MotionArrays, Record, ToolPath
 from checker.units import MM_PER_INCH

@@ -16,7 +16,7 @@ from matplotlib.colors import TwoSlopeNorm  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from checker.atomic import write_file  # noqa: E402
-from checker.flank.results import ErrorMap  # noqa: E402
+from checker.flank.error_document import ErrorMap  # noqa: E402
 
 
 def _grid(m: ErrorMap) -> np.ndarray:

@@ -11,10 +11,10 @@ from checker.cutter import Cutter
 from checker.errors import PathcheckError
 from checker.flank.envelope import profile
 from checker.flank.error import envelope_error, foot_points
-from checker.flank.motion import ToolMotion
+from checker.flank.error_document import FlankDocument, Optimisation, flank_result
 from checker.flank.optimise import optimise_axis
 from checker.flank.path import flank_pass
-from checker.flank.results import FlankDocument, Optimisation, flank_result
+from checker.flank.spline_motion import ToolMotion
 from checker.part import Part
 from checker.toolpath import ToolPath
 

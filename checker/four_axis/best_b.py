@@ -69,7 +69,7 @@ class Limited(NamedTuple):
 
 
 class Tracked(Protocol):
-    """The engine over B with the points that limit its sizes (`four_axis.plan.OverB`)."""
+    """The engine over B with the points that limit its sizes (`four_axis.over_b.OverB`)."""
 
     def sizes(self, rows: np.ndarray, b_deg: np.ndarray) -> np.ndarray: ...
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from checker.config import GeometryConfig, default_config
 from checker.errors import PathcheckError, read_input
-from checker.geometry.limits import check_mesh, check_surface
+from checker.geometry.part_limits import check_mesh, check_surface
 from checker.part import Part
 from checker.sandbox import Limits
 
@@ -58,7 +58,7 @@ def load_part(path: str | Path, geometry: GeometryConfig | None = None) -> Part:
 
     Raises PathcheckError(code="part") naming the file when it is missing, unreadable, of an
     unsupported kind, holds no usable surface or a number out of its sane range
-    (`checker.geometry.limits`), or when its reader crashes or passes a limit.
+    (`checker.geometry.part_limits`), or when its reader crashes or passes a limit.
     """
     path = Path(path)
     kind = _READERS.get(path.suffix.lower())

@@ -8,7 +8,7 @@ inside of the curve, otherwise the inside is cut away (geomdl's convention).
 
 Hostile documents are bounded before any number is used: nesting deeper than `MAX_DEPTH`, YAML
 whose aliases would expand to more than `_yaml_node_limit` nodes, and any value out of the
-ranges of `checker.geometry.limits` are one error naming the file and the surface.
+ranges of `checker.geometry.part_limits` are one error naming the file and the surface.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import numpy as np
 import yaml
 
 from checker.errors import PathcheckError
-from checker.geometry.limits import (
+from checker.geometry.part_limits import (
     MAX_DEGREE,
     MAX_TRIM_POINTS,
     check_coordinates,

@@ -47,7 +47,7 @@ class LoopSet:
         seg = np.concatenate(segs) if segs else np.zeros((0, 2, 2))
         seg = seg[seg[:, 0, 1] != seg[:, 1, 1]]  # horizontal edges never cross a +u ray
         # a loop with a non-finite point is refused by the part's range check
-        # (`geometry/limits.py`); its edges stay out of the index meanwhile
+        # (`geometry/part_limits.py`); its edges stay out of the index meanwhile
         seg = seg[np.isfinite(seg).all(axis=(1, 2))]
         self._x0, self._y0 = seg[:, 0, 0].copy(), seg[:, 0, 1].copy()
         self._x1, self._y1 = seg[:, 1, 0].copy(), seg[:, 1, 1].copy()

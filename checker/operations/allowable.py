@@ -13,8 +13,8 @@ import numpy as np
 from checker.b_axis import check_b_range
 from checker.config import Config
 from checker.engine import AllowableResult, allowable
-from checker.engine.document import allowable_document
-from checker.four_axis.job import best_b_points
+from checker.engine.allowable_output import allowable_document
+from checker.four_axis.b_plan import best_b_points
 from checker.geometry.sampling import TestPoints, sample_part
 from checker.part import Part
 from checker.progress import step
@@ -55,7 +55,7 @@ def allowable_at_points(sampled: SampledPart, cutter, cc: np.ndarray, normals: n
                         cached: bool = False) -> dict[str, Any]:
     """The largest cutter of `cutter`'s family at each CC point `cc (N, 3)` with unit normals
     `normals (N, 3)` and unit tool axis `axis (3,)`: the document `{cutter, method, points,
-    timing}` (`engine.document.allowable_document`); with `b_range` (degrees, checked against
+    timing}` (`allowable_output.allowable_document`); with `b_range` (degrees, checked against
     the config) every point also gets `b_best`, `allowable_at_best` and `b_feasible`. `cached`:
     the part was loaded before (its load and sample times count 0)."""
     check_b_request(b_range, config)

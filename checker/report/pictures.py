@@ -44,7 +44,7 @@ from PIL import Image  # noqa: E402
 from checker.atomic import write_file  # noqa: E402
 from checker.report.standard import StandardCutters  # noqa: E402
 from checker.results import VERDICTS  # noqa: E402
-from checker.verdict import FINDINGS  # noqa: E402
+from checker.verdict import is_finding  # noqa: E402
 
 PANEL_IN = (5.6, 3.9)  # width, height of one picture, inches (shown 538 x 374 CSS px)
 TREND_IN = (9.0, 3.0)  # the trend picture, inches
@@ -60,7 +60,8 @@ VERDICT_COLOURS = {
 STANDARD_NONE = "#d62728"  # no standard cutter fits
 B_RANGES = (10.0, 30.0, 60.0, 90.0, 180.0)  # degrees: the fixed scales of the B panel
 AXES = "XYZ"
-FINDING_CODES = np.array([VERDICTS.index(v) for v in FINDINGS])
+# per verdict code (the store's: an index into VERDICTS) whether it is a finding, by the one rule
+FINDING_BY_CODE = is_finding(np.array(VERDICTS, dtype=object))
 MAP_DPI = 150  # the `pathcheck map` pictures print at this dpi; their text is at least 9 pt
 
 if TYPE_CHECKING:
@@ -78,11 +79,6 @@ def png_base64(rgba: np.ndarray, dpi: float) -> str:
     image.convert("RGB").quantize(256, method=Image.Quantize.FASTOCTREE).save(
         buf, "PNG", dpi=(dpi, dpi))
     return base64.b64encode(buf.getvalue()).decode("ascii")
-
-
-def is_finding(verdict: np.ndarray) -> np.ndarray:
-    """(N,) bool: the verdict codes (into VERDICTS) that are findings (`checker.verdict`)."""
-    return np.isin(verdict, FINDING_CODES)
 
 
 def _projection(cc: np.ndarray) -> tuple[int, int]:
@@ -279,7 +275,7 @@ class JobPainter:
         allow_rgba[unbounded] = self.unbounded_rgba
         std_rgba = standard_colours(len(standard.names))[standard.largest(allowable) + 1]
         flat, n = np.full(int(cl.sum()), dot), np.zeros(int(cl.sum()), dtype=int)
-        found = is_finding(verdict).astype(int)
+        found = FINDING_BY_CODE[verdict].astype(int)
         pictures = [
             self._png(allow, xy[cl], allow_rgba, flat, n, view),
             self._png(self._standard(standard.names), xy[cl], std_rgba, flat, n, view),

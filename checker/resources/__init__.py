@@ -2,7 +2,7 @@
 has them): `defaults.toml` (configuration), `tools.toml` (tool library), `machines/*.toml`,
 `schemas/*.json` (published JSON Schemas), `warmup/` (the small job that compiles the
 kernels once per install) and, in a wheel, `kernels/` (its portable compiled kernels, built by
-`make wheel`, not kept in git: `checker.cache`)."""
+`make wheel`, not kept in git: `checker.kernel_cache`)."""
 
 from __future__ import annotations
 

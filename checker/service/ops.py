@@ -19,7 +19,7 @@ from checker.cc_points import Rows, check_reach, unit_normals
 from checker.config import Config
 from checker.errors import PathcheckError
 from checker.service import protocol as p
-from checker.service.cache import CachedPart, PartCache, deep_nbytes, file_key, json_key
+from checker.service.part_cache import CachedPart, PartCache, deep_nbytes, file_key, json_key
 from checker.service.roots import Roots, redact
 
 

@@ -30,7 +30,8 @@ class AllowablePoint(BaseModel):
     allowable: float | None = Field(description="allowable size, mm; null = unbounded")
     limiting_point: Vec3 | None = None
     limiting_surface: int | None = None
-    verdict: str
+    advice: str = Field(description="the real cutter at this CC point: fits, too_large_near, "
+                        "too_large_far or inaccessible (`checker.engine.advice`)")
     margin: float | None = Field(None, description="allowable - real size, mm")
     evaluations: int | None = None
     b_best: float | None = None

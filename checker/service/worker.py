@@ -37,8 +37,8 @@ import zmq
 from checker.config import Config, default_config
 from checker.errors import PathcheckError
 from checker.service import protocol as p
-from checker.service.cache import PartCache, file_key
 from checker.service.ops import OPS, WorkerState
+from checker.service.part_cache import PartCache, file_key
 from checker.service.recorder import NullRecorder, Recorder, open_recorder
 from checker.service.roots import Roots
 

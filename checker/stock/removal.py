@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.mesh.tool import ToolPieces
-from checker.stock import sweep as sw
+from checker.stock import swept_piece as sw
 from checker.stock.dexels import Dexels
 
 ENGAGE = 1e-3        # mm: a ray the body removes more than this from counts as engaged

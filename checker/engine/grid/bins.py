@@ -36,7 +36,7 @@ from typing import NamedTuple
 import numpy as np
 
 from checker.engine.grid.candidates import CellGrid, build_grid
-from checker.engine.grid.frames import group_axes, tool_rotation
+from checker.engine.grid.rotations import group_axes, tool_rotation
 from checker.geometry.sampling import TestPoints
 
 _BIN_DEG = 8.0  # lattice step on the unit sphere, degrees

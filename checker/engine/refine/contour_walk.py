@@ -19,8 +19,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from checker.engine.grid.frames import heights, row_height
-from checker.engine.refine.best import RowBest
+from checker.engine.grid.rotations import heights, row_height
 from checker.engine.refine.objective import (
     CONTOUR_STEPS,
     Objective,
@@ -28,6 +27,7 @@ from checker.engine.refine.objective import (
     point_batch,
     surface_size,
 )
+from checker.engine.refine.row_best import RowBest
 from checker.engine.sizes import RowFrame
 from checker.geometry.evaluate import eval_range
 from checker.part import Part

@@ -36,7 +36,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from checker.engine.grid.frames import rotate_rows
+from checker.engine.grid.rotations import rotate_rows
 from checker.engine.sizes import RowFrame
 from checker.geometry.evaluate import evaluate_mixed
 from checker.geometry.fundamental import second_form, tangent_basis, uv_of_tangents

@@ -15,7 +15,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from checker.engine.grid.frames import rotated, row_height
+from checker.engine.grid.rotations import rotated, row_height
 from checker.engine.sizes import RowFrame, point_size, size_args
 from checker.geometry.evaluate import EvalScratch, eval_range, eval_scratch, packed_part
 from checker.geometry.newton_uv import newton_step

@@ -22,7 +22,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from checker.engine.grid.frames import rotated
+from checker.engine.grid.rotations import rotated
 from checker.engine.refine.objective import Objective, point_batch
 from checker.engine.refine.starts import Contacts, Starts
 from checker.engine.sizes import RowFrame, point_size

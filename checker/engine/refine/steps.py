@@ -33,7 +33,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from checker.engine.grid.frames import rotated, row_height
+from checker.engine.grid.rotations import rotated, row_height
 from checker.engine.refine.objective import FLOOR_STEPS, Objective, exact_size, point_batch
 from checker.engine.sizes import RowFrame, SizeArgs, point_size
 from checker.geometry.evaluate import eval_range

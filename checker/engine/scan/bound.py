@@ -21,7 +21,7 @@ from checker.engine.grid.candidates import (
     grid_view,
     inside,
 )
-from checker.engine.grid.frames import in_row_frame, is_identity, rotated
+from checker.engine.grid.rotations import in_row_frame, is_identity, rotated
 from checker.engine.sizes import SizeArgs, point_size
 
 _COARSE_POINTS = 512  # at most about this many cells per row are sampled by `coarse_bounds`

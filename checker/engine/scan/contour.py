@@ -16,7 +16,7 @@ import numpy as np
 
 from checker import kernels
 from checker.engine.grid.candidates import CellGrid, cell_heights
-from checker.engine.grid.frames import in_row_frame, is_identity
+from checker.engine.grid.rotations import in_row_frame, is_identity
 
 _EPS_Z = 1e-6  # mm by which a cell must clear the bottom plane to be passed over
 _SKIP_MM = 1e-9  # relative and absolute (mm) margin of a bound over the slots against rounding

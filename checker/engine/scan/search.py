@@ -33,7 +33,7 @@ import numpy as np
 
 from checker.engine.grid.bins import axis_bins, tool_grid
 from checker.engine.grid.candidates import CellGrid, region_rows
-from checker.engine.grid.frames import identity_rows
+from checker.engine.grid.rotations import identity_rows
 from checker.engine.scan.bound import Bounds, coarse_bounds, warm_bounds
 from checker.engine.scan.contour import ContourSeeds, Crossings, EdgeData, edge_data
 from checker.engine.scan.sweep import Minima, Scan, sweep

@@ -19,7 +19,7 @@ from checker.engine.grid.candidates import (
     grid_view,
     inside,
 )
-from checker.engine.grid.frames import in_row_frame, is_identity
+from checker.engine.grid.rotations import in_row_frame, is_identity
 from checker.engine.scan.basins import row_seeds
 from checker.engine.scan.contour import (
     ContourSeeds,

@@ -431,25 +431,25 @@ def posed_interval(prof, n, rho, tx, ty, tz, ux, uy, uz, px, py, s0, s1):
         return 0.0, -1.0
     c0 = s0
     if fa > 0.0:
-        a, b = s0, sin_
-        while b - a > _TOL:
-            m = 0.5 * (a + b)
-            if _f_ray(m, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho) <= 0.0:
-                b = m
-            else:
-                a = m
-        c0 = a
+        c0 = _boundary(s0, sin_, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho)
     c1 = s1
     if fb > 0.0:
-        a, b = sin_, s1
-        while b - a > _TOL:
-            m = 0.5 * (a + b)
-            if _f_ray(m, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho) <= 0.0:
-                a = m
-            else:
-                b = m
-        c1 = b
+        c1 = _boundary(s1, sin_, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho)
     return c0, c1
+
+
+@nb.njit(cache=True)
+def _boundary(outside, inside, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho):
+    """The z where the vertical ray (px, py) leaves the piece between `outside` (f > 0) and
+    `inside` (f <= 0), either below or above it, bisected to `_TOL` mm: the end on the outside,
+    so that the interval returned covers the piece."""
+    while abs(inside - outside) > _TOL:
+        m = 0.5 * (outside + inside)
+        if _f_ray(m, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho) <= 0.0:
+            inside = m
+        else:
+            outside = m
+    return outside
 
 
 @nb.njit(cache=True, inline="always")

@@ -19,10 +19,16 @@ from checker.errors import PathcheckError
 from checker.mesh.tool import tool_pieces
 from checker.moves import FEED, RAPID, START, Moves
 from checker.progress import step
-from checker.results import MoveEngagement, StockFinding, StockOperation, StockResult, VerdictCounts
+from checker.results import (
+    MoveEngagement,
+    StockFinding,
+    StockOperation,
+    StockResult,
+    verdict_counts,
+)
 from checker.stock.dexels import Dexels
 from checker.stock.fixtures import Fixture, load_fixture
-from checker.stock.motion import sweep_items
+from checker.stock.removal_items import sweep_items
 from checker.stock.request import StockRequest
 from checker.toolpath import MotionArrays
 from checker.verify import ProgramMotion, tool_depths
@@ -93,9 +99,9 @@ def _resolution(request: StockRequest, extent: np.ndarray, default) -> float:
 
 def _stock_box(stock: Dexels) -> np.ndarray:
     """(2, 3) the box of the stock's rays and material: the tool points that can cut it."""
-    slot = np.arange(stock.capacity)[None, None, :] < stock.count[:, :, None]
-    zlo = float(np.where(slot, stock.lo, np.inf).min(initial=np.inf))
-    zhi = float(np.where(slot, stock.hi, -np.inf).max(initial=-np.inf))
+    filled = stock.count > 0
+    zlo = float(stock.bottom()[filled].min(initial=np.inf))
+    zhi = float(stock.top()[filled].max(initial=-np.inf))
     return np.array([[stock.x0, stock.y0, zlo],
                      [stock.x0 + stock.nx * stock.h, stock.y0 + stock.ny * stock.h, zhi]])
 
@@ -137,10 +143,6 @@ class _Verdicts:
         self.verdict[worse], self.depth[worse], self.against[worse] = (
             verdict[worse], depth[worse], against)
 
-    def counts(self) -> VerdictCounts:
-        return VerdictCounts(**{k: int((self.verdict == k).sum()) for k in vd.VERDICTS
-                                if k in VerdictCounts.model_fields})
-
 
 @dataclass
 class _Removed:
@@ -178,8 +180,9 @@ def check_stock(job, motion: ProgramMotion, cutters: dict, tol, request: StockRe
     fixtures = [load_fixture(text, job.cfg) for text in request.fixtures]
     for fx in fixtures:
         _against_fixture(fx, program, motion, job.cfg.check.reach, verdicts)
-    result = StockResult(**base, fixtures=[f.name for f in fixtures], counts=verdicts.counts(),
-                         findings=verdicts.findings, time_s=time.perf_counter() - t0)
+    result = StockResult(**base, fixtures=[f.name for f in fixtures],
+                         counts=verdict_counts(verdicts.verdict), findings=verdicts.findings,
+                         time_s=time.perf_counter() - t0)
     return StockCheck(verdicts.verdict, verdicts.depth, verdicts.against, result)
 
 
@@ -223,7 +226,7 @@ def _against_stock(job, program: _Program, motion: ProgramMotion, cutters: dict,
 def _remove(stock: Dexels, program: _Program, motion: ProgramMotion, step_mm: float,
             out_dir: Path | None, design) -> _Removed:
     """Cut `stock` by every operation in program order (`checker.stock.removal.remove` on the
-    items of `checker.stock.motion.sweep_items`): what each move removed, and each
+    items of `checker.stock.removal_items.sweep_items`): what each move removed, and each
     operation's summary (its stock written to `out_dir`, compared by `design`)."""
     from checker.stock.removal import remove
 

@@ -34,7 +34,7 @@ def sweep_items(moves: Moves, poses: np.ndarray, box: np.ndarray, step: float,
     """The items of poses `poses` (one operation's, ascending): each START pose alone, each
     move (i - 1, i) as one translation or as its poses `step` mm apart. With table angles `b`
     (per pose, degrees) the machine moves linearly in X Y Z B about Y through `center`; with
-    `path` (a `checker.five_axis.motion.MachinePath`) its joints run linearly."""
+    `path` (a `checker.five_axis.machine_motion.MachinePath`) its joints run linearly."""
     center = np.zeros(3) if center is None else np.asarray(center, float)
     poses = np.asarray(poses, dtype=np.int64)
     starts = poses[moves.kind[poses] == START]

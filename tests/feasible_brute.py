@@ -1,9 +1,9 @@
-"""The refined boundary against a brute-force scan (docs/MATH.md §10.2), for any part and CC
-points: along the grid line of every boundary edge, over the edge and one grid step beyond
-each end, the orientations `step` apart are judged one by one (in one batch), and the
-brute-force boundary is where neighbouring samples differ. A crossing is within the stated
-tolerance when it lies within `tolerance` of a brute-force transition interval (the true
-boundary lies in that interval; the crossing is on its feasible side). Radians."""
+"""Test oracle: the refined boundary against a brute-force scan (docs/MATH.md §10.2), for any part
+and CC points: along the grid line of every boundary edge, over the edge and one grid step beyond
+each end, the orientations `step` apart are judged one by one (in one batch), and the brute-force
+boundary is where neighbouring samples differ. A crossing is within the stated tolerance when it
+lies within `tolerance` of a brute-force transition interval (the true boundary lies in that
+interval; the crossing is on its feasible side). Radians."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from typing import NamedTuple
 import numpy as np
 
 from checker.five_axis.feasible import FeasibleRegion, Machine, feasible_at
-from checker.five_axis.frames import local_frames
+from checker.five_axis.lead_tilt import local_frames
 
 
 class BruteCheck(NamedTuple):

@@ -17,7 +17,7 @@ from checker.b_axis import (
 from checker.config import Config
 from checker.engine.grid.bins import drop_table_grids
 from checker.four_axis.best_b import best_b
-from checker.four_axis.plan import (
+from checker.four_axis.over_b import (
     Orientations,
     OverB,
     allowable_over_b,

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.five_axis.feasible import FeasibleRegion, Machine, feasible_region
-from checker.five_axis.frames import Frames, angles_from_axes, axes_from_angles, local_frames
+from checker.five_axis.lead_tilt import Frames, angles_from_axes, axes_from_angles, local_frames
 from checker.five_axis.poses import PoseJudge
 from checker.five_axis.posture import Candidates, Posture, mb_spline_fairing, shortest_posture
 

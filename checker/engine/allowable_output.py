@@ -19,7 +19,7 @@ def _vec(v: np.ndarray, nd: int = 6) -> list[float] | None:
 
 def allowable_document(res: AllowableResult, cc: np.ndarray, normals: np.ndarray, cutter,
                        method: str, timing: dict[str, float]) -> dict:
-    """`points[] {index, cc, normal, allowable, limiting_point, limiting_surface, verdict,
+    """`points[] {index, cc, normal, allowable, limiting_point, limiting_surface, advice,
     margin, evaluations}` (mm; allowable null = unbounded), the cutter and `timing` (s)."""
     points = [
         {
@@ -30,7 +30,7 @@ def allowable_document(res: AllowableResult, cc: np.ndarray, normals: np.ndarray
             "limiting_point": _vec(res.limiting_point[i]),
             "limiting_surface": (None if res.limiting_surface[i] < 0
                                  else int(res.limiting_surface[i])),
-            "verdict": str(res.verdict[i]),
+            "advice": str(res.advice[i]),
             "margin": _num(res.margin[i]),
             "evaluations": int(res.evaluations[i]),
         }
@@ -52,7 +52,7 @@ def allowable_table(doc: dict, limit: int = 60):
     var = doc["cutter"]["variable"]
     t = Table(title=f"allowable {var} for {doc['cutter']['apt']} ({doc['method']})")
     four = bool(doc["points"]) and "b_best" in doc["points"][0]
-    cols = ["#", "cc (mm)", f"allowable {var}", "limiting point", "surf", "verdict"]
+    cols = ["#", "cc (mm)", f"allowable {var}", "limiting point", "surf", "advice"]
     if four:
         cols += ["best B (deg)", f"{var} at best", "feasible B (deg)"]
     for col in cols:
@@ -62,7 +62,7 @@ def allowable_table(doc: dict, limit: int = 60):
     for p in doc["points"][:limit]:
         s = "-" if p["limiting_surface"] is None else str(p["limiting_surface"])
         row = [str(p["index"]), fmt(p["cc"]), size(p["allowable"]), fmt(p["limiting_point"]), s,
-               p["verdict"]]
+               p["advice"]]
         if four:
             feasible = " ".join(f"[{lo:.2f}, {hi:.2f}]" for lo, hi in p["b_feasible"]) or "none"
             row += [f"{p['b_best']:.2f}", size(p["allowable_at_best"]), feasible]

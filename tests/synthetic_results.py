@@ -1,4 +1,4 @@
-"""Synthetic but realistic results documents, for the report's tests, benchmark and demo page
+"""Test data: synthetic but realistic results documents, for the report's tests and benchmark
 before real jobs exist: a raster path of n x n CC points over a wavy mould surface
 z = A sin(x/a) cos(y/b) (mm, part frame), ball cutter, allowable radius from the concave
 curvature (1/k where the surface is concave, unbounded where convex), 4-axis B values from the

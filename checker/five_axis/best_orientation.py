@@ -18,7 +18,7 @@ import numpy as np
 
 from checker.five_axis.cusp import cusp_heights
 from checker.five_axis.feasible import FeasibleRegion, Machine, feasible_at
-from checker.five_axis.frames import Frames, axes_from_angles, local_frames
+from checker.five_axis.lead_tilt import Frames, axes_from_angles, local_frames
 
 Objective = Callable[[np.ndarray, np.ndarray], np.ndarray]  # (point (M,), axes (M, 3)) -> (M,)
 

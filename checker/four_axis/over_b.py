@@ -1,6 +1,7 @@
 """The 4-axis plan of a path: per CC point the allowable size as a function of the table angle B,
 the best B and the feasible B intervals for the real cutter; along the path the B chosen by the
-shortest path (and the seed-002 greedy smoothing beside it). The real tool along the program
+shortest path (and, when the config asks for it, `four_axis.greedy_baseline`, the greedy
+smoothing of Jun, Lee and Cha (2002) beside it, to compare). The real tool along the program
 that is written is checked by `checker.verify`. Part frame, mm, degrees.
 (docs/MATH.md §7)
 """
@@ -24,12 +25,13 @@ from checker.four_axis.orientation import (
 
 @dataclass(frozen=True)
 class Orientations:
-    """B per CC point: the CAM's, the best, the chosen (shortest path) and the greedy one."""
+    """B per CC point: the CAM's, the best, the chosen (shortest path) and the greedy one (None
+    unless the config's `four_axis.greedy_baseline` asks for it)."""
 
     original: np.ndarray
     best: BestB
     chosen: Orientation
-    greedy: Orientation
+    greedy: Orientation | None
 
 
 def _take(a: np.ndarray | None, rows: np.ndarray) -> np.ndarray | None:
@@ -175,12 +177,13 @@ def plan_orientations(
 ) -> Orientations:
     """Best B and feasible intervals of every CC point (`fn` exact, `coarse_fn` its cheaper
     upper bound for the scan, `bound_fn` a still cheaper one of that: see `best_b`), then the
-    shortest-path and greedy orientations inside them. `b_original` (N,) the CAM's B (nan:
-    none), `path_length` (N,) mm of the step arriving at each point, `required` the size the
-    real cutter needs (mm). `searched()`, when given, is called once the best-B search is done
-    (before the shortest path's own memory is taken). `tracked`: `fn` with its limiting points
-    (`OverB`), for a refinement from fewer evaluations, `edge_fn` where the points turn away
-    from the axis (`facing_edges`), for the interval ends there (`best_b`)."""
+    shortest-path orientation inside them (and the greedy one when `greedy_baseline`).
+    `b_original` (N,) the CAM's B (nan: none), `path_length` (N,) mm of the step arriving at
+    each point, `required` the size the real cutter needs (mm). `searched()`, when given, is
+    called once the best-B search is done (before the shortest path's own memory is taken).
+    `tracked`: `fn` with its limiting points (`OverB`), for a refinement from fewer evaluations,
+    `edge_fn` where the points turn away from the axis (`facing_edges`), for the interval ends
+    there (`best_b`)."""
     fa = cfg.four_axis
     n = len(b_original)
     best = best_b(fn, n, b_min=b_range[0], b_max=b_range[1], coarse_step=fa.b_coarse_step,
@@ -189,7 +192,7 @@ def plan_orientations(
     if searched is not None:
         searched()
     optima = interval_optima(best.grid, best.samples, best.feasible)
-    greedy, _ = greedy_smoothing(optima, best.b_best)
+    greedy = greedy_smoothing(optima, best.b_best)[0] if fa.greedy_baseline else None
     extra = np.concatenate(optima) if any(len(o) for o in optima) else None
     chosen = shortest_path_orientation(
         best.feasible, b_original, best.b_best, path_length, b_min=b_range[0], b_max=b_range[1],
