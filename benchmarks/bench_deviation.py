@@ -13,6 +13,7 @@ import sys
 import time
 from pathlib import Path
 
+from checker.check.options import CheckOptions
 from checker.job import check_job
 from checker.stock.request import StockRequest
 
@@ -26,7 +27,7 @@ def main(argv: list[str]) -> None:
         return
     h = float(argv[0]) if argv else 0.05
     t0 = time.perf_counter()
-    doc = check_job(JOB, stock=StockRequest("box:+3", resolution=h))
+    doc = check_job(JOB, options=CheckOptions(stock=StockRequest("box:+3", resolution=h)))
     wall = time.perf_counter() - t0
     st, m = doc.stock, doc.stock.machined
     simulation = st.time_s - m.time_s

@@ -11,6 +11,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from checker.check.options import CheckOptions
 from checker.job import check_job
 
 JOB = Path(__file__).resolve().parents[1] / "samples" / "compressor" / "compressor.apt"
@@ -20,7 +21,8 @@ def main() -> None:
     job = Path(sys.argv[1]) if len(sys.argv) > 1 else JOB
     with tempfile.TemporaryDirectory() as tmp:
         t = time.perf_counter()
-        doc = check_job(job, output=Path(tmp) / "out.nc", on_findings="comment")
+        doc = check_job(job, options=CheckOptions(output=Path(tmp) / "out.nc",
+                                                 on_findings="comment"))
         wall = time.perf_counter() - t
     s, o = doc.summary, doc.orientation
     print(f"{job.name}: {s.cl_points} poses at CL records, {s.poses_checked} poses checked "

@@ -79,12 +79,13 @@ def run_one(path: str, job_function: str = DEFAULT_JOB_FUNCTION) -> JobOutcome:
     """Check one job (in a pool worker or on a Dask worker); never raises for a bad job. A
     folder's `pathcheck-stock.toml` gives its jobs a stock and fixtures
     (`checker.stock.request.folder_stock`)."""
+    from checker.check.options import CheckOptions
     from checker.stock.request import folder_stock
 
     start = time.perf_counter()
     try:
         stock = folder_stock(Path(path))
-        doc = _job_function(job_function)(path, **({} if stock is None else {"stock": stock}))
+        doc = _job_function(job_function)(path, options=CheckOptions(stock=stock))
         return JobOutcome(path, doc.model_dump_json(), None, time.perf_counter() - start)
     except PathcheckError as err:
         reason = str(err)

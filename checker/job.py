@@ -19,6 +19,7 @@ import numpy as np
 from checker import input_limits, verdict, written
 from checker.apt import read_cl
 from checker.b_axis import check_four_axis
+from checker.check.options import CheckOptions
 from checker.collide.section import add_to_document, machine_section
 from checker.config import Config
 from checker.document import build_document, stock_document
@@ -39,6 +40,7 @@ from checker.stock.check import check_stock
 from checker.stock.request import StockRequest
 from checker.tolerance import operation_tolerances
 
+_DEFAULTS = CheckOptions()
 _AXIS_TOL = 1e-9  # axes equal to this are one axis (an indexed operation)
 
 
@@ -52,71 +54,49 @@ def operation_class(axes: np.ndarray, j_tol: float) -> str:
     return "4-axis-Y" if np.abs(axes[:, 1]).max() <= j_tol else "multi-axis"
 
 
-def check_job(apt_path, part_path=None, cutter=None, machine=None, config=None,
-              output=None, *, b_range: tuple[float, float] | None = None,
-              reorient: bool = False, strategy: str = "allowable",
-              part_transform: str | None = None, cutter_units: str | None = None,
-              on_findings: str = "refuse", stock: StockRequest | None = None,
-              machine_clearance: float | None = None) -> ResultsDocument:
+def check_job(apt_path, part_path=None, options: CheckOptions = _DEFAULTS) -> ResultsDocument:
     """Check a job: `apt_path` the CL file; `part_path` the part (default: the file beside the
-    job with the same stem); `cutter` a `Cutter` or "CUTTER/..." overriding the file's; `config`
-    a Config or a TOML path; `machine` a machine name, TOML file or `Machine` (default: the CL
-    file's `PPRINT/MACHINE`, else fanuc-hmc; multi-axis operations move as a 5-axis machine
-    moves them, joints linear, and on a machine with fewer rotary axes in the part frame);
-    `output` the G-code to write; `b_range` (degrees) the B range searched for 4-axis
-    operations; `reorient` plans B for 3-axis operations too and re-orients multi-axis ones by
-    `strategy` ("allowable": inside the feasible sets, `five_axis.plan`; "contact-order":
-    flat-end and bull-nose cutters at seed 003's contact order, `five_axis.contact_plan`; it
-    changes multi-axis operations only, 4-axis ones are planned by the allowable engine);
-    `part_transform` moves a part exported in another frame (`geometry.transform`);
-    `cutter_units` ("mm" or "inch") the unit of a textual `cutter` (default: the job's);
-    `on_findings` what posting does when the program as written has findings or points
-    without a feasible B (`posting.post_checked`: refuse raises `posting.PostRefusedError`);
-    `stock` the stock and the fixtures to check the written program against (`checker.stock`);
-    `machine_clearance` (mm) checks the machine's solids along the motion (`checker.collide`)."""
+    job with the same stem); `options` how (`CheckOptions`: the cutter, the machine, the
+    config, planning, the stock, the machine check, the G-code to post and the policy on
+    findings). Returns the results document (`summary.status` is the one answer)."""
     t0 = time.perf_counter()
     with step("read the CL file"):
-        toolpath = read_cl(Path(apt_path), require_cutter=cutter is None)
-    return check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=machine,
-                          config=config, output=output, b_range=b_range, reorient=reorient,
-                          strategy=strategy, part_transform=part_transform, started=t0,
-                          cutter_units=cutter_units, on_findings=on_findings, stock=stock,
-                          machine_clearance=machine_clearance)
+        toolpath = read_cl(Path(apt_path), require_cutter=options.cutter is None)
+    return check_toolpath(toolpath, part_path, options, started=t0)
 
 
-def _against_stock_only(toolpath, cutter, machine, config, stock: StockRequest, t0: float,
-                        cutter_units: str | None, to_post: bool,
-                        machine_clearance: float | None = None) -> written.Checked:
+def _against_stock_only(toolpath, options: CheckOptions, t0: float) -> written.Checked:
     """The program as written against the stock and the fixtures alone (no part): the CAM's
     own motion, nothing planned, nothing posted."""
     apt_path = Path(toolpath.path)
-    if to_post:
+    stock = options.stock or StockRequest()
+    if options.to_post:
         raise PathcheckError("a check without a part does not post: the corrected program needs "
                              "the part (give --part, or drop -o)", code="usage")
     if stock.deviation_out is not None:
         raise PathcheckError("--deviation-out compares the machined part with the part: "
                              "expected a part (give --part)", code="usage")
-    cfg = job_config(config)
+    cfg = job_config(options.config)
     m = toolpath.motion_arrays(arc_chord_tol=cfg.check.arc_chord_tolerance)
     input_limits.refuse_beyond(len(m), input_limits.MAX_CHECK_POSES, "poses to check",
                                "MAX_CHECK_POSES", path=apt_path)
     if len(m) == 0:
         raise PathcheckError("no motion: expected GOTO records", path=apt_path, code="parse")
     ops = np.unique(m.op)
-    cutters = operation_cutters(toolpath, ops, cutter, apt_path, cutter_units)
+    cutters = operation_cutters(toolpath, ops, options.cutter, apt_path, options.cutter_units)
     tol = operation_tolerances(toolpath, cfg.check.depth_tolerance, 0.0,
                                cfg.check.arc_chord_tolerance)
     classes = {int(o): operation_class(m.axis[m.op == o], cfg.four_axis.axis_j_tolerance)
                for o in ops}
     job = _Job(toolpath, m, None, None, None, cfg, apt_path)
-    mach = machine_for_toolpath(toolpath, machine)
+    mach = machine_for_toolpath(toolpath, options.machine)
     job.motion = _machine_motion(mach, {o for o, c in classes.items() if c == "multi-axis"}, cfg)
     motion = written.programmed_motion(job, classes, mach)
     checked = check_stock(job, motion, cutters, tol, stock, None)
     doc = stock_document(job, motion, checked, cutters, classes, tol, mach, t0)
-    if machine_clearance is not None:
+    if options.machine_clearance is not None:
         add_to_document(doc, machine_section(job, motion, cutters, mach, stock, None,
-                                             machine_clearance))
+                                             options.machine_clearance))
         doc.summary.time_s = time.perf_counter() - t0
     doc.job.stated_stock = _stated(toolpath, None)
     program = written.Program(m.tip, m.axis, written.cam_b(job), None, None,
@@ -177,48 +157,30 @@ class _Job:
         return self.samples
 
 
-def check_toolpath(toolpath, part_path=None, cutter=None, machine=None, config=None,
-                   output=None, *, b_range: tuple[float, float] | None = None,
-                   reorient: bool = False, strategy: str = "allowable",
-                   part_transform: str | None = None, started: float | None = None,
-                   cutter_units: str | None = None,
-                   on_findings: str = "refuse",
-                   stock: StockRequest | None = None,
-                   machine_clearance: float | None = None) -> ResultsDocument:
+def check_toolpath(toolpath, part_path=None, options: CheckOptions = _DEFAULTS, *,
+                   started: float | None = None) -> ResultsDocument:
     """`check_job` on a tool path already in memory (read from a CL file, or from a G-code
-    program by `pathcheck check-gcode`); `toolpath.path` names the job. With `output`, the
-    checked program is posted there (`posting.post_checked`)."""
-    checked = check_program(toolpath, part_path=part_path, cutter=cutter, machine=machine,
-                            config=config, b_range=b_range, reorient=reorient,
-                            strategy=strategy, part_transform=part_transform, started=started,
-                            cutter_units=cutter_units, to_post=output is not None,
-                            stock=stock, machine_clearance=machine_clearance)
-    if output is not None:
-        post_checked(checked, output, on_findings)
+    program by `pathcheck check-gcode`); `toolpath.path` names the job; `started` when the
+    check began (`time.perf_counter`, s; default now). With `options.output`, the checked
+    program is posted there under `options.on_findings` (`posting.post_checked`: refuse raises
+    `posting.PostRefusedError`)."""
+    checked = check_program(toolpath, part_path, options, started=started)
+    if options.output is not None:
+        post_checked(checked, options.output, options.on_findings)
     return checked.document
 
 
-def check_program(toolpath, part_path=None, cutter=None, machine=None, config=None, *,
-                  b_range: tuple[float, float] | None = None, reorient: bool = False,
-                  strategy: str = "allowable", part_transform: str | None = None,
-                  started: float | None = None, cutter_units: str | None = None,
-                  to_post: bool = False, stock: StockRequest | None = None,
-                  machine_clearance: float | None = None) -> written.Checked:
+def check_program(toolpath, part_path=None, options: CheckOptions = _DEFAULTS, *,
+                  started: float | None = None) -> written.Checked:
     """The check of `check_toolpath` without posting: the results document and what is to be
-    written (the program, its machine, cutters and finding counts). `to_post`: the program will
-    be posted, so its machine is resolved even when no operation is planned. `stock`: the
-    stock and the fixtures the written program is checked against (`checker.stock`);
-    `machine_clearance` (mm, None: not asked): the machine's solids along the written motion
-    (`checker.collide`)."""
+    written (the program, its machine, cutters and finding counts). With `options.output` the
+    program is to be posted, so its machine is resolved even when no operation is planned."""
     t0 = time.perf_counter() if started is None else started
-    if part_path is None and ((stock is not None and stock.asked) or machine_clearance
-                              is not None) and find_part_beside(Path(toolpath.path)) is None:
-        return _against_stock_only(toolpath, cutter, machine, config, stock or StockRequest(),
-                                   t0, cutter_units, to_post, machine_clearance)
-    if strategy not in written.STRATEGIES:
-        raise PathcheckError(f"strategy '{strategy}': expected one of "
-                             f"{', '.join(written.STRATEGIES)}", code="usage")
-    cfg = job_config(config)
+    stock, clearance = options.stock, options.machine_clearance
+    if part_path is None and (options.stock_asked or clearance is not None) \
+            and find_part_beside(Path(toolpath.path)) is None:
+        return _against_stock_only(toolpath, options, t0)
+    cfg = job_config(options.config)
     apt_path = Path(toolpath.path)
     m = toolpath.motion_arrays(arc_chord_tol=cfg.check.arc_chord_tolerance)
     input_limits.refuse_beyond(len(m), input_limits.MAX_CHECK_POSES, "poses to check",
@@ -230,8 +192,8 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
     with step("load the part"):
         part = load_part(ppath, geometry=cfg.geometry)
     transform = None
-    if part_transform is not None:
-        R, t = parse_transform(part_transform)
+    if options.part_transform is not None:
+        R, t = parse_transform(options.part_transform)
         part = transform_part(part, R, t)
         transform = np.column_stack([R, t]).ravel().tolist()
     with step("triangulate the part"):
@@ -239,12 +201,13 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
         index = MeshIndex.build(tris.vertices, tris.triangles)
     job = _Job(toolpath, m, part, tris, index, cfg, apt_path)
     ops = np.unique(m.op)
-    cutters = operation_cutters(toolpath, ops, cutter, apt_path, cutter_units)
+    cutters = operation_cutters(toolpath, ops, options.cutter, apt_path, options.cutter_units)
     tol = operation_tolerances(toolpath, cfg.check.depth_tolerance, tris.typical,
                                cfg.check.arc_chord_tolerance)
     mach = None
     classes = {int(o): operation_class(m.axis[m.op == o], cfg.four_axis.axis_j_tolerance)
                for o in ops}
+    b_range, reorient = options.b_range, options.reorient
     asked = reorient or b_range is not None
     for o, cls in classes.items():
         if cls == "multi-axis" and b_range is not None and not reorient:
@@ -254,23 +217,23 @@ def check_program(toolpath, part_path=None, cutter=None, machine=None, config=No
     planned = {o for o, cls in classes.items()
                if cls == "4-axis-Y" or (cls == "3-axis" and asked)}
     multi = {o for o, cls in classes.items() if cls == "multi-axis"}
-    if planned or multi or to_post or machine_clearance is not None:
-        mach = machine_for_toolpath(toolpath, machine)
+    if planned or multi or options.to_post or clearance is not None:
+        mach = machine_for_toolpath(toolpath, options.machine)
         job.motion = _machine_motion(mach, multi, cfg)
     reoriented = multi if reorient else set()
-    if strategy == "contact-order":
+    if options.strategy == "contact-order":
         _flat_bottomed(toolpath, cutters, sorted(reoriented), apt_path)
     with step("plan and check the program"):
         program = written.plan_program(job, cutters, classes, planned, tol, b_range, mach,
-                                       reoriented, strategy)
+                                       reoriented, options.strategy)
     part_box = np.array([tris.vertices.min(axis=0), tris.vertices.max(axis=0)])
-    if stock is not None and stock.asked:
+    if options.stock_asked:
         program.stock = check_stock(job, program.written.motion, cutters, tol, stock, part_box)
     with step("advice at the cutting poses"):
         doc = build_document(job, program, cutters, classes, tol, ppath, transform, mach, t0)
-    if machine_clearance is not None:
+    if clearance is not None:
         add_to_document(doc, machine_section(job, program.written.motion, cutters, mach, stock,
-                                             part_box, machine_clearance))
+                                             part_box, clearance))
     doc.summary.time_s = time.perf_counter() - t0
     doc.job.stated_stock = _stated(toolpath, part_box)
     counts = written.written_counts(doc.summary.counts, program)

@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 from requires import require_extra
 
+from checker.check.options import CheckOptions
 from checker.job import check_job
 from checker.verdict import FINDINGS
 
@@ -51,7 +52,8 @@ def _job(realdata: Path, name: str, folder: Path) -> Path:
 @pytest.mark.parametrize("name", PARTS)
 def test_advice_never_calls_a_clean_cutter_unsafe(realdata, tmp_path, name):
     part = realdata / "occt-cad-nurbs" / name
-    doc = check_job(_job(realdata, name, tmp_path), part_path=part, on_findings="comment")
+    doc = check_job(_job(realdata, name, tmp_path), part,
+                    CheckOptions(on_findings="comment"))
     advised = [p for p in doc.points if p.kind == "cl" and p.cc is not None]
     assert len(advised) > 300  # the engine answered at the touching poses (None: unbounded)
     clean = [p for p in advised if p.verdict not in FINDINGS and p.verdict != "inaccessible"]

@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 from requires import require_extra
 
+from checker.check.options import CheckOptions
 from checker.cutter import parse_cutter
 from checker.job import check_job
 from checker.verdict import FINDINGS
@@ -110,7 +111,7 @@ def test_larger_cutter_verdicts_agree_with_the_oracle(job):
     of them: the suite's time)."""
     path, apt, fine, (x0, y0, x1, y1) = job
     cutter_text = CHECKED_WITH[PARTS.index(path) % len(CHECKED_WITH)]
-    doc = check_job(apt, part_path=path, cutter=cutter_text)
+    doc = check_job(apt, path, CheckOptions(cutter=cutter_text))
     poses = [p for p in doc.points if p.depth is not None
              and x0 <= p.tip[0] <= x1 and y0 <= p.tip[1] <= y1]
     tips = np.array([p.tip for p in poses])

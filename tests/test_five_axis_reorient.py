@@ -17,6 +17,7 @@ from scipy.spatial import cKDTree
 from verdict_counts import findings_in
 
 from checker.apt import read_cl
+from checker.check.options import CheckOptions
 from checker.five_axis.frames import axes_from_angles
 from checker.five_axis.plan import (
     contact_segments,
@@ -43,8 +44,8 @@ def job(repo):
 @pytest.fixture(scope="module")
 def reoriented(job, tmp_path_factory):
     """The sample checked with --reorient and posted (--on-findings stop)."""
-    checked = check_program(read_cl(job), reorient=True, to_post=True)
     out = tmp_path_factory.mktemp("reorient") / "passage.nc"
+    checked = check_program(read_cl(job), options=CheckOptions(reorient=True, output=out))
     post_checked(checked, out, "stop")
     return checked, out
 
@@ -119,7 +120,7 @@ def test_the_posted_program_reads_back_as_written_and_checks_clean(reoriented, j
     assert d.max() <= ROUND_TRIP and ang.max() <= ROUND_TRIP
     cutter = read_cl(job).operations[0].cutter
     tp = toolpath_of(pm, path=program, units="mm", cutter=cutter)
-    again = check_toolpath(tp, part_path=job.with_suffix(".json"), cutter=cutter, machine=mach)
+    again = check_toolpath(tp, job.with_suffix(".json"), CheckOptions(cutter=cutter, machine=mach))
     assert again.summary.status == "ok" and findings_in(again.summary.counts) == 0
 
 

@@ -8,6 +8,7 @@ import pytest
 from click.testing import CliRunner
 from geomdl import BSpline, exchange
 
+from checker.check.options import CheckOptions
 from checker.cli import cli
 from checker.job import check_job
 
@@ -180,7 +181,7 @@ def test_holder_hit_reports_the_stickout_that_clears_it(tmp_path):
 
     tool = load_tool_library()["BALL-D6"]  # holder D42 from 28 mm above the tip
     assert tool.holder_diameter / 2 > 15.0 and tool.stickout < 40.0
-    doc = check_job(_wall_job(tmp_path), cutter=tool)
+    doc = check_job(_wall_job(tmp_path), options=CheckOptions(cutter=tool))
     cl = [p for p in doc.points if p.kind == "cl"]
     assert [p.verdict for p in cl] == ["holder", "holder"]
     for p in cl:

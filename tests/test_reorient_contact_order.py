@@ -22,6 +22,7 @@ from test_contact_order import torus_trough
 from verdict_counts import findings_in
 
 from checker.apt import read_cl
+from checker.check.options import CheckOptions
 from checker.cli import main
 from checker.cutter import parse_cutter
 from checker.five_axis.contact_order import contact_order_axes
@@ -94,9 +95,9 @@ def job(tmp_path_factory):
 @pytest.fixture(scope="module")
 def reoriented(job):
     """The job checked with --reorient --strategy contact-order and posted."""
-    checked = check_program(read_cl(job), reorient=True, strategy="contact-order",
-                            to_post=True)
     out = job.with_suffix(".nc")
+    checked = check_program(read_cl(job), options=CheckOptions(
+        reorient=True, strategy="contact-order", output=out))
     post_checked(checked, out, "refuse")
     return checked, out
 

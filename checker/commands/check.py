@@ -176,6 +176,7 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     pathcheck samples/mould/mould.apt --json out/mould.json
     pathcheck samples/mould/mould.apt --json - 2>/dev/null   # the document alone on stdout
     """
+    from checker.check.options import CheckOptions
     from checker.commands.outputs import prepare_outputs
     from checker.errors import PathcheckError
     from checker.job import check_job
@@ -204,10 +205,11 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     if not no_store:
         opt.open_store(store)
     try:
-        doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
-                        output=output, machine=machine, b_range=parse_b_range(b_range),
-                        reorient=reorient, strategy=strategy, part_transform=part_transform,
-                        cutter_units=units, on_findings=on_findings, stock=stock)
+        doc = check_job(job, part_path, CheckOptions(
+            cutter=cutter, config=config_path, output=output, machine=machine,
+            b_range=parse_b_range(b_range), reorient=reorient, strategy=strategy,
+            part_transform=part_transform, cutter_units=units, on_findings=on_findings,
+            stock=stock))
     except PostRefusedError as refused:
         write_after_check(view_out, refused.document, cutter=cutter, stock=stock,
                           config=config_path)

@@ -94,6 +94,7 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
     Every file is read through the roots: the CL file, the part (given or beside the CL file)
     and a machine file (`machine`, else the CL file's `PPRINT/MACHINE`)."""
     from checker.apt import read_cl
+    from checker.check.options import CheckOptions
     from checker.job import check_toolpath
     from checker.posting import PostRefusedError
 
@@ -117,12 +118,11 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
                 part_path = files.beside(given_apt)
             machine = _machine(req.machine, toolpath, files)
             stock = _stock(req, files)
-            doc = check_toolpath(toolpath, part_path=part_path, cutter=req.cutter,
-                                 machine=machine, config=config, output=gcode_path,
-                                 b_range=req.b_range, reorient=req.reorient,
-                                 strategy=req.strategy,
-                                 part_transform=req.part_transform, started=t0,
-                                 on_findings=req.on_findings, stock=stock)
+            doc = check_toolpath(toolpath, part_path, CheckOptions(
+                cutter=req.cutter, machine=machine, config=config, output=gcode_path,
+                b_range=req.b_range, reorient=req.reorient, strategy=req.strategy,
+                part_transform=req.part_transform, on_findings=req.on_findings,
+                stock=stock), started=t0)
         except PostRefusedError as err:
             doc, refused = err.document, f"G-code not written: {err} (on_findings=refuse)"
         except PathcheckError as err:
