@@ -13,8 +13,8 @@ import sys
 import time
 from pathlib import Path
 
+from checker.check import check_job
 from checker.check.options import CheckOptions
-from checker.job import check_job
 from checker.stock.request import StockRequest
 
 JOB = (Path(__file__).resolve().parents[2] / "shared" / "realdata" / "amorim-solidworkscam-apt"

@@ -11,8 +11,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from checker.check import check_job
 from checker.check.options import CheckOptions
-from checker.job import check_job
 
 JOB = Path(__file__).resolve().parents[1] / "samples" / "compressor" / "compressor.apt"
 

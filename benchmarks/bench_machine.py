@@ -20,7 +20,7 @@ from tests.test_machines_realdata import PROGRAMS, REAL  # noqa: E402
 _ONE = """
 import json, sys, time
 from checker.check.options import CheckOptions
-from checker.job import check_toolpath
+from checker.check import check_toolpath
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode
 from checker.postproc.replay import part_motions, toolpath_of

@@ -44,10 +44,10 @@ def compare(checked) -> list[tuple[str, object, bool]]:
 def main() -> None:
     from benchmarks.bench_feasible import rate
     from checker.apt import read_cl
+    from checker.check import check_program
     from checker.check.options import CheckOptions
     from checker.five_axis.plan import machine_reach
     from checker.five_axis.poses import PoseJudge
-    from checker.job import check_program
 
     toolpath = read_cl(JOB)
     options = CheckOptions(reorient=True)

@@ -25,7 +25,7 @@ from checker.results import ResultsDocument
 from checker.store import ResultsStore
 
 CL_SUFFIXES = (".apt", ".aptsource", ".cl", ".cls", ".clsf", ".ncl")
-DEFAULT_JOB_FUNCTION = "checker.job:check_job"
+DEFAULT_JOB_FUNCTION = "checker.check:check_job"
 
 
 @dataclass(frozen=True)

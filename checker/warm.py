@@ -135,8 +135,8 @@ def _allowable_at_the_warm_up_part() -> None:
 
 def _check_warm_up_job() -> None:
     """The warm-up job checked and posted as the demo runs it (`make demo`)."""
+    from checker.check import check_job
     from checker.check.options import CheckOptions
-    from checker.job import check_job
 
     with tempfile.TemporaryDirectory(prefix="pathcheck-warm-") as tmp:
         check_job(WARMUP_JOB, options=CheckOptions(output=Path(tmp) / "warmup.nc",

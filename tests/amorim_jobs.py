@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 from ocl_oracle import ocl_depth
 
+from checker.check import check_job
 from checker.check.options import CheckOptions
-from checker.job import check_job
 from checker.verdict import FINDINGS
 
 AMORIM = Path(__file__).resolve().parents[2] / "shared" / "realdata" / "amorim-solidworkscam-apt"

@@ -5,7 +5,7 @@ The jobs are 3-axis finishing paths made by another CAM library: OpenCAMLib's dr
 a D6 ball over OpenCASCADE's own mesh of the part (tests/cad_paths.py, tests/occ_faces.py). At
 every pose the check finds clean (no finding, INTOL/0.2), the allowable size the document gives
 is at least the cutter's own size and its margin not negative, and a clean job's "largest safe
-cutter" is too (checker/document.py, `_clean_is_safe`). Before, the
+cutter" is too (checker/check/advice.py, `_clean_is_safe`). Before, the
 blade's summary said r = 0.1253 mm (a pose 0.5 micrometre from a B-spline knot line where the
 surface creases by 1.35 degrees) and the turbine's r = 0.0874 mm (a pose on an edge between two
 faces), both at poses the check found within tolerance."""
@@ -17,8 +17,8 @@ from pathlib import Path
 import pytest
 from requires import require_extra
 
+from checker.check import check_job
 from checker.check.options import CheckOptions
-from checker.job import check_job
 from checker.verdict import FINDINGS
 
 require_extra("OCP", "cad")

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from amorim_jobs import AMORIM, JOBS, compare
 
+from checker.check import check_job
 from checker.check.options import CheckOptions
 from checker.errors import PathcheckError
-from checker.job import check_job
 from checker.verdict import FINDINGS
 
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from checker.check import check_job
 from checker.check.options import CheckOptions
 from checker.cli import main
-from checker.job import check_job
 
 
 def _exit_code(args) -> int:

@@ -17,7 +17,9 @@ from scipy.spatial import cKDTree
 from verdict_counts import findings_in
 
 from checker.apt import read_cl
+from checker.check import check_program, check_toolpath
 from checker.check.options import CheckOptions
+from checker.check.posting import post_checked
 from checker.five_axis.frames import axes_from_angles
 from checker.five_axis.plan import (
     contact_segments,
@@ -26,8 +28,6 @@ from checker.five_axis.plan import (
     machine_reach,
 )
 from checker.five_axis.poses import PoseJudge
-from checker.job import check_program, check_toolpath
-from checker.posting import post_checked
 from checker.postproc.kinematics import Chain
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode

@@ -8,9 +8,9 @@ import pytest
 from click.testing import CliRunner
 from geomdl import BSpline, exchange
 
+from checker.check import check_job
 from checker.check.options import CheckOptions
 from checker.cli import cli
-from checker.job import check_job
 
 COMPRESSOR = "samples/compressor/compressor_small.apt"
 COMPRESSOR_D12 = "samples/compressor/compressor_small_d12.apt"

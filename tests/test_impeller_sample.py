@@ -16,9 +16,9 @@ from scipy.spatial import cKDTree
 
 from checker import verdict as vd
 from checker.apt import read_cl
+from checker.check import check_job, check_toolpath
 from checker.check.options import CheckOptions
-from checker.job import check_job, check_toolpath
-from checker.posting import post_unchecked
+from checker.check.posting import post_unchecked
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode
 from checker.postproc.replay import part_motions, toolpath_of

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from wall_jobs import X_WALL, wall_pass, write_wall_part
 
+from checker.check import check_job
 from checker.check.options import CheckOptions
-from checker.job import check_job
 from checker.results import ResultsDocument
 
 REPO = Path(__file__).resolve().parents[1]

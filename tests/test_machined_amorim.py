@@ -15,8 +15,8 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
+from checker.check import check_job
 from checker.check.options import CheckOptions
-from checker.job import check_job
 from checker.stock.request import StockRequest
 
 BORE_BOX = "box:128,31,-12,166,69,2"

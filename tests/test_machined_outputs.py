@@ -101,9 +101,9 @@ def test_bad_deviation_options_are_one_usage_line(tmp_path, args, expected):
 
 
 def test_deviation_out_without_a_part_is_a_usage_error(tmp_path):
+    from checker.check import check_job
     from checker.check.options import CheckOptions
     from checker.errors import PathcheckError
-    from checker.job import check_job
     from checker.stock.request import StockRequest
 
     job = tmp_path / "alone.apt"

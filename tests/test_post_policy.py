@@ -22,10 +22,10 @@ import pytest
 from wall_jobs import wall_pass, write_wall_part
 
 from checker import __version__
+from checker.check import check_job
 from checker.check.options import CheckOptions
 from checker.errors import PathcheckError
 from checker.geometry import find_part_beside
-from checker.job import check_job
 from checker.postproc.dialects import DIALECTS
 from checker.postproc.header import read_verdict
 from checker.postproc.machine import load_machine

@@ -22,7 +22,9 @@ from test_contact_order import torus_trough
 from verdict_counts import findings_in
 
 from checker.apt import read_cl
+from checker.check import check_program
 from checker.check.options import CheckOptions
+from checker.check.posting import post_checked
 from checker.cli import main
 from checker.cutter import parse_cutter
 from checker.five_axis.contact_order import contact_order_axes
@@ -30,8 +32,6 @@ from checker.five_axis.frames import axes_from_angles, local_frames
 from checker.five_axis.plan import feed_directions, machine_reach
 from checker.five_axis.poses import PoseJudge
 from checker.geometry.evaluate import evaluate
-from checker.job import check_program
-from checker.posting import post_checked
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode
 from checker.postproc.replay import part_motions

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from brokers import running_broker
 
+from checker import check as job_module
 from checker import engine
-from checker import job as job_module
 from checker.config import default_config
 from checker.service.cache import PartCache
 from checker.service.ops import WorkerState

@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from checker.apt import read_cl
+from checker.check import check_job
 from checker.check.options import CheckOptions
 from checker.cutter import parse_cutter
-from checker.job import check_job
 from checker.mesh.tool import tool_pieces
 from checker.stock.dexels import Dexels
 from checker.stock.removal import remove

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 from stl import mesh as stl_mesh
 
+from checker.check import check_job
 from checker.check.options import CheckOptions
 from checker.cutter import parse_cutter
-from checker.job import check_job
 from checker.stock.request import StockRequest
 
 JOB = "Teste-Metrologia"

@@ -41,8 +41,8 @@ def browser(tmp_path_factory):
 
 
 def _view(tmp_path_factory, job: Path, **options):
+    from checker.check import check_job
     from checker.check.options import CheckOptions
-    from checker.job import check_job
     from checker.view.page import write_view
 
     if not job.is_file():

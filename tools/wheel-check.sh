@@ -54,7 +54,7 @@ import sys
 
 from checker.cache import kernels_compiled
 from checker.check.options import CheckOptions
-from checker.job import check_job
+from checker.check import check_job
 
 with kernels_compiled() as compiled:
     for path in sys.argv[1:]:
@@ -79,7 +79,7 @@ import sys
 
 from checker.cache import kernels_compiled
 from checker.check.options import CheckOptions
-from checker.job import check_job
+from checker.check import check_job
 
 with kernels_compiled() as compiled:
     for path in sys.argv[1:]:

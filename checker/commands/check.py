@@ -176,10 +176,10 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     pathcheck samples/mould/mould.apt --json out/mould.json
     pathcheck samples/mould/mould.apt --json - 2>/dev/null   # the document alone on stdout
     """
+    from checker.check import check_job
     from checker.check.options import CheckOptions
     from checker.commands.outputs import prepare_outputs
     from checker.errors import PathcheckError
-    from checker.job import check_job
 
     if strategy != "allowable" and not reorient:
         raise PathcheckError(f"--strategy {strategy} plans the re-orientation: add --reorient",
@@ -199,8 +199,8 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     if no_check:
         post_without_check(job, output, cutter, machine, config_path, part_path, json_out, units)
         return
+    from checker.check.posting import PostRefusedError
     from checker.errors import printable
-    from checker.posting import PostRefusedError
 
     if not no_store:
         opt.open_store(store)
@@ -251,8 +251,8 @@ def post_without_check(job: Path, output: Path | None, cutter, machine: str | No
                        config_path: Path | None, part_path: Path | None,
                        json_out: Path | None, units: str | None) -> None:
     """`--no-check`: post JOB to -o without reading a part; nothing is recorded."""
+    from checker.check.posting import post_unchecked
     from checker.errors import PathcheckError
-    from checker.posting import post_unchecked
 
     for given, name in ((output is None, "expected -o FILE"),
                         (part_path is not None, "no part is read: remove --part"),

@@ -130,9 +130,9 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
         if doc["machine_checks"]:
             sys.exit(1)
         return
+    from checker.check import check_toolpath
     from checker.check.options import CheckOptions
     from checker.commands.check import finish
-    from checker.job import check_toolpath
     from checker.postproc.replay import toolpath_of
 
     toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)

@@ -88,15 +88,15 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
 
 
 def check(req: p.CheckRequest, state: WorkerState) -> dict:
-    """Check a job with `checker.job.check_toolpath`; `post` also returns the G-code text, or
+    """Check a job with `checker.check.check_toolpath`; `post` also returns the G-code text, or
     `refused` (the reason) where `on_findings` refuses the program as written.
     Inline CL text is named `NAME.apt` (`<apt>` without a name) in errors and in the document.
     Every file is read through the roots: the CL file, the part (given or beside the CL file)
     and a machine file (`machine`, else the CL file's `PPRINT/MACHINE`)."""
     from checker.apt import read_cl
+    from checker.check import check_toolpath
     from checker.check.options import CheckOptions
-    from checker.job import check_toolpath
-    from checker.posting import PostRefusedError
+    from checker.check.posting import PostRefusedError
 
     files = _Files(state.roots)
     part_path = files.part(req.part)
