@@ -85,7 +85,8 @@ def run_one(path: str, job_function: str = DEFAULT_JOB_FUNCTION) -> JobOutcome:
     start = time.perf_counter()
     try:
         stock = folder_stock(Path(path))
-        doc = _job_function(job_function)(path, options=CheckOptions(stock=stock))
+        asked = {} if stock is None else {"options": CheckOptions(stock=stock)}
+        doc = _job_function(job_function)(path, **asked)
         return JobOutcome(path, doc.model_dump_json(), None, time.perf_counter() - start)
     except PathcheckError as err:
         reason = str(err)

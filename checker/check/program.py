@@ -51,13 +51,14 @@ class Plan:
 @dataclass
 class Program:
     """The written program: per motion row its tip, axis and table angle B (nan: none), the
-    real tool along it (`written`), along the CAM's own motions (`cam`, when any operation was
-    re-oriented), per operation how it was handled, and the plans of planned operations."""
+    real tool along it (`written`; None in a check without a part, `without_part`), along the
+    CAM's own motions (`cam`, when any operation was re-oriented), per operation how it was
+    handled, the plans of planned operations and the stock check along it."""
 
     tip: np.ndarray
     axis: np.ndarray
     b: np.ndarray
-    written: Verified
+    written: Verified | None
     cam: Verified | None
     handling: dict[int, str]
     plans: dict[int, Plan] = field(default_factory=dict)
