@@ -18,7 +18,7 @@ from amorim_jobs import AMORIM, JOBS, compare  # noqa: E402
 
 _ONE_JOB = """
 import json, resource, sys, time
-from checker.job import check_job
+from checker.check import check_job
 t = time.perf_counter()
 doc = check_job(sys.argv[1])
 print(json.dumps({"seconds": time.perf_counter() - t, "status": doc.summary.status,

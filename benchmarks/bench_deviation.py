@@ -13,7 +13,8 @@ import sys
 import time
 from pathlib import Path
 
-from checker.job import check_job
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.stock.request import StockRequest
 
 JOB = (Path(__file__).resolve().parents[2] / "shared" / "realdata" / "amorim-solidworkscam-apt"
@@ -26,7 +27,7 @@ def main(argv: list[str]) -> None:
         return
     h = float(argv[0]) if argv else 0.05
     t0 = time.perf_counter()
-    doc = check_job(JOB, stock=StockRequest("box:+3", resolution=h))
+    doc = check_job(JOB, options=CheckOptions(stock=StockRequest("box:+3", resolution=h)))
     wall = time.perf_counter() - t0
     st, m = doc.stock, doc.stock.machined
     simulation = st.time_s - m.time_s

@@ -11,8 +11,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.config import default_config
-from checker.job import check_job
 
 JOB = Path(__file__).resolve().parents[1] / "samples" / "compressor" / "compressor.apt"
 
@@ -24,7 +25,8 @@ def main() -> None:
         cfg = default_config()  # with the greedy smoothing of Jun, Lee and Cha (2002) to compare
         cfg = cfg.model_copy(update={"four_axis": cfg.four_axis.model_copy(
             update={"greedy_baseline": True})})
-        doc = check_job(job, output=Path(tmp) / "out.nc", on_findings="comment", config=cfg)
+        doc = check_job(job, options=CheckOptions(output=Path(tmp) / "out.nc",
+                                                 on_findings="comment", config=cfg))
         wall = time.perf_counter() - t
     s, o = doc.summary, doc.orientation
     print(f"{job.name}: {s.cl_points} poses at CL records, {s.poses_checked} poses checked "

@@ -20,7 +20,8 @@ from tests.test_machines_realdata import PROGRAMS, REAL  # noqa: E402
 
 _ONE = """
 import json, sys, time
-from checker.job import check_toolpath
+from checker.check.options import CheckOptions
+from checker.check import check_toolpath
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode
 from checker.postproc.replay import part_motions, toolpath_of
@@ -33,8 +34,8 @@ motions = part_motions(moves, mach)
 cutter = parse_cutter_in("CUTTER/6", moves.units)
 tp = toolpath_of(motions, path=path, units=moves.units, cutter=cutter)
 t = time.perf_counter()
-doc = check_toolpath(tp, cutter=cutter, machine=mach, stock=StockRequest(),
-                     machine_clearance=1.0)
+doc = check_toolpath(tp, options=CheckOptions(cutter=cutter, machine=mach, stock=StockRequest(),
+                                             machine_clearance=1.0))
 total = time.perf_counter() - t
 m = doc.machine
 print(json.dumps({"total": total, "poses": doc.summary.poses_checked,

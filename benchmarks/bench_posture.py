@@ -23,7 +23,7 @@ JOB = ROOT / "samples" / "impeller" / "passage.apt"
 def compare(checked) -> list[tuple[str, object, bool]]:
     """(planner, `PostureMetrics` of its rotary words, all poses feasible) for the CAM, the
     shortest path, shortest path + MB-spline and the greedy smoothing of Jun, Lee and Cha (2002),
-    on the first re-oriented operation of a `check_program(..., reorient=True)` result."""
+    on the first re-oriented operation of a `check_program` result (`reorient=True`)."""
     from checker.five_axis.posture import greedy_smoothing
     from checker.five_axis.reorient import candidates, rotary_metrics
 
@@ -45,14 +45,16 @@ def compare(checked) -> list[tuple[str, object, bool]]:
 def main() -> None:
     from benchmarks.bench_feasible import rate
     from checker.apt import read_cl
+    from checker.check import check_program
+    from checker.check.options import CheckOptions
     from checker.five_axis.poses import PoseJudge
     from checker.five_axis.reorient import machine_reach
-    from checker.job import check_program
 
     toolpath = read_cl(JOB)
-    check_program(toolpath, reorient=True)  # warm-up: compiled kernels, caches
+    options = CheckOptions(reorient=True)
+    check_program(toolpath, options=options)  # warm-up: compiled kernels, caches
     t = time.perf_counter()
-    checked = check_program(toolpath, reorient=True)
+    checked = check_program(toolpath, options=options)
     job_s = time.perf_counter() - t
     plan = next(iter(checked.program.fives.values()))
     print(f"{'planner':38} {'rotary motion':>13} {'peak deg/mm':>11} {'peak deg/mm2':>12} "

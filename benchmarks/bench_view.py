@@ -22,7 +22,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from cdp import CHROMIUM, Browser  # noqa: E402
 
-from checker.job import check_job  # noqa: E402
+from checker.check import check_job  # noqa: E402
 from checker.view.viewer_page import write_view  # noqa: E402
 
 JOBS = {

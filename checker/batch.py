@@ -25,7 +25,7 @@ from checker.results import ResultsDocument
 from checker.store import ResultsStore
 
 CL_SUFFIXES = (".apt", ".aptsource", ".cl", ".cls", ".clsf", ".ncl")
-DEFAULT_JOB_FUNCTION = "checker.job:check_job"
+DEFAULT_JOB_FUNCTION = "checker.check:check_job"
 
 
 @dataclass(frozen=True)
@@ -76,10 +76,10 @@ def _job_function(name: str) -> Callable[..., ResultsDocument]:
 
 
 def _folder_options(path: Path) -> dict:
-    """The keyword arguments of a job's check that its folder's `pathcheck-stock.toml` gives: a
-    stock and fixtures (`checker.stock.request.folder_stock`) and a machine check (`machine`,
-    `machine_clearance`: `folder_machine`), the machine loaded and its check validated before
-    the run (an error names the folder's file)."""
+    """The fields of a job's check options (`CheckOptions`) that its folder's `pathcheck-stock.toml`
+    gives: a stock and fixtures (`checker.stock.request.folder_stock`) and a machine check
+    (`machine`, `machine_clearance`: `folder_machine`), the machine loaded and its check validated
+    before the run (an error names the folder's file)."""
     from checker.collide.section import asked_clearance
     from checker.postproc.machine import load_machine
     from checker.stock.request import folder_machine, folder_stock
@@ -108,10 +108,14 @@ def _folder_options(path: Path) -> dict:
 def run_one(path: str, job_function: str = DEFAULT_JOB_FUNCTION) -> JobOutcome:
     """Check one job (in a pool worker or on a Dask worker); never raises for a bad job. A
     folder's `pathcheck-stock.toml` gives its jobs a stock, fixtures and a machine check
-    (`_folder_options`)."""
+    (`_folder_options`), passed as the check's options."""
+    from checker.check.options import CheckOptions
+
     start = time.perf_counter()
     try:
-        doc = _job_function(job_function)(path, **_folder_options(Path(path)))
+        asked = _folder_options(Path(path))
+        options = {"options": CheckOptions(**asked)} if asked else {}
+        doc = _job_function(job_function)(path, **options)
         return JobOutcome(path, doc.model_dump_json(), None, time.perf_counter() - start)
     except PathcheckError as err:
         reason = str(err)

@@ -3,8 +3,8 @@ job's own inside tolerance (APT `INTOL/t`, or `TOLER/t`), plus the stock it is t
 below the part (a negative part-surface thickness `THICK/-s`: the CAM meant to go s into the
 part), else `check.depth_tolerance` from the config; plus what the geometry adds: the deviation
 of the part's triangles from the surface they stand for (a mesh's chordal deviation, near the
-deepest point: `checker.written` adds it per pose) and, in an operation that has arcs, the chord
-error of the arcs sampled into straight moves. mm."""
+deepest point: `checker.check.verified` adds it per pose) and, in an operation that has arcs,
+the chord error of the arcs sampled into straight moves. mm."""
 
 from __future__ import annotations
 

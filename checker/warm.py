@@ -135,10 +135,12 @@ def _allowable_at_the_warm_up_part() -> None:
 
 def _check_warm_up_job() -> None:
     """The warm-up job checked and posted as the demo runs it (`make demo`)."""
-    from checker.job import check_job
+    from checker.check import check_job
+    from checker.check.options import CheckOptions
 
     with tempfile.TemporaryDirectory(prefix="pathcheck-warm-") as tmp:
-        check_job(WARMUP_JOB, output=Path(tmp) / "warmup.nc", on_findings="stop")
+        check_job(WARMUP_JOB, options=CheckOptions(output=Path(tmp) / "warmup.nc",
+                                                   on_findings="stop"))
 
 
 def _compile_all(folder: Path, kernels: str) -> None:

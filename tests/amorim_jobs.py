@@ -20,7 +20,8 @@ from pathlib import Path
 import numpy as np
 from ocl_oracle import ocl_depth
 
-from checker.job import check_job
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.verdict import FINDINGS
 
 AMORIM = Path(__file__).resolve().parents[2] / "shared" / "realdata" / "amorim-solidworkscam-apt"
@@ -53,7 +54,7 @@ def compare(job: str, **check_options) -> Comparison:
 
     apt = AMORIM / f"{job}.apt"
     t0 = time.perf_counter()
-    doc = check_job(apt, **check_options)
+    doc = check_job(apt, options=CheckOptions(**check_options))
     seconds = time.perf_counter() - t0
     mesh = load_part(doc.job.part).mesh
     cutters = {op.index: op.cutter for op in doc.operations}

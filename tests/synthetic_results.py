@@ -114,7 +114,7 @@ def synthetic_document(
 
 
 def synthetic_job(apt_path: str, **_: object) -> ResultsDocument:
-    """A stand-in for `checker.job.check_job` in batch tests and benchmarks: the file holds
+    """A stand-in for `checker.check.check_job` in batch tests and benchmarks: the file holds
     `SEED N` (integers); the document is `synthetic_document(SEED, n=N)` for that path."""
     text = Path(apt_path).read_text(encoding="utf-8").split()
     if len(text) != 2 or not all(t.isdigit() for t in text):

@@ -5,7 +5,7 @@ The jobs are 3-axis finishing paths made by another CAM library: OpenCAMLib's dr
 a D6 ball over OpenCASCADE's own mesh of the part (tests/cad_paths.py, tests/occ_faces.py). At
 every pose the check finds clean (no finding, INTOL/0.2), the allowable size the document gives
 is at least the cutter's own size and its margin not negative, and a clean job's "largest safe
-cutter" is too (checker/document.py, `_clean_is_safe`). Before, the
+cutter" is too (checker/check/advice.py, `_clean_is_safe`). Before, the
 blade's summary said r = 0.1253 mm (a pose 0.5 micrometre from a B-spline knot line where the
 surface creases by 1.35 degrees) and the turbine's r = 0.0874 mm (a pose on an edge between two
 faces), both at poses the check found within tolerance."""
@@ -17,7 +17,8 @@ from pathlib import Path
 import pytest
 from requires import require_extra
 
-from checker.job import check_job
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.verdict import FINDINGS
 
 require_extra("OCP", "cad")
@@ -51,7 +52,8 @@ def _job(realdata: Path, name: str, folder: Path) -> Path:
 @pytest.mark.parametrize("name", PARTS)
 def test_advice_never_calls_a_clean_cutter_unsafe(realdata, tmp_path, name):
     part = realdata / "occt-cad-nurbs" / name
-    doc = check_job(_job(realdata, name, tmp_path), part_path=part, on_findings="comment")
+    doc = check_job(_job(realdata, name, tmp_path), part,
+                    CheckOptions(on_findings="comment"))
     advised = [p for p in doc.points if p.kind == "cl" and p.cc is not None]
     assert len(advised) > 300  # the engine answered at the touching poses (None: unbounded)
     clean = [p for p in advised if p.verdict not in FINDINGS and p.verdict != "inaccessible"]

@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 from amorim_jobs import AMORIM, JOBS, compare
 
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.errors import PathcheckError
-from checker.job import check_job
 from checker.verdict import FINDINGS
 
 
@@ -59,7 +60,7 @@ TELEMECANIQUE_FRAME = "0,-1,0,45, 0,0,-1,35, 1,0,0,-39"
 
 def test_telemecanique_in_its_frame_only_the_spot_drill_finds_something(amorim):
     doc = check_job(amorim / "Telemecanique-Tilt-Support1.apt",
-                    part_transform=TELEMECANIQUE_FRAME)
+                    options=CheckOptions(part_transform=TELEMECANIQUE_FRAME))
     findings = [p for p in doc.points if p.verdict in FINDINGS]
     # the D16 facing (op 1) and the D3.3 drilling (op 3, 10.1 deep in the 9.1 deep holes) clean
     assert {p.op for p in findings} == {1}

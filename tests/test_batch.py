@@ -96,7 +96,7 @@ def test_dask_cluster_gives_the_local_documents(jobs, tmp_path):
 def test_dask_cluster_on_the_sample_jobs(tmp_path):
     samples = sorted((REPO / "samples").rglob("*_small.apt"))
     assert samples, "the bundled samples/*/*_small.apt are missing"
-    _dask_vs_local(samples, "checker.job:check_job", tmp_path)
+    _dask_vs_local(samples, "checker.check:check_job", tmp_path)
 
 
 def test_unreachable_scheduler_is_a_clear_error(jobs):

@@ -1,7 +1,7 @@
 """pathcheck's verdicts on paths made by another CAM library over every STEP/IGES part of
 ../shared/realdata, against an independent depth oracle. For each part: an OpenCAMLib
 drop-cutter finishing raster with a ball D6 over OpenCASCADE's mesh of the part
-(tests/cad_paths.py), checked by pathcheck's real check (`checker.job.check_job`) with a larger
+(tests/cad_paths.py), checked by pathcheck's real check (`checker.check.check_job`) with a larger
 cutter (ball D10, bull-nose D10 r2, flat D8 in turn over the parts: they cut where the D6 only
 touched); at each of
 pathcheck's checked poses (CL records, the deepest pose of every penetrating move) the depth of
@@ -24,8 +24,9 @@ import numpy as np
 import pytest
 from requires import require_extra
 
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.cutter import parse_cutter
-from checker.job import check_job
 from checker.verdict import FINDINGS
 
 require_extra("OCP", "cad")
@@ -110,7 +111,7 @@ def test_larger_cutter_verdicts_agree_with_the_oracle(job):
     of them: the suite's time)."""
     path, apt, fine, (x0, y0, x1, y1) = job
     cutter_text = CHECKED_WITH[PARTS.index(path) % len(CHECKED_WITH)]
-    doc = check_job(apt, part_path=path, cutter=cutter_text)
+    doc = check_job(apt, path, CheckOptions(cutter=cutter_text))
     poses = [p for p in doc.points if p.depth is not None
              and x0 <= p.tip[0] <= x1 and y0 <= p.tip[1] <= y1]
     tips = np.array([p.tip for p in poses])

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.cli import main
-from checker.job import check_job
 
 
 def _exit_code(args) -> int:
@@ -18,7 +19,7 @@ def _exit_code(args) -> int:
 def test_posted_program_checks_like_its_cl_job(repo, tmp_path, machine):
     job = repo / "samples/mould/mould.apt"
     program = tmp_path / f"mould-{machine}.nc"
-    doc = check_job(job, output=program, machine=machine)
+    doc = check_job(job, options=CheckOptions(output=program, machine=machine))
     assert program.is_file()
     out = tmp_path / "gcode.json"
     part = str(repo / "samples/mould/mould.json")

@@ -17,6 +17,9 @@ import pytest
 from scipy.spatial import cKDTree
 
 from checker.apt import read_cl
+from checker.check import check_program, check_toolpath
+from checker.check.options import CheckOptions
+from checker.check.posting import post_checked
 from checker.five_axis.lead_tilt import axes_from_angles
 from checker.five_axis.poses import PoseJudge
 from checker.five_axis.reorient import (
@@ -25,8 +28,6 @@ from checker.five_axis.reorient import (
     least_rotation,
     machine_reach,
 )
-from checker.job import check_program, check_toolpath
-from checker.posting import post_checked
 from checker.postproc.kinematics import Chain
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode
@@ -44,8 +45,8 @@ def job(repo):
 @pytest.fixture(scope="module")
 def reoriented(job, tmp_path_factory):
     """The sample checked with --reorient and posted (--on-findings stop)."""
-    checked = check_program(read_cl(job), reorient=True, to_post=True)
     out = tmp_path_factory.mktemp("reorient") / "passage.nc"
+    checked = check_program(read_cl(job), options=CheckOptions(reorient=True, output=out))
     post_checked(checked, out, "stop")
     return checked, out
 
@@ -120,7 +121,7 @@ def test_the_posted_program_reads_back_as_written_and_checks_clean(reoriented, j
     assert d.max() <= ROUND_TRIP and ang.max() <= ROUND_TRIP
     cutter = read_cl(job).operations[0].cutter
     tp = toolpath_of(pm, path=program, units="mm", cutter=cutter)
-    again = check_toolpath(tp, part_path=job.with_suffix(".json"), cutter=cutter, machine=mach)
+    again = check_toolpath(tp, job.with_suffix(".json"), CheckOptions(cutter=cutter, machine=mach))
     assert again.summary.status == "ok" and findings_in(again.summary.counts) == 0
 
 

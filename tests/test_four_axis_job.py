@@ -9,9 +9,10 @@ from click.testing import CliRunner
 from geomdl import BSpline, exchange
 from summary_text import summary_text
 
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.cli import cli
 from checker.config import default_config
-from checker.job import check_job
 
 COMPRESSOR = "samples/compressor/compressor_small.apt"
 COMPRESSOR_D12 = "samples/compressor/compressor_small_d12.apt"
@@ -102,7 +103,7 @@ def test_the_greedy_smoothing_is_planned_only_when_asked(small, small_d12):
 
 
 def test_shortest_path_never_moves_more_than_the_greedy_smoothing(repo, small_d12):
-    asked = check_job(repo / COMPRESSOR_D12, config=_greedy_asked())
+    asked = check_job(repo / COMPRESSOR_D12, options=CheckOptions(config=_greedy_asked()))
     o = asked.orientation
     assert o.greedy_total_rotation is not None
     assert o.dp_total_rotation <= o.greedy_total_rotation
@@ -200,7 +201,7 @@ def test_holder_hit_reports_the_stickout_that_clears_it(tmp_path):
 
     tool = load_tool_library()["BALL-D6"]  # holder D42 from 28 mm above the tip
     assert tool.holder_diameter / 2 > 15.0 and tool.stickout < 40.0
-    doc = check_job(_wall_job(tmp_path), cutter=tool)
+    doc = check_job(_wall_job(tmp_path), options=CheckOptions(cutter=tool))
     cl = [p for p in doc.points if p.kind == "cl"]
     assert [p.verdict for p in cl] == ["holder", "holder"]
     for p in cl:
@@ -214,7 +215,8 @@ def test_holder_hit_reports_the_stickout_that_clears_it(tmp_path):
 def test_full_compressor_path_is_clean_and_the_shortest_path_moves_less(repo):
     """The 2 x 41 x 41 sample job as in thesis chapter 5: clean at every pose and along every
     move at the CAM's B; the shortest path through the feasible B moves less than the CAM."""
-    doc = check_job(repo / "samples/compressor/compressor.apt", config=_greedy_asked())
+    doc = check_job(repo / "samples/compressor/compressor.apt",
+                    options=CheckOptions(config=_greedy_asked()))
     assert len(_cl(doc)) == 2 * 41 * 41  # the approach plunges do not touch: no contact
     assert doc.summary.status == "ok"
     o = doc.orientation

@@ -16,8 +16,9 @@ from scipy.spatial import cKDTree
 
 from checker import verdict as vd
 from checker.apt import read_cl
-from checker.job import check_job, check_toolpath
-from checker.posting import post_unchecked
+from checker.check import check_job, check_toolpath
+from checker.check.options import CheckOptions
+from checker.check.posting import post_unchecked
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode
 from checker.postproc.replay import part_motions, toolpath_of
@@ -38,7 +39,7 @@ def sample(repo):
 def checked(sample, tmp_path_factory):
     """The sample checked and posted (--on-findings stop)."""
     out = tmp_path_factory.mktemp("impeller") / "passage.nc"
-    doc = check_job(sample / "passage.apt", output=out, on_findings="stop")
+    doc = check_job(sample / "passage.apt", options=CheckOptions(output=out, on_findings="stop"))
     return doc, out
 
 
@@ -131,7 +132,7 @@ def test_checking_the_posted_program_gives_the_same_findings(checked, sample):
     motions = part_motions(moves, mach)
     cutter = read_cl(sample / "passage.apt").operations[0].cutter
     tp = toolpath_of(motions, path=program, units="mm", cutter=cutter)
-    again = check_toolpath(tp, part_path=sample / "passage.json", cutter=cutter, machine=mach)
+    again = check_toolpath(tp, sample / "passage.json", CheckOptions(cutter=cutter, machine=mach))
     # the program's poses at the CL poses: the same verdicts
     tip, _ = _cl_poses(sample / "passage.apt")
     cl = [p for p in doc.points if p.kind == "cl"]

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 from wall_jobs import X_WALL, wall_pass, write_wall_part
 
-from checker.job import check_job
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.results import ResultsDocument
 
 REPO = Path(__file__).resolve().parents[1]
@@ -76,6 +77,7 @@ def test_mould_sample_clean_and_larger_cutter_flagged():
     c = doc.summary.counts
     assert c.ok + c.within_tolerance == doc.summary.cl_points + doc.summary.move_points
     assert doc.summary.largest_safe_cutter > 5.0
-    big = check_job(apt, cutter=f"CUTTER/{2 * doc.summary.largest_safe_cutter + 2:.3f},"
-                                 f"{doc.summary.largest_safe_cutter + 1:.3f}")
+    big = check_job(apt, options=CheckOptions(
+        cutter=f"CUTTER/{2 * doc.summary.largest_safe_cutter + 2:.3f},"
+               f"{doc.summary.largest_safe_cutter + 1:.3f}"))
     assert big.summary.counts.gouge + big.summary.counts.interference > 0

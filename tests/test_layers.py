@@ -1,7 +1,8 @@
-"""The packages depend one way: the layers contract of pyproject.toml (import-linter, which
-counts function-level imports and indirect chains) is kept by the code, names every module of
-`checker` (`checker.postproc` among them), and is broken by an import that goes up
-(checker.postproc -> checker.job)."""
+"""The packages depend one way: the layers contracts of pyproject.toml (import-linter, which
+counts function-level imports and indirect chains) are kept by the code; the first names every
+module of `checker` (`checker.postproc` among them) and is broken by an import that goes up
+(checker.postproc -> checker.check), the second every stage of the check (`checker.check`) and
+is broken by a stage that imports a later one (the advice importing the document)."""
 
 from __future__ import annotations
 
@@ -28,10 +29,12 @@ def _lint(root: Path) -> subprocess.CompletedProcess:
                           timeout=300)
 
 
-def _layer_modules() -> list[str]:
+def _layer_modules(which: int = 0) -> list[str]:
+    """The modules the layers of contract `which` name (0: the packages, 1: the check's
+    stages)."""
     from importlinter.api import read_configuration
 
-    (contract,) = read_configuration(str(REPO / "pyproject.toml"))["contracts_options"]
+    contract = read_configuration(str(REPO / "pyproject.toml"))["contracts_options"][which]
     names = []
     for layer in contract["layers"]:
         names += [n.strip().strip("()") for n in re.split(r"[|:]", layer)]
@@ -41,7 +44,7 @@ def _layer_modules() -> list[str]:
 def test_the_layers_contract_is_kept():
     run = _lint(REPO)
     assert run.returncode == 0, run.stdout + run.stderr
-    assert "1 kept, 0 broken" in run.stdout
+    assert "2 kept, 0 broken" in run.stdout
 
 
 def test_the_contract_names_every_module_once():
@@ -54,15 +57,36 @@ def test_the_contract_names_every_module_once():
     assert "checker.postproc" in names
 
 
+def test_the_check_contract_names_every_stage_once():
+    names = _layer_modules(1)
+    assert len(names) == len(set(names))
+    stages = {p.stem for p in (REPO / "checker" / "check").glob("*.py") if p.stem != "__init__"}
+    assert set(names) == stages
+
+
 def test_an_import_that_goes_up_breaks_the_contract(tmp_path):
     shutil.copytree(REPO / "checker", tmp_path / "checker",
                     ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(REPO / "pyproject.toml", tmp_path)
     header = tmp_path / "checker" / "postproc" / "header.py"
     # a function-level import: import-linter sees it as well as a module-level one
-    header.write_text(header.read_text() + "\n\ndef _up():\n    from checker.job import check_job"
+    header.write_text(header.read_text() + "\n\ndef _up():\n    from checker.check import check_job"
                       "\n\n    return check_job\n")
     run = _lint(tmp_path)
     assert run.returncode == 1, run.stdout + run.stderr
-    assert "0 kept, 1 broken" in run.stdout
-    assert "checker.postproc.header -> checker.job" in run.stdout
+    # both: the stages reach the entry of their package through the post
+    assert "0 kept, 2 broken" in run.stdout
+    assert "checker.postproc.header -> checker.check" in run.stdout
+
+
+def test_a_stage_that_imports_a_later_one_breaks_the_check_contract(tmp_path):
+    shutil.copytree(REPO / "checker", tmp_path / "checker",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(REPO / "pyproject.toml", tmp_path)
+    advice = tmp_path / "checker" / "check" / "advice.py"
+    advice.write_text(advice.read_text() + "\n\ndef _later():\n    from checker.check.document "
+                      "import build_document\n\n    return build_document\n")
+    run = _lint(tmp_path)
+    assert run.returncode == 1, run.stdout + run.stderr
+    assert "1 kept, 1 broken" in run.stdout
+    assert "checker.check.advice -> checker.check.document" in run.stdout

@@ -15,7 +15,8 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from checker.job import check_job
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.stock.request import StockRequest
 
 BORE_BOX = "box:128,31,-12,166,69,2"
@@ -25,7 +26,8 @@ BORE_BOX = "box:128,31,-12,166,69,2"
 def rotatethin(realdata, tmp_path_factory):
     out = tmp_path_factory.mktemp("rotatethin") / "deviation.ply"
     apt = realdata / "amorim-solidworkscam-apt" / "RotateThin.apt"
-    doc = check_job(apt, stock=StockRequest(BORE_BOX, resolution=0.05, deviation_out=out))
+    doc = check_job(apt, options=CheckOptions(stock=StockRequest(BORE_BOX, resolution=0.05,
+                                                             deviation_out=out)))
     return doc, out
 
 
@@ -105,7 +107,7 @@ def test_rotatethin_on_the_whole_box_at_its_default_resolution(realdata):
     """`box:+2` around the whole part (h = 0.5 mm by default: the bound is 0.60 mm on a wall):
     the over-cut is the bore's alone, as deep as the check's gouges within that bound."""
     apt = realdata / "amorim-solidworkscam-apt" / "RotateThin.apt"
-    doc = check_job(apt, stock=StockRequest("box:+2"))
+    doc = check_job(apt, options=CheckOptions(stock=StockRequest("box:+2")))
     m = doc.stock.machined
     depth = max(p.depth for p in doc.points if p.verdict == "gouge")
     assert doc.stock.resolution == 0.5 and m.gouge_points > 0

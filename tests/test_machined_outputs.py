@@ -101,13 +101,14 @@ def test_bad_deviation_options_are_one_usage_line(tmp_path, args, expected):
 
 
 def test_deviation_out_without_a_part_is_a_usage_error(tmp_path):
+    from checker.check import check_job
+    from checker.check.options import CheckOptions
     from checker.errors import PathcheckError
-    from checker.job import check_job
     from checker.stock.request import StockRequest
 
     job = tmp_path / "alone.apt"
     job.write_text("PARTNO/A\nCUTTER/6\nFEDRAT/100\nGOTO/0,0,5\nGOTO/10,0,5\nFINI\n")
     request = StockRequest("box:-5,-5,0,15,5,6", deviation_out=tmp_path / "d.ply")
     with pytest.raises(PathcheckError, match="expected a part") as err:
-        check_job(job, stock=request)
+        check_job(job, options=CheckOptions(stock=request))
     assert err.value.code == "usage" and not (tmp_path / "d.ply").exists()

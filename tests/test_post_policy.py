@@ -22,9 +22,10 @@ import pytest
 from wall_jobs import wall_pass, write_wall_part
 
 from checker import __version__
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.errors import PathcheckError
 from checker.geometry import find_part_beside
-from checker.job import check_job
 from checker.postproc.dialects import DIALECTS
 from checker.postproc.header import read_verdict
 from checker.postproc.machine import load_machine
@@ -107,7 +108,8 @@ def posted(jobs, tmp_path_factory) -> dict:
     out = tmp_path_factory.mktemp("posted")
     got = {}
     for policy in ("stop", "comment"):
-        doc = check_job(jobs / "wall.apt", output=out / f"{policy}.nc", on_findings=policy)
+        doc = check_job(jobs / "wall.apt", options=CheckOptions(output=out / f"{policy}.nc",
+                                                            on_findings=policy))
         got[policy] = doc, Path(doc.gcode).read_text()
     return got
 
@@ -142,7 +144,7 @@ def test_comment_writes_the_flags_and_the_verdict_with_the_documents_counts(post
 
 
 def test_header_of_a_clean_two_tool_job(jobs, tmp_path):
-    doc = check_job(jobs / "clean.apt", output=tmp_path / "clean.nc")
+    doc = check_job(jobs / "clean.apt", options=CheckOptions(output=tmp_path / "clean.nc"))
     assert doc.summary.status == "ok" and len(doc.operations) == 2
     text = Path(doc.gcode).read_text()
     head = _header(text)
@@ -215,7 +217,8 @@ def test_no_check_posts_without_a_part(jobs, tmp_path):
     text = (tmp_path / "boss.nc").read_text()
     assert read_verdict(text) == "NOT CHECKED"
     assert "(TOOL 2 CUTTER/6.0,3.0,0.0,3.0,0.0,0.0,0.0)" in _header(text)
-    checked = check_job(jobs / "clean.apt", output=tmp_path / "checked.nc")
+    checked = check_job(jobs / "clean.apt",
+                        options=CheckOptions(output=tmp_path / "checked.nc"))
     assert np.array_equal(_motion(text), _motion(Path(checked.gcode).read_text()),
                           equal_nan=True)
     bad = _cli("boss.apt", "-o", "b2.nc", "--no-check", "--json", "r.json", cwd=tmp_path)

@@ -21,6 +21,9 @@ from scipy.spatial import cKDTree
 from test_contact_order import torus_trough
 
 from checker.apt import read_cl
+from checker.check import check_program
+from checker.check.options import CheckOptions
+from checker.check.posting import post_checked
 from checker.cli import main
 from checker.cutter import parse_cutter
 from checker.five_axis.contact_order import contact_order_axes
@@ -28,8 +31,6 @@ from checker.five_axis.lead_tilt import axes_from_angles, local_frames
 from checker.five_axis.poses import PoseJudge
 from checker.five_axis.reorient import feed_directions, machine_reach
 from checker.geometry.evaluate import evaluate
-from checker.job import check_program
-from checker.posting import post_checked
 from checker.postproc.machine import load_machine
 from checker.postproc.reader import read_gcode
 from checker.postproc.replay import part_motions
@@ -94,9 +95,9 @@ def job(tmp_path_factory):
 @pytest.fixture(scope="module")
 def reoriented(job):
     """The job checked with --reorient --strategy contact-order and posted."""
-    checked = check_program(read_cl(job), reorient=True, strategy="contact-order",
-                            to_post=True)
     out = job.with_suffix(".nc")
+    checked = check_program(read_cl(job), options=CheckOptions(
+        reorient=True, strategy="contact-order", output=out))
     post_checked(checked, out, "refuse")
     return checked, out
 

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from brokers import running_broker
 
+from checker import check as job_module
 from checker import engine
-from checker import job as job_module
 from checker.config import default_config
 from checker.service.ops import WorkerState
 from checker.service.part_cache import PartCache
@@ -186,7 +186,7 @@ def test_check_returns_the_results_document_and_records_it(state, tiny_job, tmp_
         assert request[1:3] == ("check", 1) and request[5] == row.id
         assert store.document(row.id).model_dump(mode="json") == reply["results"]
     doc = ResultsDocument.model_validate(reply["results"])
-    direct = job_module.check_job(job, part_path=part)
+    direct = job_module.check_job(job, part)
     assert doc.job.path == "<apt>" and doc.summary.points == direct.summary.points > 0
     assert [p.allowable for p in doc.points] == [p.allowable for p in direct.points]
     assert doc.summary.counts == direct.summary.counts

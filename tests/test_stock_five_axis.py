@@ -17,8 +17,9 @@ import numpy as np
 import pytest
 
 from checker.apt import read_cl
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.cutter import parse_cutter
-from checker.job import check_job
 from checker.mesh.tool import tool_pieces
 from checker.stock.dexels import Dexels
 from checker.stock.removal import remove
@@ -96,7 +97,7 @@ def test_removed_length_per_ray_agrees_with_the_oracle(poses):
 
 def test_the_check_simulates_the_impeller_on_a_box_stock(repo):
     doc = check_job(repo / "samples" / "impeller" / "passage.apt",
-                    stock=StockRequest("box:+2", (), 0.5))
+                    options=CheckOptions(stock=StockRequest("box:+2", (), 0.5)))
     s = doc.stock
     assert s.volume_initial > s.volume_final > 0.0
     assert s.operations[0].removed == pytest.approx(s.volume_initial - s.volume_final, rel=1e-3)

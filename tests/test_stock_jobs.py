@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from stl import mesh as stl_mesh
 
+from checker.check import check_job
+from checker.check.options import CheckOptions
 from checker.cutter import parse_cutter
-from checker.job import check_job
 from checker.stock.request import StockRequest
 
 JOB = "Teste-Metrologia"
@@ -60,9 +61,9 @@ def job(realdata, tmp_path_factory) -> dict:
 
 
 def _check(apt: Path, part: Path, stickout: float, fixtures=(), stock="cl", flutes=32.0):
-    return check_job(apt, part_path=part, cutter=_cutter(stickout, flutes),
-                     on_findings="comment",
-                     stock=StockRequest(stock, tuple(str(f) for f in fixtures), RESOLUTION))
+    return check_job(apt, part, CheckOptions(
+        cutter=_cutter(stickout, flutes), on_findings="comment",
+        stock=StockRequest(stock, tuple(str(f) for f in fixtures), RESOLUTION)))
 
 
 @pytest.fixture(scope="module")

@@ -95,7 +95,7 @@ def glue(tmp_path_factory):
     """Interface-glue checked, its view written by `pathcheck view`."""
     if not GLUE.is_file():
         pytest.skip(f"{GLUE} not present")
-    from checker.job import check_job
+    from checker.check import check_job
 
     out = tmp_path_factory.mktemp("glue")
     doc = check_job(GLUE)

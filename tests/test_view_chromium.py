@@ -41,12 +41,13 @@ def browser(tmp_path_factory):
 
 
 def _view(tmp_path_factory, job: Path, **options):
-    from checker.job import check_job
+    from checker.check import check_job
+    from checker.check.options import CheckOptions
     from checker.view.viewer_page import write_view
 
     if not job.is_file():
         pytest.skip(f"{job} not present")
-    doc = check_job(job, **options)
+    doc = check_job(job, options=CheckOptions(**options))
     html = write_view(tmp_path_factory.mktemp(job.stem) / f"{job.stem}.html", doc)
     return doc, html
 

@@ -53,11 +53,12 @@ first=$(seconds $(($(date +%s%N) - start)))
 import sys
 
 from checker.kernel_cache import kernels_compiled
-from checker.job import check_job
+from checker.check.options import CheckOptions
+from checker.check import check_job
 
 with kernels_compiled() as compiled:
     for path in sys.argv[1:]:
-        check_job(path, output="compiled.nc", on_findings="stop")
+        check_job(path, options=CheckOptions(output="compiled.nc", on_findings="stop"))
 print("compiled:", " ".join(compiled))
 PY
 [ "$(tail -1 first-compiled.log)" = "compiled: " ] \
@@ -77,11 +78,12 @@ site=$("$work/venv/bin/python" -c "import checker, os; print(os.path.dirname(che
 import sys
 
 from checker.kernel_cache import kernels_compiled
-from checker.job import check_job
+from checker.check.options import CheckOptions
+from checker.check import check_job
 
 with kernels_compiled() as compiled:
     for path in sys.argv[1:]:
-        check_job(path, output="compiled.nc", on_findings="stop")
+        check_job(path, options=CheckOptions(output="compiled.nc", on_findings="stop"))
 print("compiled:", " ".join(compiled))
 PY
 [ "$(tail -1 compiled.log)" = "compiled: " ] \

@@ -23,7 +23,7 @@ from checker.commands import options as opt
               help="run the jobs on this Dask distributed scheduler (tcp://host:8786)")
 @opt.store_option()
 @opt.config_option(help="configuration TOML: the store is its store.path")
-@click.option("--job-function", default="checker.job:check_job", hidden=True,
+@click.option("--job-function", default="checker.check:check_job", hidden=True,
               help="module:function that checks one job (tests and benchmarks)")
 def batch(jobs: str, workers: int | None, scheduler: str | None, store_path: Path | None,
           config_path: Path | None, job_function: str) -> None:

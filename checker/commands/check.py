@@ -181,9 +181,10 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     pathcheck samples/mould/mould.apt --json - 2>/dev/null   # the document alone on stdout
     pathcheck job.apt --machine linuxcnc-xyzac-trt --machine-check   # the machine's solids too
     """
+    from checker.check import check_job
+    from checker.check.options import CheckOptions
     from checker.commands.outputs import prepare_outputs
     from checker.errors import PathcheckError
-    from checker.job import check_job
 
     if strategy != "allowable" and not reorient:
         raise PathcheckError(f"--strategy {strategy} plans the re-orientation: add --reorient",
@@ -210,17 +211,17 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
                                          _job_machine(job, machine)
                                          if machine_check or machine_clearance is not None
                                          else None)
+    from checker.check.posting import PostRefusedError
     from checker.errors import printable
-    from checker.posting import PostRefusedError
 
     if not no_store:
         opt.open_store(store)
     try:
-        doc = check_job(job, part_path=part_path, cutter=cutter, config=config_path,
-                        output=output, machine=machine, b_range=parse_b_range(b_range),
-                        reorient=reorient, strategy=strategy, part_transform=part_transform,
-                        cutter_units=units, on_findings=on_findings, stock=stock,
-                        machine_clearance=clearance)
+        doc = check_job(job, part_path, CheckOptions(
+            cutter=cutter, config=config_path, output=output, machine=machine,
+            b_range=parse_b_range(b_range), reorient=reorient, strategy=strategy,
+            part_transform=part_transform, cutter_units=units, on_findings=on_findings,
+            stock=stock, machine_clearance=clearance))
     except PostRefusedError as refused:
         write_after_check(view_out, refused.document, cutter=cutter, stock=stock,
                           config=config_path)
@@ -274,8 +275,8 @@ def post_without_check(job: Path, output: Path | None, cutter, machine: str | No
                        config_path: Path | None, part_path: Path | None,
                        json_out: Path | None, units: str | None) -> None:
     """`--no-check`: post JOB to -o without reading a part; nothing is recorded."""
+    from checker.check.posting import post_unchecked
     from checker.errors import PathcheckError
-    from checker.posting import post_unchecked
 
     for given, name in ((output is None, "expected -o FILE"),
                         (part_path is not None, "no part is read: remove --part"),

@@ -130,13 +130,15 @@ def check_gcode(program: Path, machine, dialect, units, block_delete, part_path,
         if doc["machine_checks"]:
             sys.exit(1)
         return
+    from checker.check import check_toolpath
+    from checker.check.options import CheckOptions
     from checker.commands.check import finish
-    from checker.job import check_toolpath
     from checker.postproc.replay import toolpath_of
 
     toolpath = toolpath_of(motions, path=program, units=moves.units, cutter=cutter)
-    result = check_toolpath(toolpath, part_path=part_path, cutter=cutter, machine=mach,
-                            config=config_path, stock=stock, machine_clearance=clearance)
+    result = check_toolpath(toolpath, part_path, CheckOptions(
+        cutter=cutter, machine=mach, config=config_path, stock=stock,
+        machine_clearance=clearance))
     write_after_check(view_out, result, toolpath=toolpath, cutter=cutter, stock=stock,
                       config=config_path)
     finish(result, json_out, store=not no_store, store_path=store)

@@ -60,7 +60,7 @@ def write_after_check(view_out: Path | None, doc, *, toolpath=None, cutter=None,
         with step("write the 3-D view"):
             fixtures = []
             if stock is not None and stock.fixtures:
-                from checker.job_inputs import job_config
+                from checker.check.inputs import job_config
                 from checker.stock.fixtures import load_fixture
 
                 cfg = job_config(config)

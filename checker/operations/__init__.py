@@ -1,2 +1,2 @@
 """One library call per operation that both the CLI and the service do (the check and its
-posting are `checker.job`)."""
+posting are `checker.check`)."""

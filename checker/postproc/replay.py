@@ -243,7 +243,7 @@ def part_motions(
 
 def toolpath_of(motions: PartMotions, *, path: str | Path, units: str, cutter) -> ToolPath:
     """The program's moves as an in-memory tool path (one operation with `cutter`), so that
-    `checker.job.check_toolpath` checks a G-code program like a CL file. Positions the program
+    `checker.check.check_toolpath` checks a G-code program like a CL file. Positions the program
     leaves undefined (before the first full X Y Z) are dropped."""
     keep = np.flatnonzero(motions.known)
     n = keep.size

@@ -88,14 +88,15 @@ def allowable(req: p.AllowableRequest, state: WorkerState) -> dict:
 
 
 def check(req: p.CheckRequest, state: WorkerState) -> dict:
-    """Check a job with `checker.job.check_toolpath`; `post` also returns the G-code text, or
+    """Check a job with `checker.check.check_toolpath`; `post` also returns the G-code text, or
     `refused` (the reason) where `on_findings` refuses the program as written.
     Inline CL text is named `NAME.apt` (`<apt>` without a name) in errors and in the document.
     Every file is read through the roots: the CL file, the part (given or beside the CL file)
     and a machine file (`machine`, else the CL file's `PPRINT/MACHINE`)."""
     from checker.apt import read_cl
-    from checker.job import check_toolpath
-    from checker.posting import PostRefusedError
+    from checker.check import check_toolpath
+    from checker.check.options import CheckOptions
+    from checker.check.posting import PostRefusedError
 
     files = _Files(state.roots)
     part_path = files.part(req.part)
@@ -118,13 +119,11 @@ def check(req: p.CheckRequest, state: WorkerState) -> dict:
             machine = _machine(req.machine, toolpath, files)
             stock = _stock(req, files)
             clearance = _machine_clearance(req, machine, toolpath)
-            doc = check_toolpath(toolpath, part_path=part_path, cutter=req.cutter,
-                                 machine=machine, config=config, output=gcode_path,
-                                 b_range=req.b_range, reorient=req.reorient,
-                                 strategy=req.strategy,
-                                 part_transform=req.part_transform, started=t0,
-                                 on_findings=req.on_findings, stock=stock,
-                                 machine_clearance=clearance)
+            doc = check_toolpath(toolpath, part_path, CheckOptions(
+                cutter=req.cutter, machine=machine, config=config, output=gcode_path,
+                b_range=req.b_range, reorient=req.reorient, strategy=req.strategy,
+                part_transform=req.part_transform, on_findings=req.on_findings,
+                stock=stock, machine_clearance=clearance), started=t0)
         except PostRefusedError as err:
             doc, refused = err.document, f"G-code not written: {err} (on_findings=refuse)"
         except PathcheckError as err:

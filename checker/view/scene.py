@@ -89,9 +89,9 @@ def part_mesh(doc: ResultsDocument, beside: Path | None = None, config=None) -> 
     """The document's part as triangles, in the frame it was checked in (its `part_transform`
     applied): an STL's own, exact surfaces tessellated within NURBS_DEVIATION; None without a
     part."""
+    from checker.check.inputs import job_config
     from checker.geometry import load_part
     from checker.geometry.tessellate import part_triangles
-    from checker.job_inputs import job_config
 
     path = _resolve(doc.job.part, beside)
     if path is None:
@@ -135,9 +135,9 @@ def read_toolpath(doc: ResultsDocument, beside: Path | None = None,
 def _cutters(doc: ResultsDocument, toolpath, ops: np.ndarray, cutter) -> dict:
     """The real cutter of each operation: the one the check was given, else the CL file's,
     else the document's statement."""
+    from checker.check.inputs import operation_cutters
     from checker.cutter import parse_cutter
     from checker.errors import PathcheckError
-    from checker.job_inputs import operation_cutters
 
     try:
         return operation_cutters(toolpath, ops, cutter, Path(doc.job.path), doc.job.units)
@@ -273,7 +273,7 @@ def build_view(doc: ResultsDocument, *, toolpath=None, part: Mesh | None = None,
     document are also looked for in the folder `beside`; `machine` that of a G-code program
     (`read_toolpath`); `deviation` the part's measuring points and their deviation
     (`read_deviation`), which colour the last stock (the machined part against the design)."""
-    from checker.job_inputs import job_config
+    from checker.check.inputs import job_config
 
     cfg = job_config(config)
     if toolpath is None:

@@ -12,6 +12,7 @@ from checker.config import Config, default_config, load_config
 from checker.cutter import Cutter, parse_cutter_in
 from checker.errors import PathcheckError
 from checker.geometry import BESIDE_SUFFIXES, find_part_beside
+from checker.toolpath import ToolPath
 
 
 def job_config(config: Config | str | Path | None) -> Config:
@@ -34,8 +35,8 @@ def part_file(apt_path: Path, given: str | Path | None) -> Path:
     return found
 
 
-def operation_cutters(toolpath, ops: np.ndarray, cutter, apt_path: Path,
-                      cutter_units: str | None = None) -> dict[int, Cutter]:
+def operation_cutters(toolpath: ToolPath, ops: np.ndarray, cutter: Cutter | str | None,
+                      apt_path: Path, cutter_units: str | None = None) -> dict[int, Cutter]:
     """The real cutter of every operation index in `ops`; a `cutter` statement given as text
     is read in `cutter_units` (default: the job's units)."""
     if cutter is not None:

@@ -1,7 +1,7 @@
 """Posting, the stage after the check: the checked program written as G-code for its machine
 (`postproc.post.post_toolpath`) under a policy on findings, or a CL file posted without a check.
-The check (`checker.job`) hands over what is to be written (`written.Checked`); posting is
-done only when a caller asks for G-code. Part frame, mm, degrees."""
+The check (`checker.check.job`) hands over what is to be written (`checked.Checked`); posting
+is done only when a caller asks for G-code. Part frame, mm, degrees."""
 
 from __future__ import annotations
 
@@ -10,20 +10,24 @@ from pathlib import Path
 
 import numpy as np
 
+from checker import verdict as vd
 from checker.apt import read_cl
+from checker.check.checked import Checked, infeasible_rows
+from checker.check.context import JobContext
+from checker.check.inputs import job_config, operation_cutters
+from checker.check.options import ON_FINDINGS
+from checker.check.program import Program
 from checker.errors import PathcheckError
-from checker.job_inputs import job_config, operation_cutters
 from checker.postproc.header import verdict_text
 from checker.postproc.post import post_toolpath
 from checker.progress import step
-from checker.written import Checked, flags
 
-ON_FINDINGS = ("refuse", "stop", "comment")
+__all__ = ["ON_FINDINGS", "PostRefusedError", "flags", "post_checked", "post_unchecked"]
 
 
 class PostRefusedError(Exception):
     """The program was not written (``--on-findings refuse``): ``counts`` the findings of the
-    program as written (`written.written_counts`), ``document`` the check that ran."""
+    program as written (`checked.written_counts`), ``document`` the check that ran."""
 
     def __init__(self, counts: dict[str, int], document=None) -> None:
         self.counts = counts
@@ -73,8 +77,38 @@ def _post(checked: Checked, output, on_findings: str):
                          axes=program.axis)
 
 
+def flags(job: JobContext, program: Program) -> list[str]:
+    """Per motion row the comment written before it ('' none): a finding at its pose (the
+    first), a finding along the move that reaches it (the first), no feasible B at it."""
+    w = program.written
+    at: dict[int, list[str]] = {}
+    for rows, verdict, depth, where in (
+            (w.moves.row, w.pose_verdict, w.poses.depth, "CL LINE {line}"),
+            (w.moves.row[w.along.end], w.move_verdict, w.along.depths.depth, "ALONG THE MOVE")):
+        hit = np.flatnonzero(vd.is_finding(verdict))
+        _, first = np.unique(rows[hit], return_index=True)
+        for i in hit[first]:
+            row = int(rows[i])
+            at.setdefault(row, []).append(f"{str(verdict[i]).upper()} "
+                                          f"{where.format(line=int(job.m.line[row]))} "
+                                          f"DEPTH {depth[i]:.4f}")
+    if program.stock is not None:
+        st = program.stock
+        hit = np.flatnonzero(vd.is_finding(st.verdict))
+        for i in hit:
+            row = int(w.moves.row[i])
+            at.setdefault(row, []).append(f"{str(st.verdict[i]).upper()} INTO "
+                                          f"{str(st.against[i]).upper()} DEPTH {st.depth[i]:.4f}")
+    for row in infeasible_rows(program).tolist():
+        at.setdefault(int(row), []).append("NO FEASIBLE B")
+    out = [""] * len(job.m)
+    for row, texts in at.items():
+        out[row] = "PATHCHECK " + "; ".join(texts)
+    return out
+
+
 def _with_machine(comments: list[str], doc) -> list[str]:
-    """`comments` (per motion row, `written.flags`) with each machine finding of `doc`
+    """`comments` (per motion row, `flags`) with each machine finding of `doc`
     (`checker.collide`) before the move where it starts: its two solids and the least distance
     of its run (mm, < 0: into each other)."""
     found = [] if doc.machine is None else doc.machine.findings
