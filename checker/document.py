@@ -143,7 +143,7 @@ def _engine_advice(job, program, o, c, rows, tips, axes, out: _Advice) -> None:
 
 
 def _mesh_advice(job, program, c, rows, tips, axes, out: _Advice) -> None:
-    from checker.mesh.depth import allowable_on_mesh
+    from checker.mesh.allowable import allowable_on_mesh
 
     w = program.written
     at = _pose_of_rows(w.moves, rows)
