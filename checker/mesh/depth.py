@@ -21,10 +21,10 @@ import math
 import numba as nb
 import numpy as np
 
-from checker.mesh.bvh import MeshIndex
+from checker.mesh.bvh import MeshIndex, Tree
 from checker.mesh.candidates import new_candidates
 from checker.mesh.core import Tools
-from checker.mesh.inputs import one_tool, rows_of_three, unit_rows
+from checker.mesh.inputs import one_tool, plain, rows_of_three, unit_rows
 from checker.mesh.pose import Effort, PoseDepths, Poses, pose_depth, pose_scratch
 from checker.mesh.tool import ToolPieces
 
@@ -34,7 +34,9 @@ __all__ = ["PoseDepths", "depths_of_tools", "pose_depths"]
 @nb.njit(cache=True, parallel=True)
 def _poses(tree, tools, poses, floor, reach, nchunks):
     """Every pose of `poses` (`pose.pose_depth`), in `nchunks` parallel chunks: (PoseDepths,
-    Effort)."""
+    Effort). `tree`, `tools`, `poses`: the fields of a `bvh.Tree`, `core.Tools`, `pose.Poses`
+    as plain tuples (`inputs.plain`)."""
+    tree, tools, poses = Tree(*tree), Tools(*tools), Poses(*poses)
     n = poses.tip.shape[0]
     out = PoseDepths(np.empty(n), np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64),
                      np.empty((n, 3)))
@@ -59,7 +61,7 @@ def depths_of_tools(mesh_index: MeshIndex, tools: Tools, poses: Poses, floor: fl
     effort per pose. Arrays as the kernels take them (`checker.mesh.inputs`)."""
     n = len(poses.tip)
     nchunks = max(1, min(n, 8 * nb.get_num_threads(), (n + 63) // 64))
-    return _poses(mesh_index.tree(), tools, poses, float(floor), float(reach), nchunks)
+    return _poses(*plain(mesh_index.tree(), tools, poses), float(floor), float(reach), nchunks)
 
 
 def pose_depths(mesh_index: MeshIndex, pieces: ToolPieces, tips: np.ndarray, axes: np.ndarray,

@@ -38,6 +38,14 @@ def unit_rows(axes: np.ndarray) -> np.ndarray:
     return contiguous(axes / n[:, None], np.float64)
 
 
+def plain(*records: tuple) -> list[tuple]:
+    """The records (NamedTuples) as plain tuples, for a kernel's arguments, which rebuilds them:
+    numba types a plain tuple at once, while a NamedTuple argument's class is first matched
+    against every registered abstract base class (once per class and process, slow once numba's
+    parallel backend has loaded)."""
+    return [tuple(r) for r in records]
+
+
 def one_tool(pieces: ToolPieces) -> Tools:
     """The `core.Tools` of the one tool `pieces`."""
     return Tools(contiguous(pieces.prof, np.float64), contiguous(pieces.nprof, np.int64),

@@ -31,10 +31,10 @@ import numba as nb
 import numpy as np
 
 from checker.mesh.bounds import quick_upper
-from checker.mesh.bvh import STACK, MeshIndex, query_capsule
+from checker.mesh.bvh import STACK, MeshIndex, Tree, query_capsule
 from checker.mesh.core import PROFILE_ROWS, Tools, core_buffers, eroded, piece_core
 from checker.mesh.gjk import FARTHER, SEPARATED, Simplex, gjk_distance, simplex_buffers
-from checker.mesh.inputs import contiguous, one_tool
+from checker.mesh.inputs import contiguous, one_tool, plain
 from checker.mesh.tool import ToolPieces
 from checker.mesh.tool_frame import (
     along_axis,
@@ -77,6 +77,7 @@ class _Scratch(NamedTuple):
 
 @nb.njit(cache=True)
 def _scratch():
+    """A new `_Scratch`."""
     profile, normal, offset = core_buffers()
     return _Scratch(np.empty(STACK, dtype=np.int64), profile, normal, offset, np.empty((6, 3)),
                     simplex_buffers(), np.empty((PROFILE_ROWS, 2)), np.empty((PROFILE_ROWS, 2)))
@@ -151,6 +152,10 @@ def _stretch(i, tree, tools, stretches, found, scratch):
 
 @nb.njit(cache=True, parallel=True)
 def _stretches(tree, tools, stretches, nchunks):
+    """Whether each stretch is certified (`_stretch`), in `nchunks` parallel chunks. `tree`,
+    `tools`, `stretches`: the fields of a `bvh.Tree`, `core.Tools`, `Stretches` as plain
+    tuples (`inputs.plain`)."""
+    tree, tools, stretches = Tree(*tree), Tools(*tools), Stretches(*stretches)
     n = stretches.mid.shape[0]
     out = np.zeros(n, dtype=np.bool_)
     for c in nb.prange(nchunks):
@@ -176,4 +181,4 @@ def certified_stretches(mesh_index: MeshIndex, pieces: ToolPieces, mids: np.ndar
     stretches = Stretches(contiguous(mids, f), contiguous(axes, f), contiguous(half, f),
                           contiguous(tau, f), contiguous(alpha, f), contiguous(tol, f))
     tools: Tools = one_tool(pieces)
-    return _stretches(mesh_index.tree(), tools, stretches, nchunks)
+    return _stretches(*plain(mesh_index.tree(), tools, stretches), nchunks)
