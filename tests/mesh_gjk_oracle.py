@@ -173,7 +173,7 @@ def _pruned(tree, f, found, k, core, kind, best, best_tri, best_piece, bx, by, b
             bx, by, bz = point_in_part(f, bound.point[0], bound.point[1], bound.point[2])
         if ub <= best + EPS_T:
             continue
-        val, at = _gjk_value(T, core, best, low, bound.point, ub - core.rho, simplex, buf_a,
+        val, at = _gjk_value(T, core, best, low, bound.point, bound.erosion, simplex, buf_a,
                              buf_b)
         if val > best:
             best, best_tri, best_piece = val, tree.tri_id[found[q]], kind

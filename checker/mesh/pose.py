@@ -20,7 +20,7 @@ from checker.mesh.bounds import lower_bound, plane_upper, quick_upper, upper_bou
 from checker.mesh.bvh import STACK, query_capsule
 from checker.mesh.candidates import best_left, keep, new_candidates, take
 from checker.mesh.core import core_buffers, piece_core
-from checker.mesh.slice_depth import _COLUMNS, BRACKETS, SLICE_EPS, exact_value
+from checker.mesh.slice_depth import BRACKET_COLUMNS, BRACKETS, SLICE_EPS, exact_value
 from checker.mesh.tool_frame import (
     along_axis,
     box_top,
@@ -82,7 +82,7 @@ def pose_scratch():
     """A new `PoseScratch`."""
     profile, normal, offset = core_buffers()
     return PoseScratch(np.empty(STACK, dtype=np.int64), profile, normal, offset,
-                       np.empty((3, 3)), np.empty((BRACKETS, _COLUMNS)))
+                       np.empty((3, 3)), np.empty((BRACKETS, BRACKET_COLUMNS)))
 
 
 @nb.njit(cache=True)

@@ -26,7 +26,7 @@ BRACKETS = 64       # brackets held at once, at most
 # next step (0 the tangents' meeting, 1 the secant), the end replaced last (-1 a, +1 b) and the
 # Illinois scales of the slopes at a and b
 _A, _FA, _GA, _B, _FB, _GB, _STALLS, _SECANT, _LAST, _SCALE_A, _SCALE_B = range(11)
-_COLUMNS = 11
+BRACKET_COLUMNS = 11
 
 
 class SliceValue(NamedTuple):
@@ -146,7 +146,7 @@ def _set_end(br, k, column, level, f):
 def exact_value(T, core, best, br):
     """The signed value of triangle T (tool frame) against the piece, rho - min over T of the
     signed distance to K (mm), if it beats `best`, else -inf; and T's point of that value.
-    `br (BRACKETS, _COLUMNS)` scratch.
+    `br (BRACKETS, BRACKET_COLUMNS)` scratch.
 
     phi (module docstring) is bracketed by tangent lines (each evaluation gives an interval
     holding phi's subgradients; a bracket whose probe's interval holds 0 is split in two),
@@ -198,7 +198,7 @@ def exact_value(T, core, best, br):
         b, gb = br[kmin, _B], br[kmin, _GB]
         if b - a <= 4e-16 or ga >= 0.0 or gb <= 0.0:
             # exhausted (its ends are evaluated): drop it
-            for c in range(_COLUMNS):
+            for c in range(BRACKET_COLUMNS):
                 br[kmin, c] = br[nbr - 1, c]
             nbr -= 1
             continue
@@ -226,7 +226,7 @@ def exact_value(T, core, best, br):
             _set_end(br, kmin, _A, hc, f)
             _illinois(br, kmin, -1.0, b - hc > 0.5 * width)
         elif nbr < BRACKETS:                     # either side: split
-            for c in range(_COLUMNS):
+            for c in range(BRACKET_COLUMNS):
                 br[nbr, c] = br[kmin, c]
             _set_end(br, kmin, _B, hc, f)
             _set_end(br, nbr, _A, hc, f)
