@@ -29,7 +29,7 @@ class Bound(NamedTuple):
     point: tuple[float, float, float]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def plane_upper(T, n, core):
     """Upper bound of the signed value of triangle T (unit normal `n`, 3-tuple, tool frame)
     from its plane: rho - max(d+, d-), d+- the distances by which the core K lies beyond the
@@ -66,7 +66,7 @@ def _slack(T, core, rmin):
     return min(0.0, min(core.rmax - rmin, min(hmax - core.hlo, core.hhi - hmin)))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def quick_upper(T, core):
     """A cheaper, looser `upper_bound`: min r over T bounded below by the distance from the axis
     to the box of T's shadow (T: a triangle's vertices, or any convex polytope's)."""
@@ -80,7 +80,7 @@ def quick_upper(T, core):
     return core.rho + _slack(T, core, rmin)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def shadow_weights(T):
     """Weights (u, v, w) of a point of triangle T (tool frame) whose shadow along the axis is
     nearest the axis, and whether the axis meets the shadow (the three edges see it on one
@@ -102,7 +102,7 @@ def shadow_weights(T):
     return u, v, w, False
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def upper_bound(T, core):
     """The `Bound` of triangle T (tool frame): rho + min_i (c_i - min over T of (a_i r + b_i h)),
     with min r = the distance from the axis to T's shadow along it (a degenerate core: the

@@ -165,15 +165,16 @@ def _build(tv):
 
 
 @nb.njit(cache=True)
-def segment_hits_box(start, along, tree, node, pad) -> bool:
-    """Does the segment start + s along, s in [0, 1] (3-tuples, mm), meet the box of `tree`'s
-    `node` grown by `pad` on every side (a superset of the capsule of radius pad about the
-    segment)?"""
+def segment_hits_box(start, along, lo, hi, node, pad) -> bool:
+    """Does the segment start + s along, s in [0, 1] (3-tuples, mm), meet the box `lo[node]`,
+    `hi[node]` (`Tree.node_lo`, `node_hi`) grown by `pad` on every side (a superset of the
+    capsule of radius pad about the segment)? (The tree's two arrays, not the whole tree: a
+    call passes each array as several words.)"""
     s0, s1 = 0.0, 1.0
     for a in range(3):
         p, d = start[a], along[a]
-        bl = tree.node_lo[node, a] - pad
-        bh = tree.node_hi[node, a] + pad
+        bl = lo[node, a] - pad
+        bh = hi[node, a] + pad
         if abs(d) < 1e-300:
             if p < bl or p > bh:
                 return False
@@ -199,7 +200,8 @@ def query_capsule(tree, start, along, pad, cand, stack):
     full; returned) and counted. `stack (STACK,)` scratch."""
     k = 0
     sp = 0
-    if not segment_hits_box(start, along, tree, 0, pad):
+    lo, hi = tree.node_lo, tree.node_hi
+    if not segment_hits_box(start, along, lo, hi, 0, pad):
         return cand, 0
     stack[0] = 0
     sp = 1
@@ -217,10 +219,10 @@ def query_capsule(tree, start, along, pad, cand, stack):
                 k += 1
             continue
         a, b = tree.node_left[node], tree.node_right[node]
-        if segment_hits_box(start, along, tree, b, pad):
+        if segment_hits_box(start, along, lo, hi, b, pad):
             stack[sp] = b
             sp += 1
-        if segment_hits_box(start, along, tree, a, pad):
+        if segment_hits_box(start, along, lo, hi, a, pad):
             stack[sp] = a
             sp += 1
     return cand, k

@@ -29,7 +29,7 @@ def new_candidates(n):
                       np.empty((n, 3, 3)))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def keep(c, k, t, upper, point, T):
     """Row k of `c`: triangle t (tree order) with its `upper` bound and `point` (3-tuple), its
     vertices T (3, 3)."""
@@ -42,7 +42,7 @@ def keep(c, k, t, upper, point, T):
         c.triangle[k, v, 2] = T[v, 2]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def best_left(c, n):
     """The row of the largest upper bound among the first n (the first of equals)."""
     jb = 0
@@ -53,7 +53,7 @@ def best_left(c, n):
     return jb
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def take(c, j, last, T):
     """Row j's vertices into T (3, 3); row `last` moves into row j. Returns row j's triangle
     index and point."""

@@ -43,7 +43,7 @@ def tool_frame(tip, axis):
     return ToolFrame(tip, (e1x, e1y, e1z), (e2x, e2y, e2z), (ax, ay, az))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def direction_in_tool(f, d):
     """The direction `d` (part frame) in the tool frame `f`."""
     e1, e2, e = f.e1, f.e2, f.axis
@@ -52,7 +52,7 @@ def direction_in_tool(f, d):
             d[0] * e[0] + d[1] * e[1] + d[2] * e[2])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def triangle_in_tool(f, verts, t, T):
     """Triangle t's vertices `verts[t] (3, 3)` (part frame) into rows 0-2 of T, tool frame."""
     px, py, pz = f.tip
