@@ -7,7 +7,11 @@ axis segment's box grown by the piece's radius plus rho minus the best value so 
 (`checker.mesh.slice_depth`) is computed only for triangles whose bound beats the best value so
 far, in order of that bound, after the value at their point nearest the axis (a lower bound). An
 unbounded piece is clipped per pose at a height above the mesh's box that keeps every distance
-within `reach` and every depth."""
+within `reach` and every depth.
+
+The kernels called per candidate triangle (the frame's transforms, the bounds, the candidates'
+rows) allocate nothing and are compiled without numba's reference counting (`_nrt=False`):
+with it, each call counted every array of the records it was passed up and down."""
 
 from __future__ import annotations
 
