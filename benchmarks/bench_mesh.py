@@ -27,7 +27,9 @@ from checker.apt import read_cl
 from checker.cutter import parse_cutter
 from checker.geometry.stl_io import read_stl
 from checker.mesh import MeshIndex, tool_pieces
-from checker.mesh.depth import _run
+from checker.mesh.depth import depths_of_tools
+from checker.mesh.inputs import one_tool
+from checker.mesh.pose import Poses
 
 REALDATA = Path(__file__).resolve().parents[2] / "shared" / "realdata" / "amorim-solidworkscam-apt"
 MESHES = ("RotateThin", "Interface-glue")
@@ -85,18 +87,19 @@ def run_case(index, cutter, tips, axis):
     axes = np.ascontiguousarray(np.broadcast_to(axis, tips.shape))
     tips = np.ascontiguousarray(tips)
 
+    tools = one_tool(pc)
+    poses = Poses(tips, axes, np.zeros(len(tips), np.int64))
+
     def call():
-        return _run(index, pc.prof, pc.nprof, pc.rho, pc.kind,
-                    np.array([0, len(pc)], dtype=np.int64), np.zeros(len(tips), np.int64),
-                    tips, axes, -REACH, REACH)
+        return depths_of_tools(index, tools, poses, -REACH, REACH)
 
     threads = numba.config.NUMBA_NUM_THREADS
     numba.set_num_threads(1)
     t1 = best_of(call, warm=True).wall
     numba.set_num_threads(threads)
     tn = best_of(call, warm=True).wall
-    d, _, _, _, stats = call()
-    return len(tips) / t1, len(tips) / tn, d, stats
+    got, effort = call()
+    return len(tips) / t1, len(tips) / tn, got.depth, effort
 
 
 def main() -> None:
@@ -125,13 +128,13 @@ def main() -> None:
             for axis in (np.array([0.0, 0.0, 1.0]), tilted):
                 cases.append(("near", c, near_poses(mesh, axis, NEAR, rng), axis))
         for label, cutter, tips, axis in cases:
-            one, many, d, stats = run_case(index, cutter, tips, axis)
+            one, many, d, effort = run_case(index, cutter, tips, axis)
             o = ocl_rate(mesh, cutter, tips, axis)
             kind = {"flat": "flat", "ball": "ball", "bullnose": "bull", "apt": "apt"}.get(
                 cutter.kind, cutter.kind)
             print(f"{name:15s} {label:22s} {kind + ' D' + format(cutter.d, 'g'):9s} "
                   f"{'z' if axis[0] == 0 else '20deg':5s} {len(tips):6d} {np.mean(d > 0):5.2f} "
-                  f"{stats[:, 0].mean():5.1f} {stats[:, 2].mean():6.2f} {one:11,.0f} "
+                  f"{effort.candidates.mean():5.1f} {effort.exact.mean():6.2f} {one:11,.0f} "
                   f"{many:10,.0f} {'-' if o is None else format(o, '11,.0f'):>11s}")
 
 

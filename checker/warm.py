@@ -53,7 +53,8 @@ def compile_step_mesh_and_plan() -> None:
     _refinement_step()
     from checker.cutter import parse_cutter
     from checker.mesh import MeshIndex, tool_pieces
-    from checker.mesh.depth import allowable_on_mesh, pose_depths
+    from checker.mesh.allowable import allowable_on_mesh
+    from checker.mesh.depth import pose_depths
     from checker.mesh.swept import certified_stretches
 
     v = np.array([[-20.0, -20, 0], [20, -20, 0], [0, 20, 0], [0, 0, 10]])

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from feasible_brute import brute_force_check
 from five_axis_parts import channel, channel_contacts, half_pipe, tool
+from mesh_gjk_oracle import gjk_pose_depths
 
 from checker.config import default_config
 from checker.five_axis.best_orientation import allowable_objective, best_orientation, cusp_objective
@@ -197,7 +198,8 @@ def test_boundary_against_a_brute_force_scan(folder):
     cutter = tool("CUTTER/8,1", 12.0, 8.0, 30.0, 24.0, 30.0)
     reg = feasible_region(PoseJudge.for_triangles(tri, cutter, 0.01), cc, n, f, tolerance=TOL)
     assert 0 < reg.mask.mean() < 1 and len(reg.crossing) > 50
-    check = brute_force_check(reg, PoseJudge.for_triangles(tri, cutter, 0.01, method="gjk"),
+    check = brute_force_check(reg, PoseJudge.for_triangles(tri, cutter, 0.01,
+                                                             depths=gjk_pose_depths),
                               cc, n, f)
     assert check.poses > 20 * len(reg.crossing)
     assert float(check.distance.max()) <= TOL + 1e-9

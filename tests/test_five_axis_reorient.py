@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 import pytest
+from mesh_gjk_oracle import gjk_pose_depths
 from scipy.spatial import cKDTree
 
 from checker.apt import read_cl
@@ -68,7 +69,7 @@ def test_every_written_contact_pose_is_feasible_by_another_judge(reoriented):
     plan = checked.program.fives[0]
     job = checked.job
     gjk = PoseJudge(job.index, checked.cutters[0], float(checked.document.operations[0].tolerance),
-                    job.triangles.deviation, method="gjk")
+                    job.triangles.deviation, depths=gjk_pose_depths)
     assert gjk(plan.contacts.cc, plan.contacts.normal, plan.chosen.axis).all()
     assert not gjk(plan.contacts.cc, plan.contacts.normal, plan.cam_axis).all()
     sol = job.motion.chain.solve(plan.chosen.axis)

@@ -9,6 +9,7 @@ import zlib
 
 import numpy as np
 import pytest
+from mesh_gjk_oracle import gjk_pose_depths
 
 from checker.cutter import Cutter, diameter_from, parse_cutter
 from checker.mesh import MeshIndex, allowable_on_mesh, chordal_deviation, pose_depths, tool_pieces
@@ -419,10 +420,12 @@ def test_a_run_of_poses_equals_each_pose_alone(name):
 
 @pytest.mark.parametrize("name", ["flat", "ball", "bullnose", "tapered_bull", "drill",
                                   "bull+shank+holder"])
-def test_gjk_method_agrees_with_the_slice_method(name):
-    """The two exact methods, the 1-D slice minimisation and GJK with bisection on the erosion
-    depth, agree within 1e-5 mm; GJK never reports less (it keeps the upper end of its bracket
-    where it cannot certify a separation)."""
+def test_gjk_oracle_agrees_with_the_slice_method(name):
+    """The product's branch and bound over the 1-D slice minimisation and the GJK oracle
+    (tests/mesh_gjk_oracle.py: GJK with bisection on the erosion depth, with the product's
+    bounds and with every triangle near the tool) agree within 1e-5 mm; GJK never reports less
+    (it keeps the upper end of its bracket where it cannot certify a separation); both name the
+    same deepest piece."""
     cutter = CUTTERS.get(name) or HOLDERS[name]
     rng = np.random.default_rng(11)
     v, t = soup(rng, 200)
@@ -431,11 +434,13 @@ def test_gjk_method_agrees_with_the_slice_method(name):
     pc = tool_pieces(cutter, with_holder=True)
     for axis in (Z, np.array([0.3, -0.4, 0.866])):
         a = pose_depths(idx, pc, tips, axis, reach=3.0)
-        b = pose_depths(idx, pc, tips, axis, reach=3.0, method="gjk")
-        assert np.all(b.depth >= a.depth - 1e-9)
-        assert np.all(b.depth <= a.depth + 1e-5), np.max(b.depth - a.depth)
-    with pytest.raises(ValueError):
-        pose_depths(idx, pc, tips, Z, reach=3.0, method="sampling")
+        cut = a.depth > 1e-5
+        assert cut.sum() >= 10 and (a.depth < -1e-5).sum() >= 10
+        for prune in (True, False):
+            b = gjk_pose_depths(idx, pc, tips, axis, reach=3.0, prune=prune)
+            assert np.all(b.depth >= a.depth - 1e-9)
+            assert np.all(b.depth <= a.depth + 1e-5), np.max(b.depth - a.depth)
+            assert np.array_equal(a.piece[cut], b.piece[cut])
 
 
 def test_far_pose_and_input_checks():

@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 import pytest
+from mesh_gjk_oracle import gjk_pose_depths
 from scipy.spatial import cKDTree
 from test_contact_order import torus_trough
 
@@ -166,7 +167,8 @@ def test_every_axis_is_the_contact_order_pose_or_its_fairing(reoriented):
         largest = np.zeros(segment.max() + 1)
         np.maximum.at(largest, segment[1:][~plan.starts[1:]], step[~plan.starts[1:]])
         assert (turn <= largest[segment] + 1e-7).all() and turn.max() > 1e-3
-        gjk = PoseJudge(job.index, cutter, tol, job.triangles.deviation, method="gjk")
+        gjk = PoseJudge(job.index, cutter, tol, job.triangles.deviation,
+                        depths=gjk_pose_depths)
         assert gjk(con.cc, con.normal, plan.chosen.axis).all()
         assert not gjk(con.cc, con.normal, plan.cam_axis).any()
         sol = chain.solve(plan.chosen.axis)

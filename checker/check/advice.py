@@ -6,7 +6,7 @@ and the cutting poses whose contact the cutter cannot touch (`inaccessible`). Ad
 pose, never a finding (MATH.md §2-§6, §8): the verdicts are the check's
 (`checker.check.verified`), and the advice never calls the real cutter unsafe where the check
 finds it clean. NURBS parts go through the allowable-cutter engine (`checker.engine`), mesh
-parts through the exact triangle tests (`checker.mesh.depth.allowable_on_mesh`). Part frame,
+parts through the exact triangle tests (`checker.mesh.allowable.allowable_on_mesh`). Part frame,
 mm, degrees."""
 
 from __future__ import annotations
@@ -175,7 +175,7 @@ def _mesh_advice(job: JobContext, program: Program, c: Cutter, rows: np.ndarray,
     normal, and the allowable cutter by the exact triangle tests, searched up to
     _MESH_SIZE_CAP times the real size (larger is unbounded); contacts facing away from the
     tool axis are inaccessible."""
-    from checker.mesh.depth import allowable_on_mesh
+    from checker.mesh.allowable import allowable_on_mesh
 
     w = program.written
     at = pose_of_rows(w.moves, rows)

@@ -292,7 +292,7 @@ def _on_mesh(part: Part, cutter, cc: np.ndarray, normals: np.ndarray, axes: np.n
     (the bisection gives none); the advice by the same rule as on surfaces, every limit counted
     on the CC point's own surface (a mesh has no surfaces to tell them apart)."""
     from checker.mesh import MeshIndex
-    from checker.mesh.depth import allowable_on_mesh
+    from checker.mesh.allowable import allowable_on_mesh
 
     m = part.mesh
     index = _MESH_INDEX.get(part.content_hash)

@@ -4,11 +4,12 @@ means (docs/MATH.md §8, §10.2). Part frame, mm."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from checker.mesh import MeshIndex, pose_depths, tool_pieces
+from checker.mesh import MeshIndex, PoseDepths, pose_depths, tool_pieces
 from checker.verdict import decide, is_finding
 
 
@@ -21,8 +22,8 @@ class PoseJudge:
     clearances computed (0: none, all a verdict needs); `gouge_neighbourhood` (tool radii
     from the tip) names a body hit near the contact a gouge, as the check does (it changes the
     label, never the feasibility);
-    `method` the exact depth method of `checker.mesh.pose_depths` ("gjk": an independent
-    cross-check)."""
+    `depths` the exact depth (`checker.mesh.pose_depths` or a function with its arguments and
+    answer: a test's independent oracle)."""
 
     index: MeshIndex
     cutter: object
@@ -31,7 +32,7 @@ class PoseJudge:
     reach: float = 0.0
     gouge_neighbourhood: float = 2.0
     with_holder: bool = True
-    method: str = "slice"
+    depths: Callable[..., PoseDepths] = pose_depths
 
     @classmethod
     def for_triangles(cls, triangles, cutter, tolerance: float, **kw) -> PoseJudge:
@@ -46,7 +47,7 @@ class PoseJudge:
             return np.zeros(0, dtype=object)
         tips = self.cutter.tip_from_contact(cc, normals, axes)
         pieces = tool_pieces(self.cutter, with_holder=self.with_holder)
-        got = pose_depths(self.index, pieces, tips, axes, reach=self.reach, method=self.method)
+        got = self.depths(self.index, pieces, tips, axes, reach=self.reach)
         height = np.einsum("ij,ij->i", got.point - tips, axes)
         near = np.nan_to_num(height, nan=np.inf) <= \
             self.gouge_neighbourhood * 0.5 * float(self.cutter.d)

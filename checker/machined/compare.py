@@ -169,10 +169,10 @@ def _probes(c: Comparison, r: Region) -> np.ndarray:
 def _finishing_tools(c: Comparison, found: list[Region], out: list[MachinedRegion],
                      library) -> None:
     """Per region: the least over its probes (`_probes`) of the largest size of its cutter's
-    family touching there gouge-free with the axis +Z (`checker.mesh.depth.allowable_on_mesh`,
+    family touching there gouge-free with the axis +Z (`checker.mesh.allowable.allowable_on_mesh`,
     all regions of a cutter in one bisection), and the library's largest cutter not above
     it (`allowable`, `tool` of `out`)."""
-    from checker.mesh.depth import allowable_on_mesh
+    from checker.mesh.allowable import allowable_on_mesh
 
     cutter_of = [c.cutters[o.op if o.op is not None else max(c.cutters)] for o in out]
     for cutter in {id(k): k for k in cutter_of}.values():

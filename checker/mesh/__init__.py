@@ -10,9 +10,10 @@ res = pose_depths(index, pieces, tips, axes, reach=5.0)     # depth, piece, tria
 ```
 """
 
+from checker.mesh.allowable import allowable_on_mesh
 from checker.mesh.bvh import MeshIndex
 from checker.mesh.chord import chordal_deviation
-from checker.mesh.depth import PoseDepths, allowable_on_mesh, pose_depths
+from checker.mesh.depth import PoseDepths, pose_depths
 from checker.mesh.tool import ToolPieces, tool_pieces
 
 __all__ = ["MeshIndex", "PoseDepths", "ToolPieces", "allowable_on_mesh", "chordal_deviation",

@@ -10,12 +10,33 @@ reads contiguous memory; `tri_id` maps them back to the caller's triangle indice
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
 
 LEAF = 4
 STACK = 128  # traversal stack: enough for a balanced tree of 2^60 triangles
+
+
+class Tree(NamedTuple):
+    """The tree as the kernels take it (mm, part frame): the nodes' boxes `node_lo, node_hi
+    (M, 3)`, children `node_left, node_right (M,)` (-1 at a leaf), a leaf's triangles in tree
+    order `node_start, node_count (M,)`; the triangles in tree order `tri_verts (T, 3, 3)`, their
+    unit normals `tri_normal (T, 3)` and indices in the caller's mesh `tri_id (T,)`; the mesh's
+    box `lo, hi (3,)`."""
+
+    node_lo: np.ndarray
+    node_hi: np.ndarray
+    node_left: np.ndarray
+    node_right: np.ndarray
+    node_start: np.ndarray
+    node_count: np.ndarray
+    tri_verts: np.ndarray
+    tri_normal: np.ndarray
+    tri_id: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,10 +89,11 @@ class MeshIndex:
                                       self.node_left, self.node_right, self.node_start,
                                       self.node_count))
 
-    def arrays(self) -> tuple:
-        """The arrays the kernels take, in their order."""
-        return (self.node_lo, self.node_hi, self.node_left, self.node_right, self.node_start,
-                self.node_count, self.tri_verts, self.tri_normal, self.tri_id, self.lo, self.hi)
+    def tree(self) -> Tree:
+        """The tree as the kernels take it."""
+        return Tree(self.node_lo, self.node_hi, self.node_left, self.node_right, self.node_start,
+                    self.node_count, self.tri_verts, self.tri_normal, self.tri_id, self.lo,
+                    self.hi)
 
 
 @nb.njit(cache=True)
@@ -143,17 +165,14 @@ def _build(tv):
 
 
 @nb.njit(cache=True)
-def segment_hits_box(p0x, p0y, p0z, dx, dy, dz, lo, hi, node, pad) -> bool:
-    """Does the segment p0 + s d, s in [0, 1], meet the node's box grown by `pad` on every side
-    (a superset of the capsule of radius pad about the segment)?"""
+def segment_hits_box(start, along, lo, hi, node, pad) -> bool:
+    """Does the segment start + s along, s in [0, 1] (3-tuples, mm), meet the box `lo[node]`,
+    `hi[node]` (`Tree.node_lo`, `node_hi`) grown by `pad` on every side (a superset of the
+    capsule of radius pad about the segment)? (The tree's two arrays, not the whole tree: a
+    call passes each array as several words.)"""
     s0, s1 = 0.0, 1.0
     for a in range(3):
-        if a == 0:
-            p, d = p0x, dx
-        elif a == 1:
-            p, d = p0y, dy
-        else:
-            p, d = p0z, dz
+        p, d = start[a], along[a]
         bl = lo[node, a] - pad
         bh = hi[node, a] + pad
         if abs(d) < 1e-300:
@@ -175,21 +194,22 @@ def segment_hits_box(p0x, p0y, p0z, dx, dy, dz, lo, hi, node, pad) -> bool:
 
 
 @nb.njit(cache=True)
-def query_capsule(node_lo, node_hi, node_left, node_right, node_start, node_count,
-                  p0x, p0y, p0z, dx, dy, dz, pad, cand, stack):
-    """Triangles (tree order) in leaves whose box grown by `pad` meets the segment p0 + s d:
-    written into `cand` (grown when full; returned) and counted. `stack (STACK,)` scratch."""
+def query_capsule(tree, start, along, pad, cand, stack):
+    """Triangles (tree order) in leaves whose box grown by `pad` (mm) meets the segment
+    start + s along, s in [0, 1] (3-tuples, mm, part frame): written into `cand` (grown when
+    full; returned) and counted. `stack (STACK,)` scratch."""
     k = 0
     sp = 0
-    if not segment_hits_box(p0x, p0y, p0z, dx, dy, dz, node_lo, node_hi, 0, pad):
+    lo, hi = tree.node_lo, tree.node_hi
+    if not segment_hits_box(start, along, lo, hi, 0, pad):
         return cand, 0
     stack[0] = 0
     sp = 1
     while sp > 0:
         sp -= 1
         node = stack[sp]
-        if node_left[node] < 0:
-            s, c = node_start[node], node_count[node]
+        if tree.node_left[node] < 0:
+            s, c = tree.node_start[node], tree.node_count[node]
             if k + c > cand.shape[0]:
                 bigger = np.empty(2 * cand.shape[0] + c, dtype=np.int64)
                 bigger[:k] = cand[:k]
@@ -198,11 +218,11 @@ def query_capsule(node_lo, node_hi, node_left, node_right, node_start, node_coun
                 cand[k] = s + j
                 k += 1
             continue
-        a, b = node_left[node], node_right[node]
-        if segment_hits_box(p0x, p0y, p0z, dx, dy, dz, node_lo, node_hi, b, pad):
+        a, b = tree.node_left[node], tree.node_right[node]
+        if segment_hits_box(start, along, lo, hi, b, pad):
             stack[sp] = b
             sp += 1
-        if segment_hits_box(p0x, p0y, p0z, dx, dy, dz, node_lo, node_hi, a, pad):
+        if segment_hits_box(start, along, lo, hi, a, pad):
             stack[sp] = a
             sp += 1
     return cand, k
