@@ -1,16 +1,14 @@
 """Compile the kernels once per install, into the per-user cache (`checker.cache`). Two
-processes compile at once: the refinement's step kernel (first, so that the other process
-finds it cached when it gets there: 84 -> 64 s on 2 cores), the exact tool-vs-triangle depth
-(`checker.mesh`: a tool over a few triangles, its allowable size there) and the orientation
-along a 4-axis path; and the allowable-cutter engine (`checker.engine`: CC points of the
-warm-up part; the best-B scan's coarse engine runs the same kernels). Then the bundled warm-up
-job (the demo job: the 4-axis compressor sample with a ball D12, 90 CC points, flagged) is
-checked and posted as `pathcheck JOB -o JOB.nc` does, loading those and compiling what is
-left. The engine also runs on many CC points with one axis, for the kernels' threaded variants,
-which a large job takes: without them the compressor sample's first run after `warm` compiled
-six kernels (21.8 s instead of 14, peak 566 MB instead of 490). Afterwards neither job compiles
-anything; a job that needs more (a flat end-mill's contour search) compiles those few on its
-first run.
+processes at once (two cores): one checks and posts the bundled warm-up job (the demo job: the
+4-axis compressor sample with a ball D12, 90 CC points, flagged) as `pathcheck JOB -o JOB.nc`
+does, compiling what it needs as it goes; the other compiles ahead of it what the job needs
+last, so that the job finds those cached when it gets there: the refinement's step kernel, the
+exact tool-vs-triangle depth (`checker.mesh`: a tool over a few triangles, its allowable size
+there) and the orientation along a 4-axis path; then the allowable-cutter engine on many CC
+points with one axis, for the kernels' threaded variants, which a large job takes (the
+compressor sample's first run after `warm` compiled six kernels without them). Afterwards
+neither job compiles anything; a job that needs more (a flat end-mill's contour search)
+compiles those few on its first run.
 
 `pathcheck warm` compiles for this CPU and marks the cache folder so (`cache.HOST_MARK`: later
 processes take these kernels instead of the portable ones a wheel ships); `make wheel` builds the
@@ -27,6 +25,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from resource import RUSAGE_CHILDREN, getrusage
 
 from checker.cache import (
     HOST_MARK,
@@ -40,8 +39,16 @@ from checker.cache import (
 from checker.resources import resource
 
 WARMUP_JOB = resource("warmup", "warmup.apt")
-_FAMILIES = ("step_mesh_and_plan", "engine")
+# the two processes: the warm-up job, and what it needs last compiled ahead of it
+_PROCESSES = ("check_warm_up_job", "compile_ahead")
 _WARM_ROWS = 4000  # CC points: enough for the threaded kernels (see _allowable_at_the_warm_up_part)
+
+
+def compile_ahead() -> None:
+    """What the warm-up job needs last (`compile_step_mesh_and_plan`), then the engine's
+    threaded variants (`compile_engine`)."""
+    compile_step_mesh_and_plan()
+    compile_engine()
 
 
 def compile_step_mesh_and_plan() -> None:
@@ -133,7 +140,7 @@ def _allowable_at_the_warm_up_part() -> None:
                   cc_uv=np.column_stack([u, v]), hint=np.zeros(u.size) if one_axis else None)
 
 
-def _check_warm_up_job() -> None:
+def check_warm_up_job() -> None:
     """The warm-up job checked and posted as the demo runs it (`make demo`)."""
     from checker.job import check_job
 
@@ -142,29 +149,33 @@ def _check_warm_up_job() -> None:
 
 
 def _compile_all(folder: Path, kernels: str) -> None:
-    """Compile the families (two processes at once), then the warm-up job (a third), into the
-    numba cache `folder`, for this CPU (`kernels` "host") or `cache.PORTABLE_CPU`
-    ("portable")."""
+    """The warm-up job and `compile_ahead` (two processes at once) into the numba cache
+    `folder`, for this CPU (`kernels` "host") or `cache.PORTABLE_CPU` ("portable")."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(folder), **{KERNELS_ENV: kernels})
 
     def run(call: str) -> subprocess.Popen:
         return subprocess.Popen([sys.executable, "-c", f"from checker.warm import {call}; "
                                  f"{call}()"], env=env)
 
-    procs = [run(f"compile_{name}") for name in _FAMILIES]
-    failed = [proc.wait() for proc in procs] + [run("_check_warm_up_job").wait()]
+    failed = [proc.wait() for proc in [run(name) for name in _PROCESSES]]
     if any(failed):
         raise RuntimeError(f"compiling the kernels failed (exit {max(failed)})")
 
 
-def warm_kernels() -> tuple[Path, float]:
+def _children_cpu() -> float:
+    """CPU seconds (user + system) of this process's waited-for child processes so far."""
+    used = getrusage(RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
+
+
+def warm_kernels() -> tuple[Path, float, float]:
     """Compile this CPU's kernels into the cache folder and mark it so: (the folder, seconds
-    taken)."""
-    t0 = time.perf_counter()
+    taken, CPU seconds of the compiling processes)."""
+    t0, cpu0 = time.perf_counter(), _children_cpu()
     folder = kernel_cache_dir()
     _compile_all(folder, "host")
     (folder / HOST_MARK).touch()
-    return folder, time.perf_counter() - t0
+    return folder, time.perf_counter() - t0, _children_cpu() - cpu0
 
 
 def build_portable(out: Path) -> float:

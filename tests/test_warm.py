@@ -27,7 +27,7 @@ def test_warm_compiles_for_this_cpu_and_marks_the_folder(tmp_path, monkeypatch):
         (folder, kernels, (folder / HOST_MARK).exists())))
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "user"))
     (tmp_path / "user").mkdir()
-    folder, _ = warm.warm_kernels()
+    folder, _, _ = warm.warm_kernels()
     assert calls == [(tmp_path / "user", "host", False)]
     assert (folder / HOST_MARK).is_file()
     out = tmp_path / "kernels"
@@ -36,3 +36,24 @@ def test_warm_compiles_for_this_cpu_and_marks_the_folder(tmp_path, monkeypatch):
     assert calls[1] == (out, "portable", False)
     assert not (out / "stale").exists()
     assert (out / PORTABLE_STAMP).read_text().split() == portable_stamp().split()
+
+
+def test_the_engines_kernels_compile_one_signature_each():
+    """A Python int constant passed to a kernel (numba types it as its literal value), a
+    parallel loop's index (uint64 there) or a read-only array compiles the kernel once more:
+    after the engine ran on CC points of the warm-up part as `pathcheck warm` runs it (with
+    their own axes, serial, and on 4,000 rows with one axis, threaded), each of these kernels
+    holds one signature (eval_range held 8, the descent 4)."""
+    from checker import warm
+    from checker.engine.refine import rings, steps
+    from checker.engine.scan import bound, sweep
+    from checker.geometry import evaluate
+
+    warm.compile_engine()
+    kernels = {"eval_range": evaluate.eval_range, "steps._exact": steps._exact,
+               "steps._refine_rows": steps._refine_rows, "bound._descend": bound._descend,
+               "bound._warm_row": bound._warm_row, "bound._coarse_row": bound._coarse_row,
+               "sweep._block": sweep._block, "rings._sizes_at": rings._sizes_at,
+               "rings._on_ring": rings._on_ring}
+    signatures = {name: len(k.signatures) for name, k in kernels.items()}
+    assert signatures == dict.fromkeys(kernels, 1)

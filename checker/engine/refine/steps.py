@@ -19,12 +19,15 @@ exactly, with second derivatives, at the point the step picks (`_exact`). The st
 Newton step, its backtracking and the walk run on the second-order Taylor model of the surface
 about the start's best point (error O(h^3) for a step of length h, so the model becomes exact
 as the steps converge); only exact values are ever reported. The model's value
-(`_model_value`) is inlined at its seven sites (a call passed the whole model, about a hundred
-words, for every value), each site compiling the cutter's kernels again. The kernels that
-allocate nothing are compiled without numba's reference counting (`_nrt=False`): with it, every
-array a call passes or unpacks from a tuple is counted up and down atomically, which took ~17 %
-of a call on one thread and more on two (both threads count the same arrays).
-(docs/MATH.md §6)"""
+(`_model_value`) is inlined at its seven sites (a call passes the whole model, about a hundred
+words, for every value: a call at the walk's four sites alone ran the ball and bull-nose
+engine slower, `benchmarks/bench_compile.py` says what the sites cost to compile), each site
+compiling the cutter's kernels again. The kernels that allocate nothing are compiled without
+numba's reference counting (`_nrt=False`): with it, every array a call passes or unpacks from a
+tuple is counted up and down atomically, a large part of a call, more on two threads (both
+count the same arrays). Counts and orders passed to kernels are int64 values, not Python int
+constants (`evaluate.ONE`, `np.int64(index)`): numba compiles a kernel again for each literal
+value it is passed and for a parallel loop's uint64 index. (docs/MATH.md §6)"""
 
 from __future__ import annotations
 
@@ -37,7 +40,7 @@ import numpy as np
 from checker.engine.grid.frames import rotated, row_height
 from checker.engine.refine.objective import FLOOR_STEPS, Objective, exact_size, point_batch
 from checker.engine.sizes import RowFrame, SizeArgs, point_size
-from checker.geometry.evaluate import eval_range
+from checker.geometry.evaluate import ONE, TWO, ZERO, eval_range
 from checker.geometry.newton_uv import newton_step
 from checker.geometry.trims import PackedTrims, kept
 from checker.part import Part
@@ -537,10 +540,10 @@ def _exact(G, M, r, k, bt):
     order-2 evaluation into bt.ev; packed surfaces G), points below the bottom plane of a
     flat-bottomed cutter moved onto it first (bt.u, bt.v updated; objective.py)."""
     _, _, Q, floor, dom, sz, T = M
-    eval_range(G, bt.sid, bt.u, bt.v, 2, bt.ev, bt.normals, 0, k, bt.sc)
+    eval_range(G, bt.sid, bt.u, bt.v, TWO, bt.ev, bt.normals, ZERO, k, bt.sc)
     for j in range(k):
         bt.size[j] = exact_size(G, Q, floor, dom, sz, T, r, bt.sid, bt.u, bt.v, bt.ev,
-                                bt.normals, bt.sc, j, 2)
+                                bt.normals, bt.sc, j, TWO)
 
 
 @nb.njit(cache=True, inline="always")
@@ -607,7 +610,7 @@ def _refine_row(G, M, r, idx, sid, hmin, best_uv, best_f, best_p, h, radius, wal
             sd = sid[s]
             st = _step(M, s, r, sd, best_uv, best_f, best_p, h, radius, walked, sc)
             bt.sid[0], bt.u[0], bt.v[0] = sd, st.u, st.v
-            _exact(G, M, r, 1, bt)
+            _exact(G, M, r, ONE, bt)
             evals[s] += st.probes + 1
             won = bt.size[0] < best_f[s]
             for c in range(2):
@@ -680,8 +683,8 @@ def _refine_all(G, d, uv0, Q, floor, dom, sz, T, rows, sid, order, bounds, hmin,
     tasks = min(bounds.shape[0] - 1, _TASKS)
     for t in nb.prange(tasks):
         _refine_rows(G, _Model(d, uv0, Q, floor, dom, sz, T), rows, sid, order, bounds, hmin,
-                     best_uv, best_f, best_p, h, radius, walked, evals, iterations, most, t,
-                     tasks)
+                     best_uv, best_f, best_p, h, radius, walked, evals, iterations, most,
+                     np.int64(t), tasks)
 
 
 def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray, sid: np.ndarray,
@@ -714,7 +717,7 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
 def compile_step(part: Part, cutter, frame: RowFrame, Q: np.ndarray) -> None:
     """Compile (or load from the cache) `_step`, the refinement's largest kernel, for the types
     `refine` passes it (one start of row 0 of `frame` on a flat model): `pathcheck warm` builds
-    it in one process while another compiles the rest of the engine, which then loads it."""
+    it in one process while the other checks the warm-up job, which then loads it."""
     obj = Objective(part, cutter, frame, Q)
     model = _Model(np.zeros((1, 6, 3)), np.zeros((1, 2)), obj.Q, obj.floor, obj.dom, obj.sz,
                    obj.trims)
