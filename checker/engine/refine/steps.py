@@ -712,14 +712,3 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
                      best_p, h, np.empty((n, 3)), np.zeros(n), evals, iterations,
                      int(np.diff(bounds).max()))
     return Refined(best_f, best_uv, best_p, evals)
-
-
-def compile_step(part: Part, cutter, frame: RowFrame, Q: np.ndarray) -> None:
-    """Compile (or load from the cache) `_step`, the refinement's largest kernel, for the types
-    `refine` passes it (one start of row 0 of `frame` on a flat model): `pathcheck warm` builds
-    it in one process while the other checks the warm-up job, which then loads it."""
-    obj = Objective(part, cutter, frame, Q)
-    model = _Model(np.zeros((1, 6, 3)), np.zeros((1, 2)), obj.Q, obj.floor, obj.dom, obj.sz,
-                   obj.trims)
-    _step(model, 0, 0, 0, np.zeros((1, 2)), np.zeros(1), np.zeros((1, 3)), np.full((1, 2), 1e-3),
-          np.ones((1, 3)), np.zeros(1), _step_scratch())
