@@ -5,6 +5,10 @@ from an empty cache: tools/wheel-check.sh.)"""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 from checker.resources import resource
 
 
@@ -38,22 +42,40 @@ def test_warm_compiles_for_this_cpu_and_marks_the_folder(tmp_path, monkeypatch):
     assert (out / PORTABLE_STAMP).read_text().split() == portable_stamp().split()
 
 
-def test_the_engines_kernels_compile_one_signature_each():
-    """A Python int constant passed to a kernel (numba types it as its literal value), a
-    parallel loop's index (uint64 there) or a read-only array compiles the kernel once more:
-    after the engine ran on CC points of the warm-up part as `pathcheck warm` runs it (with
-    their own axes, serial, and on 4,000 rows with one axis, threaded), each of these kernels
-    holds one signature (eval_range held 8, the descent 4)."""
-    from checker import warm
-    from checker.engine.refine import rings, steps
-    from checker.engine.scan import bound, sweep
-    from checker.geometry import evaluate
+_BOUNDS = """
+import numpy as np
 
-    warm.compile_engine()
-    kernels = {"eval_range": evaluate.eval_range, "steps._exact": steps._exact,
-               "steps._refine_rows": steps._refine_rows, "bound._descend": bound._descend,
-               "bound._warm_row": bound._warm_row, "bound._coarse_row": bound._coarse_row,
-               "sweep._block": sweep._block, "rings._sizes_at": rings._sizes_at,
-               "rings._on_ring": rings._on_ring}
-    signatures = {name: len(k.signatures) for name, k in kernels.items()}
-    assert signatures == dict.fromkeys(kernels, 1)
+from checker.cutter import parse_cutter
+from checker.engine.grid.candidates import SERIAL_ROWS
+from checker.engine.scan import bound
+from checker.engine.sizes import SizeArgs
+
+rng = np.random.default_rng(1)
+xyz = rng.uniform(-5.0, 5.0, (40, 3))
+knn = np.array([[(i + 1) % 40, (i + 39) % 40] for i in range(40)], dtype=np.int64)
+sizes = []
+for n in (3, SERIAL_ROWS + 4):  # the serial kernel, then the threaded one
+    rot = np.tile(np.eye(3), (n, 1, 1))
+    cc = rng.uniform(-1.0, 1.0, (n, 3))
+    cc[:, 2] = -8.0
+    sz = SizeArgs(cc, np.tile([0.0, 0.0, 1.0], (n, 1)), np.zeros((n, 3)), np.zeros(n),
+                  np.zeros(n), parse_cutter("CUTTER/6,3").kernel_params(), True, 50.0, 0.0)
+    starts = rng.integers(0, 40, (n, 2))
+    starts.flags.writeable = n < SERIAL_ROWS  # a read-only array too
+    sizes.append(bound.warm_bounds(xyz, rot, starts, sz, knn).upper)
+print(len(bound._warm_row.signatures), len(bound._descend.signatures),
+      bool(np.isfinite(np.concatenate(sizes)).all()))
+"""
+
+
+def test_the_scans_kernels_compile_one_signature_each(tmp_path):
+    """A Python int constant passed to a kernel (numba types it as its literal value), a
+    parallel loop's index (uint64 in the loop's body) and a read-only array each compiled a
+    kernel once more: compiled from an empty cache, the scan's bounds from start points, serial
+    and threaded, leave one signature of the row's kernel and of its descent (there were 3 and
+    4), and a finite bound on every row (test points above a ball's CC point, all reachable)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    done = subprocess.run([sys.executable, "-c", _BOUNDS], capture_output=True, text=True,
+                          env=env, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["1", "1", "True"]
