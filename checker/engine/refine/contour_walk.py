@@ -29,7 +29,7 @@ from checker.engine.refine.objective import (
     surface_size,
 )
 from checker.engine.sizes import RowFrame
-from checker.geometry.evaluate import ONE, eval_range
+from checker.geometry.evaluate import eval_range
 from checker.part import Part
 
 FIRST_STEP = 0.005  # mm along the contour: the first probe from the start
@@ -91,8 +91,8 @@ def _contour_evaluations(reach: float) -> int:
 def _on_contour(G, Q, floor, dom, sz, T, r, w, j):
     """Probe j (w.sid, w.u, w.v) moved onto row r's bottom plane from either side (its
     contour), evaluated to order 1; its size into w.size[j]."""
-    eval_range(G, w.sid, w.u, w.v, ONE, w.ev, w.normals, j, j + 1, w.sc)
-    onto_floor(G, Q, dom, r, floor[r], w.sid, w.u, w.v, w.ev, w.normals, w.sc, j, ONE, True,
+    eval_range(G, w.sid, w.u, w.v, 1, w.ev, w.normals, j, j + 1, w.sc)
+    onto_floor(G, Q, dom, r, floor[r], w.sid, w.u, w.v, w.ev, w.normals, w.sc, j, 1, True,
                CONTOUR_STEPS)
     w.size[j] = surface_size(Q, sz, T, r, w.sid[j], w.u[j], w.v[j], w.ev, j)
 

@@ -82,7 +82,7 @@ def _tangents(G, sd, u, v, w, tan) -> _Tangents:
     `PointBatch` w; its vectors are the rows t1, t2, S_u, S_v of `tan (4, 3)` (views, not
     counted: its callers count no references either)."""
     w.sid[0], w.u[0], w.v[0] = sd, u, v
-    eval_range(G, w.sid, w.u, w.v, ONE, w.ev, w.normals, ZERO, ONE, w.sc)
+    eval_range(G, w.sid, w.u, w.v, 1, w.ev, w.normals, ZERO, ONE, w.sc)
     t1, t2, su, sv = tan[0], tan[1], tan[2], tan[3]
     for m in range(3):
         su[m], sv[m] = w.ev[0, 1, m], w.ev[0, 2, m]
@@ -120,7 +120,7 @@ def _uv_step(tg: _Tangents, angle, rho):
 @nb.njit(cache=True, _nrt=False)
 def _sizes_at(G, Q, sz, r, n, w):
     """Sizes w.size[:n] of row r at the surface points (w.sid, w.u, w.v)[:n] (order-0)."""
-    eval_range(G, w.sid, w.u, w.v, ZERO, w.ev, w.normals, ZERO, n, w.sc)
+    eval_range(G, w.sid, w.u, w.v, 0, w.ev, w.normals, ZERO, n, w.sc)
     for j in range(n):
         x, y, z = rotated(Q, r, w.ev[j], 0)
         w.size[j] = point_size(sz, r, x, y, z)

@@ -25,9 +25,11 @@ engine slower, `benchmarks/bench_compile.py` says what the sites cost to compile
 compiling the cutter's kernels again. The kernels that allocate nothing are compiled without
 numba's reference counting (`_nrt=False`): with it, every array a call passes or unpacks from a
 tuple is counted up and down atomically, a large part of a call, more on two threads (both
-count the same arrays). Counts and orders passed to kernels are int64 values, not Python int
-constants (`evaluate.ONE`, `np.int64(index)`): numba compiles a kernel again for each literal
-value it is passed and for a parallel loop's uint64 index. (docs/MATH.md §6)"""
+count the same arrays). Counts and indices passed to kernels are int64 values, not Python int
+constants (`evaluate.ZERO`, `np.int64(index)`): numba compiles a kernel again for each literal
+value it is passed and for a parallel loop's uint64 index. The evaluation's order and the
+exact value of one point stay constants (their loops then have fixed lengths: the engine ran
+slower without, the flat end-mill most). (docs/MATH.md §6)"""
 
 from __future__ import annotations
 
@@ -40,7 +42,7 @@ import numpy as np
 from checker.engine.grid.frames import rotated, row_height
 from checker.engine.refine.objective import FLOOR_STEPS, Objective, exact_size, point_batch
 from checker.engine.sizes import RowFrame, SizeArgs, point_size
-from checker.geometry.evaluate import ONE, TWO, ZERO, eval_range
+from checker.geometry.evaluate import ZERO, eval_range
 from checker.geometry.newton_uv import newton_step
 from checker.geometry.trims import PackedTrims, kept
 from checker.part import Part
@@ -540,10 +542,10 @@ def _exact(G, M, r, k, bt):
     order-2 evaluation into bt.ev; packed surfaces G), points below the bottom plane of a
     flat-bottomed cutter moved onto it first (bt.u, bt.v updated; objective.py)."""
     _, _, Q, floor, dom, sz, T = M
-    eval_range(G, bt.sid, bt.u, bt.v, TWO, bt.ev, bt.normals, ZERO, k, bt.sc)
+    eval_range(G, bt.sid, bt.u, bt.v, 2, bt.ev, bt.normals, ZERO, k, bt.sc)
     for j in range(k):
         bt.size[j] = exact_size(G, Q, floor, dom, sz, T, r, bt.sid, bt.u, bt.v, bt.ev,
-                                bt.normals, bt.sc, j, TWO)
+                                bt.normals, bt.sc, j, 2)
 
 
 @nb.njit(cache=True, inline="always")
@@ -610,7 +612,7 @@ def _refine_row(G, M, r, idx, sid, hmin, best_uv, best_f, best_p, h, radius, wal
             sd = sid[s]
             st = _step(M, s, r, sd, best_uv, best_f, best_p, h, radius, walked, sc)
             bt.sid[0], bt.u[0], bt.v[0] = sd, st.u, st.v
-            _exact(G, M, r, ONE, bt)
+            _exact(G, M, r, 1, bt)  # a constant: the one point's loops unrolled
             evals[s] += st.probes + 1
             won = bt.size[0] < best_f[s]
             for c in range(2):
