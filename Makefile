@@ -11,36 +11,41 @@ THREE_NPM := tools/three/node_modules/three
 
 # The base install, then at once (two cores) the [all] extra (STEP/IGES, Dask, the test tools)
 # and the kernels compiled once into the per-user cache (`pathcheck warm`, run from the source
-# tree while pip re-links the package). --no-compile, then byte-compiled on two cores at the end:
+# tree while pip re-links the package); three.js (npm) fetched from the start beside both.
+# --no-compile, then byte-compiled on two cores after the extra, while the kernels compile:
 # Python does not write its own .pyc where PYTHONDONTWRITEBYTECODE is set (some CI machines), and
 # every command would compile numpy, scipy and numba from source again (~1.7 s of start-up).
+# $(TIME): a prefix for each step, empty by default (e.g. `make demo TIME="/usr/bin/time -a -o
+# F"` appends each step's times to F).
 setup: $(STAMP) $(THREE)/VERSION
 
 # three.js for the 3-D view (`pathcheck view`): the version pinned by tools/three/package-lock.json,
 # from the npm registry (no install scripts run), copied with its licence into the package
 $(THREE)/VERSION: tools/three/package-lock.json
-	cd tools/three && npm ci --ignore-scripts --no-audit --no-fund --silent
+	cd tools/three && $(TIME) npm ci --ignore-scripts --no-audit --no-fund --silent
 	mkdir -p $(THREE)
 	cp $(THREE_NPM)/build/three.core.js $(THREE_NPM)/build/three.module.js \
 		$(THREE_NPM)/examples/jsm/controls/OrbitControls.js $(THREE_NPM)/LICENSE $(THREE)/
 	node -p "require('./$(THREE_NPM)/package.json').version" > $@
 
 $(STAMP): pyproject.toml
-	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --no-compile -e .
-	$(BIN)/pip install --quiet --no-compile -e ".[all]" & pip=$$!; \
-		$(BIN)/python -m checker.cli warm; warm=$$?; wait $$pip && test $$warm -eq 0
-	$(BIN)/python -m compileall -q -j 0 $(VENV)/lib checker >/dev/null
+	$(MAKE) --no-print-directory $(THREE)/VERSION & three=$$!; \
+	$(TIME) $(PYTHON) -m venv $(VENV) && $(TIME) $(BIN)/pip install --quiet --no-compile -e . \
+		|| { wait $$three; exit 1; }; \
+	{ $(TIME) $(BIN)/pip install --quiet --no-compile -e ".[all]" \
+		&& $(TIME) $(BIN)/python -m compileall -q -j 0 $(VENV)/lib checker >/dev/null; } & extra=$$!; \
+	$(TIME) $(BIN)/python -m checker.cli warm; warm=$$?; \
+	wait $$extra && wait $$three && test $$warm -eq 0
 	touch $(STAMP)
 
 # exit 1 from the check means "findings", which is what the demo job shows; the program is
 # written with an optional stop (M01) before each offending move (the default refuses it)
 demo: setup
 	mkdir -p out
-	PATHCHECK_STORE=out/results.sqlite $(BIN)/pathcheck samples/compressor/compressor_small_d12.apt \
+	PATHCHECK_STORE=out/results.sqlite $(TIME) $(BIN)/pathcheck samples/compressor/compressor_small_d12.apt \
 		--json out/compressor_d12.json -o out/compressor_d12.nc --on-findings stop \
 		--view out/compressor_small_d12.view.html; test $$? -le 1
-	PATHCHECK_STORE=out/results.sqlite $(BIN)/pathcheck report -o out/report.html
+	PATHCHECK_STORE=out/results.sqlite $(TIME) $(BIN)/pathcheck report -o out/report.html
 
 # two processes (the CI machines have two cores; much of the suite is single-threaded:
 # subprocesses, sockets, parsing), a test file's tests kept together in one of them; the wheel

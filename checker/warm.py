@@ -1,14 +1,13 @@
 """Compile the kernels once per install, into the per-user cache (`checker.kernel_cache`). Two
-processes compile at once: the refinement's step kernel (first, so that the other process
-finds it cached when it gets there, which shortens the whole), the exact tool-vs-triangle depth
-(`checker.mesh`: a tool over a few triangles, its allowable size there) and the orientation
-along a 4-axis path; and the allowable-cutter engine (`checker.engine`: CC points of the
-warm-up part; the best-B scan's coarse engine runs the same kernels). Then the bundled warm-up
-job (the demo job: the 4-axis compressor sample with a ball D12, 90 CC points, flagged) is
-checked and posted as `pathcheck JOB -o JOB.nc` does, loading those and compiling what is
-left. The engine also runs on many CC points with one axis, for the kernels' threaded variants,
-which a large job takes (without them a large job's first run after `warm` compiles them).
-Afterwards neither job compiles
+processes at once (two cores): one checks and posts the bundled warm-up job (the demo job: the
+4-axis compressor sample with a ball D12, 90 CC points, flagged) as `pathcheck JOB -o JOB.nc`
+does, compiling what it needs in the order it needs it (the mesh of the tool and holder, the
+scan, the rings, the refinement, the 4-axis plan); the other compiles at the same time what the
+job needs last, the refinement (`steps.refine`, the largest kernels) and the plan, so that the
+job finds them cached when it gets there and neither compiles what the other does. Then one
+process compiles what a large job takes beyond the demo's: the engine on many CC points with one
+axis (the kernels' threaded variants; the compressor sample's first run after `warm` compiled
+six kernels without them) and the rest of the mesh's kernels. Afterwards neither job compiles
 anything; a job that needs more (a flat end-mill's contour search) compiles those few on its
 first run.
 
@@ -27,6 +26,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from resource import RUSAGE_CHILDREN, getrusage
 
 from checker.kernel_cache import (
     HOST_MARK,
@@ -40,17 +40,31 @@ from checker.kernel_cache import (
 from checker.resources import resource
 
 WARMUP_JOB = resource("warmup", "warmup.apt")
-_FAMILIES = ("step_mesh_and_plan", "engine")
+# the stages, each a set of processes run at once: the warm-up job beside what it needs last,
+# then what a large job needs beyond it
+_STAGES = (("check_warm_up_job", "compile_refinement_and_plan"), ("compile_large_job",))
 _WARM_ROWS = 4000  # CC points: enough for the threaded kernels (see _allowable_at_the_warm_up_part)
 
 
-def compile_step_mesh_and_plan() -> None:
-    """The refinement's step kernel, the mesh kernels (the tree, the depth of a tool's pieces, a
-    stretch certified whole, the allowable size) and the 4-axis plan's own (the shortest path
-    over B)."""
+def compile_refinement_and_plan() -> None:
+    """What the warm-up job needs last: the refinement (`_refinement`) and the 4-axis plan's
+    own kernel (the shortest path over B)."""
+    _refinement()
+    _plan()
+
+
+def compile_large_job() -> None:
+    """What a large job needs beyond the warm-up job: the engine's threaded variants
+    (`compile_engine`) and the rest of the mesh's kernels (`compile_mesh`)."""
+    compile_engine()
+    compile_mesh()
+
+
+def compile_mesh() -> None:
+    """The mesh kernels: the tree, the depth of a tool's pieces, a stretch certified whole, the
+    allowable size."""
     import numpy as np
 
-    _refinement_step()
     from checker.cutter import parse_cutter
     from checker.mesh import MeshIndex, tool_pieces
     from checker.mesh.allowable import allowable_on_mesh
@@ -66,7 +80,6 @@ def compile_step_mesh_and_plan() -> None:
     pose_depths(index, pieces, tips, axes, reach=1.0)
     certified_stretches(index, pieces, tips, axes, tips, np.zeros(2), np.zeros(2), np.ones(2))
     allowable_on_mesh(index, cutter, np.zeros((1, 3)), axes[:1], axes[:1], tol=1e-6, s_max=10.0)
-    _plan()
 
 
 def _plan() -> None:
@@ -83,15 +96,16 @@ def _plan() -> None:
         w_original=fa.dp_weight_original, max_db_per_mm=fa.max_db_per_mm)
 
 
-def _refinement_step() -> None:
-    """`steps.compile_step` for a CC point of the warm-up part (its frames as `allowable` makes
+def _refinement() -> None:
+    """`steps.refine` (the kernels of the whole refinement) from one start at a CC point of the
+    warm-up part, with the types `allowable` passes it (its frames as `allowable` makes
     them)."""
     import numpy as np
 
     from checker.config import default_config
     from checker.cutter import parse_cutter
     from checker.engine.api import tool_frames
-    from checker.engine.refine.steps import compile_step
+    from checker.engine.refine.steps import refine
     from checker.geometry import load_part
     from checker.geometry.evaluate import evaluate
     from checker.geometry.sampling import sample_part
@@ -101,7 +115,8 @@ def _refinement_step() -> None:
     ev = evaluate(part.surfaces[3], np.array([0.5]), np.array([0.5]))
     frames = tool_frames(sample_part(part), cutter, ev.points, ev.normals, ev.normals, None,
                          default_config())
-    compile_step(part, cutter, frames.frame, frames.Q)
+    refine(part, cutter, frames.frame, frames.Q, np.zeros(1, dtype=np.int64),
+           np.full(1, 3, dtype=np.int64), np.full((1, 2), 0.5), np.full((1, 2), 0.01))
 
 
 def compile_engine() -> None:
@@ -134,7 +149,7 @@ def _allowable_at_the_warm_up_part() -> None:
                   cc_uv=np.column_stack([u, v]), hint=np.zeros(u.size) if one_axis else None)
 
 
-def _check_warm_up_job() -> None:
+def check_warm_up_job() -> None:
     """The warm-up job checked and posted as the demo runs it (`make demo`)."""
     from checker.check import check_job
     from checker.check.options import CheckOptions
@@ -145,29 +160,35 @@ def _check_warm_up_job() -> None:
 
 
 def _compile_all(folder: Path, kernels: str) -> None:
-    """Compile the families (two processes at once), then the warm-up job (a third), into the
-    numba cache `folder`, for this CPU (`kernels` "host") or `kernel_cache.PORTABLE_CPU`
-    ("portable")."""
+    """The `_STAGES` (each stage's processes at once) into the numba cache `folder`, for this
+    CPU (`kernels` "host") or `kernel_cache.PORTABLE_CPU` ("portable")."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(folder), **{KERNELS_ENV: kernels})
 
     def run(call: str) -> subprocess.Popen:
         return subprocess.Popen([sys.executable, "-c", f"from checker.warm import {call}; "
                                  f"{call}()"], env=env)
 
-    procs = [run(f"compile_{name}") for name in _FAMILIES]
-    failed = [proc.wait() for proc in procs] + [run("_check_warm_up_job").wait()]
+    failed = []
+    for stage in _STAGES:
+        failed += [proc.wait() for proc in [run(name) for name in stage]]
     if any(failed):
         raise RuntimeError(f"compiling the kernels failed (exit {max(failed)})")
 
 
-def warm_kernels() -> tuple[Path, float]:
+def _children_cpu() -> float:
+    """CPU seconds (user + system) of this process's waited-for child processes so far."""
+    used = getrusage(RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
+
+
+def warm_kernels() -> tuple[Path, float, float]:
     """Compile this CPU's kernels into the cache folder and mark it so: (the folder, seconds
-    taken)."""
-    t0 = time.perf_counter()
+    taken, CPU seconds of the compiling processes)."""
+    t0, cpu0 = time.perf_counter(), _children_cpu()
     folder = kernel_cache_dir()
     _compile_all(folder, "host")
     (folder / HOST_MARK).touch()
-    return folder, time.perf_counter() - t0
+    return folder, time.perf_counter() - t0, _children_cpu() - cpu0
 
 
 def build_portable(out: Path) -> float:

@@ -5,6 +5,10 @@ from an empty cache: tools/wheel-check.sh.)"""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 from checker.resources import resource
 
 
@@ -27,7 +31,7 @@ def test_warm_compiles_for_this_cpu_and_marks_the_folder(tmp_path, monkeypatch):
         (folder, kernels, (folder / HOST_MARK).exists())))
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "user"))
     (tmp_path / "user").mkdir()
-    folder, _ = warm.warm_kernels()
+    folder, _, _ = warm.warm_kernels()
     assert calls == [(tmp_path / "user", "host", False)]
     assert (folder / HOST_MARK).is_file()
     out = tmp_path / "kernels"
@@ -36,3 +40,42 @@ def test_warm_compiles_for_this_cpu_and_marks_the_folder(tmp_path, monkeypatch):
     assert calls[1] == (out, "portable", False)
     assert not (out / "stale").exists()
     assert (out / PORTABLE_STAMP).read_text().split() == portable_stamp().split()
+
+
+_BOUNDS = """
+import numpy as np
+
+from checker.cutter import parse_cutter
+from checker.engine.grid.candidates import SERIAL_ROWS
+from checker.engine.scan import bound
+from checker.engine.sizes import SizeArgs
+
+rng = np.random.default_rng(1)
+xyz = rng.uniform(-5.0, 5.0, (40, 3))
+knn = np.array([[(i + 1) % 40, (i + 39) % 40] for i in range(40)], dtype=np.int64)
+sizes = []
+for n in (3, SERIAL_ROWS + 4):  # the serial kernel, then the threaded one
+    rot = np.tile(np.eye(3), (n, 1, 1))
+    cc = rng.uniform(-1.0, 1.0, (n, 3))
+    cc[:, 2] = -8.0
+    sz = SizeArgs(cc, np.tile([0.0, 0.0, 1.0], (n, 1)), np.zeros((n, 3)), np.zeros(n),
+                  np.zeros(n), parse_cutter("CUTTER/6,3").kernel_params(), True, 50.0, 0.0)
+    starts = rng.integers(0, 40, (n, 2))
+    starts.flags.writeable = n < SERIAL_ROWS  # a read-only array too
+    sizes.append(bound.warm_bounds(xyz, rot, starts, sz, knn).upper)
+print(len(bound._warm_row.signatures), len(bound._descend.signatures),
+      bool(np.isfinite(np.concatenate(sizes)).all()))
+"""
+
+
+def test_the_scans_kernels_compile_one_signature_each(tmp_path):
+    """A Python int constant passed to a kernel (numba types it as its literal value), a
+    parallel loop's index (uint64 in the loop's body) and a read-only array each compiled a
+    kernel once more: compiled from an empty cache, the scan's bounds from start points, serial
+    and threaded, leave one signature of the row's kernel and of its descent (there were 3 and
+    4), and a finite bound on every row (test points above a ball's CC point, all reachable)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    done = subprocess.run([sys.executable, "-c", _BOUNDS], capture_output=True, text=True,
+                          env=env, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["1", "1", "True"]

@@ -15,5 +15,5 @@ def warm() -> None:
     from checker.warm import warm_kernels
 
     with step("compile the kernels"):
-        folder, seconds = warm_kernels()
-    click.echo(f"kernels compiled into {folder} in {seconds:.1f} s")
+        folder, seconds, cpu = warm_kernels()
+    click.echo(f"kernels compiled into {folder} in {seconds:.1f} s ({cpu:.0f} CPU s)")

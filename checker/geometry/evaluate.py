@@ -25,6 +25,11 @@ _NO_IDS = np.zeros(0, dtype=np.int64)
 _PARALLEL_MIN = 4_000  # fewer points: one thread (thread start-up costs more than it saves)
 _MAXDEG = 32
 _SLOTS = (1, 3, 6, 10)  # derivatives S, Su, Sv, ... up to each order
+# int64 constants for compiled callers (indices and counts): numba compiles a kernel once more
+# for every Python int constant passed to it (typed as its literal value) and for a parallel
+# loop's index (uint64); these and np.int64(index) keep one signature. `eval_range`'s order is
+# passed as a constant all the same, one signature per order: its loops then have fixed lengths
+ZERO, ONE = np.int64(0), np.int64(1)
 
 
 @nb.njit(cache=True, inline="always")
@@ -206,8 +211,8 @@ def _eval_parallel(G, sid, u, v, order, out, normals):
     """eval_range over all points in parallel chunks."""
     n = u.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
-        eval_range(G, sid, u, v, order, out, normals, c * _CHUNK, min(n, (c + 1) * _CHUNK),
-                   eval_scratch())
+        i0 = np.int64(c) * _CHUNK
+        eval_range(G, sid, u, v, order, out, normals, i0, min(n, i0 + _CHUNK), eval_scratch())
 
 
 @dataclass

@@ -199,5 +199,6 @@ def _walk_all(G, Q, floor, dom, sz, T, rows, sid, uv, sigma, f, p, q):
     f (K,), its point p (K, 3) (part frame) and (u, v) q (K, 2)."""
     n = rows.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
-        _walk_range(G, Q, floor, dom, sz, T, rows, sid, uv, sigma, f, p, q, c * _CHUNK,
-                    min(n, (c + 1) * _CHUNK))
+        k0 = np.int64(c) * _CHUNK
+        _walk_range(G, Q, floor, dom, sz, T, rows, sid, uv, sigma, f, p, q, k0,
+                    min(n, k0 + _CHUNK))

@@ -26,11 +26,14 @@ from checker.engine.grid.rotations import rotated
 from checker.engine.refine.objective import Objective, point_batch
 from checker.engine.refine.starts import Contacts, Starts
 from checker.engine.sizes import RowFrame, point_size
-from checker.geometry.evaluate import eval_range
+from checker.geometry.evaluate import ONE, ZERO, eval_range
 from checker.part import Part
 
-_FIRST_RING = 16  # directions on the first ring around a CC point
-_WIDER_RING = 10  # on each wider one: the best direction, its opposite, 8 even ones
+# directions on the first ring around a CC point, and on each wider one (the best direction, its
+# opposite, 8 even ones); int64, not Python ints: a count passed to a kernel would compile it
+# again for its literal value (evaluate.ZERO)
+_FIRST_RING = np.int64(16)
+_WIDER_RING = np.int64(10)
 _RING_RATIO = 3.0  # the wider rings' radii grow by at most this
 _CHUNK = 64  # contacts per parallel task
 
@@ -70,7 +73,7 @@ def ring_radii(ring: float, spacing: float) -> list[float]:
 def ring_evaluations(radii: list[float]) -> int:
     """Sizes evaluated on the rings of `radii` around one CC point on one surface
     (`ring_starts`): _FIRST_RING on the first, _WIDER_RING on each wider one."""
-    return _FIRST_RING + _WIDER_RING * (len(radii) - 1)
+    return int(_FIRST_RING + _WIDER_RING * (len(radii) - 1))
 
 
 @nb.njit(cache=True, _nrt=False)
@@ -79,7 +82,7 @@ def _tangents(G, sd, u, v, w, tan) -> _Tangents:
     `PointBatch` w; its vectors are the rows t1, t2, S_u, S_v of `tan (4, 3)` (views, not
     counted: its callers count no references either)."""
     w.sid[0], w.u[0], w.v[0] = sd, u, v
-    eval_range(G, w.sid, w.u, w.v, 1, w.ev, w.normals, 0, 1, w.sc)
+    eval_range(G, w.sid, w.u, w.v, 1, w.ev, w.normals, ZERO, ONE, w.sc)
     t1, t2, su, sv = tan[0], tan[1], tan[2], tan[3]
     for m in range(3):
         su[m], sv[m] = w.ev[0, 1, m], w.ev[0, 2, m]
@@ -117,7 +120,7 @@ def _uv_step(tg: _Tangents, angle, rho):
 @nb.njit(cache=True, _nrt=False)
 def _sizes_at(G, Q, sz, r, n, w):
     """Sizes w.size[:n] of row r at the surface points (w.sid, w.u, w.v)[:n] (order-0)."""
-    eval_range(G, w.sid, w.u, w.v, 0, w.ev, w.normals, 0, n, w.sc)
+    eval_range(G, w.sid, w.u, w.v, 0, w.ev, w.normals, ZERO, n, w.sc)
     for j in range(n):
         x, y, z = rotated(Q, r, w.ev[j], 0)
         w.size[j] = point_size(sz, r, x, y, z)
@@ -169,7 +172,7 @@ def _limit_at_cc(G, Q, sz, dom, r, sd, u, v, tg, angle, rho, w):
         w.sid[j] = sd
         w.u[j] = min(max(u + (0.5 if j == 0 else 1.0) * du, dom[sd, 0, 0]), dom[sd, 0, 1])
         w.v[j] = min(max(v + (0.5 if j == 0 else 1.0) * dv, dom[sd, 1, 0]), dom[sd, 1, 1])
-    _sizes_at(G, Q, sz, r, 2, w)
+    _sizes_at(G, Q, sz, r, np.int64(2), w)
     near, far = w.size[0], w.size[1]
     if not (np.isfinite(near) and np.isfinite(far)):
         return np.nan
@@ -234,8 +237,9 @@ def _all_contacts(G, Q, sz, dom, rows, sid, uv, toward, settled, radii, start, h
     n = rows.shape[0]
     for c in nb.prange((n + _CHUNK - 1) // _CHUNK):
         w, tan, angles = _scratch()
-        _contacts(G, Q, sz, dom, rows, sid, uv, toward, settled, radii, c * _CHUNK,
-                  min(n, (c + 1) * _CHUNK), start, half, limit, w, tan, angles)
+        k0 = np.int64(c) * _CHUNK
+        _contacts(G, Q, sz, dom, rows, sid, uv, toward, settled, radii, k0, min(n, k0 + _CHUNK),
+                  start, half, limit, w, tan, angles)
 
 
 def ring_starts(part: Part, cutter, frame: RowFrame, Q: np.ndarray, contacts: Contacts,

@@ -19,11 +19,17 @@ exactly, with second derivatives, at the point the step picks (`_exact`). The st
 Newton step, its backtracking and the walk run on the second-order Taylor model of the surface
 about the start's best point (error O(h^3) for a step of length h, so the model becomes exact
 as the steps converge); only exact values are ever reported. The model's value
-(`_model_value`) is inlined at its seven sites (a call passed the whole model, about a hundred
-words, for every value), each site compiling the cutter's kernels again. The kernels that
-allocate nothing are compiled without numba's reference counting (`_nrt=False`): with it, every
-array a call passes or unpacks from a tuple is counted up and down atomically, a cost that grows
-with the threads counting the same arrays. (docs/MATH.md §6)"""
+(`_model_value`) is inlined at its seven sites (a call passes the whole model, about a hundred
+words, for every value: a call at the walk's four sites alone ran the ball and bull-nose
+engine slower, `benchmarks/bench_compile.py` says what the sites cost to compile), each site
+compiling the cutter's kernels again. The kernels that allocate nothing are compiled without
+numba's reference counting (`_nrt=False`): with it, every array a call passes or unpacks from a
+tuple is counted up and down atomically, a large part of a call, more on two threads (both
+count the same arrays). Counts and indices passed to kernels are int64 values, not Python int
+constants (`evaluate.ZERO`, `np.int64(index)`): numba compiles a kernel again for each literal
+value it is passed and for a parallel loop's uint64 index. The evaluation's order and the
+exact value of one point stay constants (their loops then have fixed lengths: the engine ran
+slower without, the flat end-mill most). (docs/MATH.md §6)"""
 
 from __future__ import annotations
 
@@ -36,7 +42,7 @@ import numpy as np
 from checker.engine.grid.rotations import rotated, row_height
 from checker.engine.refine.objective import FLOOR_STEPS, Objective, exact_size, point_batch
 from checker.engine.sizes import RowFrame, SizeArgs, point_size
-from checker.geometry.evaluate import eval_range
+from checker.geometry.evaluate import ZERO, eval_range
 from checker.geometry.newton_uv import newton_step
 from checker.geometry.trims import PackedTrims, kept
 from checker.part import Part
@@ -536,7 +542,7 @@ def _exact(G, M, r, k, bt):
     order-2 evaluation into bt.ev; packed surfaces G), points below the bottom plane of a
     flat-bottomed cutter moved onto it first (bt.u, bt.v updated; objective.py)."""
     _, _, Q, floor, dom, sz, T = M
-    eval_range(G, bt.sid, bt.u, bt.v, 2, bt.ev, bt.normals, 0, k, bt.sc)
+    eval_range(G, bt.sid, bt.u, bt.v, 2, bt.ev, bt.normals, ZERO, k, bt.sc)
     for j in range(k):
         bt.size[j] = exact_size(G, Q, floor, dom, sz, T, r, bt.sid, bt.u, bt.v, bt.ev,
                                 bt.normals, bt.sc, j, 2)
@@ -606,7 +612,7 @@ def _refine_row(G, M, r, idx, sid, hmin, best_uv, best_f, best_p, h, radius, wal
             sd = sid[s]
             st = _step(M, s, r, sd, best_uv, best_f, best_p, h, radius, walked, sc)
             bt.sid[0], bt.u[0], bt.v[0] = sd, st.u, st.v
-            _exact(G, M, r, 1, bt)
+            _exact(G, M, r, 1, bt)  # a constant: the one point's loops unrolled
             evals[s] += st.probes + 1
             won = bt.size[0] < best_f[s]
             for c in range(2):
@@ -679,8 +685,8 @@ def _refine_all(G, d, uv0, Q, floor, dom, sz, T, rows, sid, order, bounds, hmin,
     tasks = min(bounds.shape[0] - 1, _TASKS)
     for t in nb.prange(tasks):
         _refine_rows(G, _Model(d, uv0, Q, floor, dom, sz, T), rows, sid, order, bounds, hmin,
-                     best_uv, best_f, best_p, h, radius, walked, evals, iterations, most, t,
-                     tasks)
+                     best_uv, best_f, best_p, h, radius, walked, evals, iterations, most,
+                     np.int64(t), tasks)
 
 
 def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray, sid: np.ndarray,
@@ -708,14 +714,3 @@ def refine(part: Part, cutter, frame: RowFrame, Q: np.ndarray, rows: np.ndarray,
                      best_p, h, np.empty((n, 3)), np.zeros(n), evals, iterations,
                      int(np.diff(bounds).max()))
     return Refined(best_f, best_uv, best_p, evals)
-
-
-def compile_step(part: Part, cutter, frame: RowFrame, Q: np.ndarray) -> None:
-    """Compile (or load from the cache) `_step`, the refinement's largest kernel, for the types
-    `refine` passes it (one start of row 0 of `frame` on a flat model): `pathcheck warm` builds
-    it in one process while another compiles the rest of the engine, which then loads it."""
-    obj = Objective(part, cutter, frame, Q)
-    model = _Model(np.zeros((1, 6, 3)), np.zeros((1, 2)), obj.Q, obj.floor, obj.dom, obj.sz,
-                   obj.trims)
-    _step(model, 0, 0, 0, np.zeros((1, 2)), np.zeros(1), np.zeros((1, 3)), np.full((1, 2), 1e-3),
-          np.ones((1, 3)), np.zeros(1), _step_scratch())

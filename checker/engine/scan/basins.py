@@ -71,7 +71,7 @@ def row_seeds(i, ids, values, count, knn, limit, stamp, pos, low, seeds, seed_si
     for k in range(count):
         stamp[ids[k]] = i
         pos[ids[k]] = k
-    taken = 0
+    taken = np.int64(0)  # not 0: the kernels it is passed to would also compile for the literal
     for k in range(count):
         v = values[k]
         if v <= limit:

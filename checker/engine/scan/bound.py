@@ -68,7 +68,7 @@ def _coarse_row(i, grid, rot, reg, sz, knn, u, evals):
     view = grid_view(reg, i, rot)
     same = is_identity(rot, i)
     best = np.inf
-    arg = -1
+    arg = np.int64(-1)  # not -1: the descent would also compile for the literal
     ne = 0
     for a in range(i0, i1 + 1, k):
         for c in range(a * ny + j0, a * ny + j1 + 1, k):
@@ -92,7 +92,7 @@ def _warm_row(i, xyz, rot, sz, knn, starts, u, evals):
     """Row i: the sizes at its start points, then the descent from the smallest (from the
     first start when none is finite)."""
     best = np.inf
-    arg = -1
+    arg = np.int64(-1)  # not -1: the descent would also compile for the literal
     ne = 0
     for k in range(starts.shape[1]):
         p = starts[i, k]
@@ -111,7 +111,7 @@ def _warm_row(i, xyz, rot, sz, knn, starts, u, evals):
 @nb.njit(cache=True, parallel=True)
 def _coarse_par(grid, rot, reg, sz, knn, u, evals):
     for i in nb.prange(reg.shape[0]):
-        _coarse_row(i, grid, rot, reg, sz, knn, u, evals)
+        _coarse_row(np.int64(i), grid, rot, reg, sz, knn, u, evals)  # one signature, not uint64
 
 
 @nb.njit(cache=True)
@@ -123,7 +123,7 @@ def _coarse_ser(grid, rot, reg, sz, knn, u, evals):
 @nb.njit(cache=True, parallel=True)
 def _warm_par(xyz, rot, sz, knn, starts, u, evals):
     for i in nb.prange(starts.shape[0]):
-        _warm_row(i, xyz, rot, sz, knn, starts, u, evals)
+        _warm_row(np.int64(i), xyz, rot, sz, knn, starts, u, evals)
 
 
 @nb.njit(cache=True)
@@ -154,5 +154,6 @@ def warm_bounds(xyz: np.ndarray, rot: np.ndarray, starts: np.ndarray, sz: SizeAr
     n = len(starts)
     u, evals = np.empty(n), np.empty(n, dtype=np.int64)
     kernel = _warm_ser if n < SERIAL_ROWS else _warm_par
-    kernel(xyz, rot, sz, knn, np.ascontiguousarray(starts, dtype=np.int64), u, evals)
+    kernel(xyz, rot, sz, knn, np.require(starts, np.int64, ("C", "W")), u, evals)  # writable:
+    # a read-only array is another signature
     return Bounds(u, evals)

@@ -150,8 +150,8 @@ def _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, fou
 
 @nb.njit(cache=True, parallel=True)
 def _sweep_par(nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, found):
-    for b in nb.prange(nblocks):
-        _block(b, nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, found)
+    for b in nb.prange(nblocks):  # np.int64: the index is uint64 here, another signature
+        _block(np.int64(b), nblocks, grid, rot, reg, lim, sz, knn, rel, slack, out, cross, found)
 
 
 @nb.njit(cache=True)
