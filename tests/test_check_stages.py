@@ -71,7 +71,7 @@ def test_the_document_is_only_assembled(stages, monkeypatch):
         raise AssertionError("the document computed instead of assembling")
 
     for where, name in (("checker.engine", "allowable"), ("checker.geometry.contact", "cl_to_cc"),
-                        ("checker.mesh.depth", "allowable_on_mesh")):
+                        ("checker.mesh.allowable", "allowable_on_mesh")):
         monkeypatch.setattr(f"{where}.{name}", unavailable)
     doc = build_document(job, program, advice, rotary, time.perf_counter())
     cl = [p for p in doc.points if p.kind == "cl"]
