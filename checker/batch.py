@@ -80,8 +80,8 @@ def _folder_options(path: Path) -> dict:
     gives: a stock and fixtures (`checker.stock.request.folder_stock`) and a machine check
     (`machine`, `machine_clearance`: `folder_machine`), the machine loaded and its check validated
     before the run (an error names the folder's file)."""
+    from checker.check.inputs import job_machine
     from checker.collide.section import asked_clearance
-    from checker.postproc.machine import load_machine
     from checker.stock.request import folder_machine, folder_stock
 
     out: dict = {}
@@ -91,13 +91,11 @@ def _folder_options(path: Path) -> dict:
     asked = folder_machine(path)
     if asked is None:
         return out
-    if asked.machine is None:  # the job's own: its PPRINT/MACHINE, else the default
-        from checker.apt import read_cl
-
-        machine = load_machine(read_cl(path, require_cutter=False).machine_name())
+    if asked.machine is None:  # the job's own (an error names the CL file)
+        machine = job_machine(path, None)
     try:
         if asked.machine is not None:
-            machine = load_machine(asked.machine)
+            machine = job_machine(path, asked.machine)
         clearance = asked_clearance(machine, asked.clearance, check="machine_check",
                                     clearance_name="machine_clearance", code="config")
     except PathcheckError as err:  # named by the folder's file, where the check was asked

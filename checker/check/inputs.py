@@ -1,6 +1,7 @@
 """What a job is checked or posted with, resolved from what the caller gave: the config (a
-`Config`, a TOML path or the defaults), the part file (given, or beside the CL file) and the
-real cutter of every operation (given, or the CL file's own)."""
+`Config`, a TOML path or the defaults), the part file (given, or beside the CL file), the
+machine (given, or the CL file's) and the real cutter of every operation (given, or the CL
+file's own)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ from checker.config import Config, default_config, load_config
 from checker.cutter import Cutter, parse_cutter_in
 from checker.errors import PathcheckError
 from checker.geometry import BESIDE_SUFFIXES, find_part_beside
+from checker.postproc.machine import Machine, load_machine
+from checker.postproc.post import machine_for_toolpath
 from checker.toolpath import ToolPath
 
 
@@ -33,6 +36,17 @@ def part_file(apt_path: Path, given: str | Path | None) -> Path:
             f"{apt_path.stem}{{{','.join(BESIDE_SUFFIXES)}}} (any case), or --no-check to "
             "post without checking", path=apt_path, code="part")
     return found
+
+
+def job_machine(apt_path: Path, given: str | Path | None) -> Machine:
+    """The machine job `apt_path` runs on: `given` (a shipped machine's name or a TOML file),
+    else its CL file's `PPRINT/MACHINE` (the file is read only then), else the default
+    (`machine_for_toolpath`)."""
+    from checker.apt import read_cl
+
+    if given is not None:
+        return load_machine(given)
+    return machine_for_toolpath(read_cl(apt_path, require_cutter=False))
 
 
 def operation_cutters(toolpath: ToolPath, ops: np.ndarray, cutter: Cutter | str | None,

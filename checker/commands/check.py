@@ -182,6 +182,7 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
     pathcheck job.apt --machine linuxcnc-xyzac-trt --machine-check   # the machine's solids too
     """
     from checker.check import check_job
+    from checker.check.inputs import job_machine
     from checker.check.options import CheckOptions
     from checker.commands.outputs import prepare_outputs
     from checker.errors import PathcheckError
@@ -207,10 +208,11 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
                                  code="usage")
         post_without_check(job, output, cutter, machine, config_path, part_path, json_out, units)
         return
-    clearance = opt.machine_clearance_of(machine_check, machine_clearance,
-                                         _job_machine(job, machine)
-                                         if machine_check or machine_clearance is not None
-                                         else None)
+    # the machine of a machine check is loaded first, so that one it cannot make is refused
+    # before any work, and handed to the check as loaded
+    if machine_check or machine_clearance is not None:
+        machine = job_machine(job, machine)
+    clearance = opt.machine_clearance_of(machine_check, machine_clearance, machine)
     from checker.check.posting import PostRefusedError
     from checker.errors import printable
 
@@ -239,18 +241,6 @@ def check(job, part_path, cutter_text, units, tool_name, tool_library, config_pa
         raise
     write_after_check(view_out, doc, cutter=cutter, stock=stock, config=config_path)
     finish(doc, json_out, store=not no_store, store_path=store)
-
-
-def _job_machine(job: Path, machine: str | None):
-    """The machine the job runs on (`--machine`, else the CL file's PPRINT/MACHINE, else the
-    default), loaded before the check so that a machine check it cannot make is refused
-    first."""
-    from checker.apt import read_cl
-    from checker.postproc.machine import load_machine
-
-    if machine is not None:
-        return load_machine(machine)
-    return load_machine(read_cl(job, require_cutter=False).machine_name())
 
 
 def job_inputs(job: Path, part_path: Path | None, config_path: Path | None,
