@@ -14,10 +14,15 @@ THREE_NPM := tools/three/node_modules/three
 # tree while pip re-links the package); three.js (npm) fetched from the start beside both.
 # --no-compile, then byte-compiled on two cores after the extra, while the kernels compile:
 # Python does not write its own .pyc where PYTHONDONTWRITEBYTECODE is set (some CI machines), and
-# every command would compile numpy, scipy and numba from source again (~1.7 s of start-up).
+# every command would compile numpy, scipy and numba from source again (~1.7 s of start-up);
+# `NOT_IMPORTED` is left out.
 # $(TIME): a prefix for each step, empty by default (e.g. `make demo TIME="/usr/bin/time -a -o
 # F"` appends each step's times to F).
 setup: $(STAMP) $(THREE)/VERSION
+
+# what no pathcheck command imports, left out of the byte-compiling: the libraries' own tests
+# and the installers
+NOT_IMPORTED := /tests?/|/site-packages/(pip|setuptools|pkg_resources|_distutils_hack)/
 
 # three.js for the 3-D view (`pathcheck view`): the version pinned by tools/three/package-lock.json,
 # from the npm registry (no install scripts run), copied with its licence into the package
@@ -33,7 +38,8 @@ $(STAMP): pyproject.toml
 	$(TIME) $(PYTHON) -m venv $(VENV) && $(TIME) $(BIN)/pip install --quiet --no-compile -e . \
 		|| { wait $$three; exit 1; }; \
 	{ $(TIME) $(BIN)/pip install --quiet --no-compile -e ".[all]" \
-		&& $(TIME) $(BIN)/python -m compileall -q -j 0 $(VENV)/lib checker >/dev/null; } & extra=$$!; \
+		&& $(TIME) $(BIN)/python -m compileall -q -j 0 -x "$(NOT_IMPORTED)" $(VENV)/lib checker \
+		>/dev/null; } & extra=$$!; \
 	$(TIME) $(BIN)/python -m checker.cli warm; warm=$$?; \
 	wait $$extra && wait $$three && test $$warm -eq 0
 	touch $(STAMP)

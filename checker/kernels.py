@@ -129,7 +129,7 @@ def _apt_tip_contact(qx, qy, qz, prm):
     return max(min(max(root, lo), r2), 0.0)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _axis_dir(nx, ny, ex, ey, has_e):
     """Unit horizontal e (fillet centre -> axis) from n, else from the caller's e; (0, 0, True)
     when neither defines it (worst case over directions)."""
@@ -142,7 +142,7 @@ def _axis_dir(nx, ny, ex, ey, has_e):
     return 0.0, 0.0, True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _fillet_size(dx, dy, dz, ux, uy, worst, prm):
     """R for fillet contact: (dx, dy, dz) = P - O with O = Pcc + r n, e = (ux, uy)."""
     k = _k_band(dz, prm)
@@ -162,7 +162,7 @@ def _fillet_size(dx, dy, dz, ux, uy, worst, prm):
     return max((dd - k * k) / (2.0 * den), 0.0)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def contact_case(nz, prm):
     """The contact case of a CC point with tool-frame unit normal z-component `nz` for the
     family of `prm` (module docstring): UNTOUCHABLE below the taper (n_z <= 0 or n_z <
@@ -185,7 +185,7 @@ def contact_cases(nz, prm):
     return out
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _not_above(nq, qx, qy, qz, tol):
     """Whether P = Pcc + q is not above the tangent plane at Pcc (offset by the depth tolerance
     `tol`; `nq` = n.q): n.q <= tol, or within PLANE_SLOPE |q| of it, where the sign of n.q is
@@ -194,7 +194,7 @@ def _not_above(nq, qx, qy, qz, tol):
     return h <= 0.0 or h * h <= _PLANE_SLOPE2 * (qx * qx + qy * qy + qz * qz)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def apt_size(qx, qy, qz, nx, ny, nz, ex, ey, has_e, prm):
     """R of the imaginary APT-family cutter through P = Pcc + q, touching Pcc with normal n."""
     case = contact_case(nz, prm)
@@ -234,7 +234,7 @@ def plane_disc(qz, nx, ny, nz, ex, ey, prm):
     return PlaneDisc(usable, r * nx, r * ny, ux, uy, worst, _k_band(qz - r * nz, prm))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def plane_disc_bound(pd, qx, qy, rho):
     """A lower bound (mm; -inf: none) of `apt_size` over the points at the height of `pd`
     (`plane_disc`) within rho mm horizontally of q = (qx, qy) (relative to Pcc): with

@@ -82,7 +82,7 @@ def size_args(cutter, frame: RowFrame, rows: np.ndarray) -> SizeArgs:
             cutter.ball_family, float(fam.length), frame.exclusion ** 2)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def point_size(sz, i, x, y, z):
     """Size (mm) of row i (of `sz`, `SizeArgs`) at the point (x, y, z) of its tool frame; the
     rules of `pair_sizes`."""

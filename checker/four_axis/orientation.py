@@ -136,7 +136,7 @@ def _window_min(values, grid, width, direction):
     return out, arg
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _unary(allowed, target, w_original, grid, i, k):
     """Cost of point i at candidate k: w_original*|B - target| where allowed, else inf (computed
     where needed: the (n, K) matrix would be the largest array of the job)."""

@@ -32,7 +32,7 @@ _SLOTS = (1, 3, 6, 10)  # derivatives S, Su, Sv, ... up to each order
 ZERO, ONE = np.int64(0), np.int64(1)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _find_span(knots: np.ndarray, p: int, n: int, x: float) -> int:
     """Index s in [p, n-1] with knots[s] <= x < knots[s+1] (last span at the right end)."""
     if x >= knots[n]:
@@ -109,7 +109,7 @@ class EvalScratch(NamedTuple):
     T: np.ndarray
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def eval_scratch() -> EvalScratch:
     """A fresh `EvalScratch`."""
     return EvalScratch(np.empty((4, _MAXDEG + 1)), np.empty((4, _MAXDEG + 1)),

@@ -9,7 +9,7 @@ import numba as nb
 import numpy as np
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _crossing_count(u, v, x0, y0, x1, y1, vmin, dv, nb_, bstart, bedges):
     """Number of loop edges crossed by the ray from (u, v) towards +u."""
     b = int((v - vmin) / dv)
@@ -173,7 +173,7 @@ def packed_trims(part) -> PackedTrims:
     return hit[1]
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _odd(T, k, u, v):
     """Whether (u, v) lies inside an odd number of the loops of set k of `PackedTrims` T."""
     I, R = T
@@ -190,7 +190,7 @@ def _odd(T, k, u, v):
     return cnt % 2 == 1
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def kept(T, s, u, v):
     """`UVTrim.contains` of surface s at one (u, v), from `pack_trims`."""
     I = T[0]

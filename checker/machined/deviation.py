@@ -26,7 +26,7 @@ import numpy as np
 _NONE = -1.0
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _cell(v: float, origin: float, h: float) -> int:
     return int(math.floor((v - origin) / h))
 

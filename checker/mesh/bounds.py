@@ -48,7 +48,7 @@ def plane_upper(T, n, core):
     return core.rho - max(-hm - c, c - hp)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _slack(T, core, rmin):
     """min_i (c_i - min over T of (a_i r + b_i h)) with T's least distance `rmin` from the axis
     (a degenerate core: the bounding cylinder's sides, at most 0), mm. T: the vertices of a

@@ -148,7 +148,7 @@ def eroded(core, t, buf_a, buf_b):
     return src, cnt
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _nearest_on_profile(P, m, r, h):
     """The point (qr, qh) of the closed polygon P[:m] nearest (r, h), and its squared distance."""
     best = np.inf

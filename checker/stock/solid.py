@@ -52,7 +52,7 @@ def _snap_scale(vertices: np.ndarray, x0: float, y0: float, nx: int, ny: int, h:
     return 2.0 ** math.floor(_INT_BITS - math.log2(extent) - 1)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _claims(w: np.int64, dx: np.int64, dy: np.int64) -> bool:
     """Inside the edge whose function is `w` (> 0 inside), a point on it by the top-left rule."""
     return w > 0 or (w == 0 and (dy < 0 or (dy == 0 and dx > 0)))

@@ -236,7 +236,7 @@ def capsule_line(cx, cy, cz, vx, vy, vz, rho, px, py):
     return lo, hi
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def vertical_interval(q, ptypes, profs, nprofs, rhos, rmaxs, geos, ax, ay, az, vx, vy, vz,
                       px, py, mbot, mtop):
     """(c0, c1) of the ray (px, py) inside the piece swept vertically from tip a by v, clipped
@@ -357,7 +357,7 @@ def _f_ray(s, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho):
     return prof_dist(prof, n, r, hh) - rho
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def posed_range(tx, ty, tz, ux, uy, uz, px, py, hmin, hmax, rmax):
     """(s0, s1): the z of the vertical ray (px, py) within the slab hmin <= h <= hmax along
     the axis (tip t, unit axis u) and within rmax of the axis line; s0 > s1 when none."""
@@ -452,7 +452,7 @@ def _boundary(outside, inside, tx, ty, tz, ux, uy, uz, px, py, prof, n, rho):
     return outside
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def subtract(lo, hi, count, j, i, c0, c1, out, nlo, nhi):
     """Remove [c0, c1] from ray (j, i). Returns the length removed (mm) and writes the lowest
     and highest removed z to out[0], out[1]; -1.0 when the cut would need more intervals than
@@ -541,7 +541,7 @@ def row_span(ax, ay, vx, vy, r, y):
     return xl - 1e-9, xr + 1e-9
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _record(st, e, kind, length, zr0, zr1, px, py):
     st[e, ST_LEN + kind] += length
     if length > st[e, ST_THICK + kind]:
@@ -551,7 +551,7 @@ def _record(st, e, kind, length, zr0, zr1, px, py):
         st[e, ST_WHERE + 3 * kind + 2] = 0.5 * (zr0 + zr1)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _engaged(st, e, px, py, nxq, nyq, plunge):
     if plunge:
         q, q2 = px, py

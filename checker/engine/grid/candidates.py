@@ -110,7 +110,7 @@ def build_grid(xyz: np.ndarray, per_cell: float = 6.0) -> CellGrid:
                     box_hi, np.array([xyz.min(axis=0), xyz.max(axis=0)]))
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def inside(reg, i, x, y, z):
     """Whether the point (x, y, z) (row i's frame, mm) lies in row i's region `reg[i]`: in the
     slab, on or above the plane, in the ball where below `ZEQ`, and in the disc."""
@@ -129,7 +129,7 @@ def inside(reg, i, x, y, z):
     return dx * dx + dy * dy <= reg[i, RAD] * reg[i, RAD]
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def cell_range(reg, i, grid):
     """Cell columns i0..i1 and rows j0..j1 covering row i's grid-frame disc (empty: i1 < i0 or
     j1 < j0)."""
@@ -142,7 +142,7 @@ def cell_range(reg, i, grid):
     return i0, i1, j0, j1
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def column_span(reg, i, grid, a, j0, j1):
     """The rows of cell column a, within j0..j1, that meet row i's grid-frame disc (empty:
     second < first); `_CULL_EPS_MM` wider against rounding."""
@@ -160,7 +160,7 @@ def column_span(reg, i, grid, a, j0, j1):
             int(min(np.floor((by + h - y0) / cell), j1)))
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def grid_view(reg, i, rot):
     """Row i's `GridView`: its region's axes seen from the grid's frame."""
     px, py, pz = reg[i, PX], reg[i, PY], reg[i, PZ]
@@ -174,14 +174,14 @@ def grid_view(reg, i, rot):
                     sx * rot[i, 0, 2] + sy * rot[i, 1, 2] + sz * rot[i, 2, 2])
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _box(lo, hi, c):
     """Centre and half-sizes (mx, my, mz, hx, hy, hz) of the box `lo[c]`, `hi[c]`."""
     return (0.5 * (hi[c, 0] + lo[c, 0]), 0.5 * (hi[c, 1] + lo[c, 1]), 0.5 * (hi[c, 2] + lo[c, 2]),
             0.5 * (hi[c, 0] - lo[c, 0]), 0.5 * (hi[c, 1] - lo[c, 1]), 0.5 * (hi[c, 2] - lo[c, 2]))
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def cell_heights(view, lo, hi, c):
     """Lowest and highest row-frame height (mm, widened by _CULL_EPS_MM) over the box `lo[c]`,
     `hi[c]` (grid frame; `view` from `grid_view`)."""
@@ -191,7 +191,7 @@ def cell_heights(view, lo, hi, c):
     return zc - zh - _CULL_EPS_MM, zc + zh + _CULL_EPS_MM
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def cell_misses(reg, i, view, grid, c):
     """Whether no point of cell c can lie in row i's region (`view` from `grid_view`): the
     cell's bounding box is outside the grid-frame disc, or (row frame) above or below the slab,

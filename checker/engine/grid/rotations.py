@@ -83,7 +83,7 @@ def identity_rows(n: int) -> np.ndarray:
     return np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def is_identity(rot, i):
     """Whether row i's rotation `rot[i]` is exactly the identity."""
     for a in range(3):
@@ -93,7 +93,7 @@ def is_identity(rot, i):
     return True
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def rotated(rot, i, xyz, p):
     """Point `xyz[p]` (grid frame) in the frame of row i: rot[i] @ xyz[p] as (x, y, z)."""
     x, y, z = xyz[p, 0], xyz[p, 1], xyz[p, 2]
@@ -102,7 +102,7 @@ def rotated(rot, i, xyz, p):
             rot[i, 2, 0] * x + rot[i, 2, 1] * y + rot[i, 2, 2] * z)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def in_row_frame(same, rot, i, xyz, p):
     """`rotated(rot, i, xyz, p)`, or `xyz[p]` itself where `same` (`is_identity(rot, i)`: the
     row's frame is the grid's, so nothing is multiplied per point)."""
@@ -111,7 +111,7 @@ def in_row_frame(same, rot, i, xyz, p):
     return rotated(rot, i, xyz, p)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def row_height(rot, i, xyz, p):
     """The height (z) of point `xyz[p]` (grid frame) in the frame of row i: `rotated(...)[2]`."""
     return rot[i, 2, 0] * xyz[p, 0] + rot[i, 2, 1] * xyz[p, 1] + rot[i, 2, 2] * xyz[p, 2]

@@ -108,7 +108,7 @@ def _at(G, Q, floor, dom, sz, T, r, sd, u0, v0, tu, tv, sigma, w, j):
     return w.size[j]
 
 
-@nb.njit(cache=True, _nrt=False, inline="always")
+@nb.njit(cache=True, _nrt=False, forceinline=True)
 def _slot(side, i, m):
     """The probe slot of sample i (sigma[i]) on `side` (0: along the tangent, 1: against it):
     the start is slot 0 for both, then m - 1 slots a side."""

@@ -52,7 +52,7 @@ class PointBatch(NamedTuple):
     sc: EvalScratch
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def point_batch(k, slots) -> PointBatch:
     """A fresh `PointBatch` for up to k points, evaluations of `slots` rows (3: order 1,
     6: order 2)."""
@@ -60,7 +60,7 @@ def point_batch(k, slots) -> PointBatch:
                       np.empty((k, slots, 3)), np.empty((k, 3)), np.empty(k), eval_scratch())
 
 
-@nb.njit(cache=True, _nrt=False, inline="always")
+@nb.njit(cache=True, _nrt=False, forceinline=True)
 def onto_floor(G, Q, dom, r, level, sid, u, v, ev, normals, sc, j, order, both_sides, steps):
     """Point j (surface sid[j] at (u[j], v[j]), its evaluation of `order` in ev[j]; packed
     surfaces G) moved onto row r's bottom plane at tool-frame height `level` mm: where it lies
@@ -84,7 +84,7 @@ def onto_floor(G, Q, dom, r, level, sid, u, v, ev, normals, sc, j, order, both_s
         eval_range(G, sid, u, v, order, ev, normals, j, j + 1, sc)
 
 
-@nb.njit(cache=True, _nrt=False, inline="always")
+@nb.njit(cache=True, _nrt=False, forceinline=True)
 def surface_size(Q, sz, T, r, sd, u, v, ev, j):
     """The size (mm) for row r of the evaluated point ev[j] (part frame) at (u, v) on surface
     sd: `sizes.point_size` in the row's tool frame (Q), inf outside the trim (packed trims T)."""
@@ -94,7 +94,7 @@ def surface_size(Q, sz, T, r, sd, u, v, ev, j):
     return point_size(sz, r, x, y, z)
 
 
-@nb.njit(cache=True, _nrt=False, inline="always")
+@nb.njit(cache=True, _nrt=False, forceinline=True)
 def exact_size(G, Q, floor, dom, sz, T, r, sid, u, v, ev, normals, sc, j, order):
     """The size (mm) for row r of the evaluated point j (`onto_floor`'s arguments): moved onto
     the bottom plane first where it lies below it (a flat-bottomed cutter: `floor` not empty),

@@ -105,7 +105,7 @@ def _tangents(G, sd, u, v, w, tan) -> _Tangents:
     return _Tangents(t1, t2, su, sv, e, f, g, 1.0 / det if det > 0.0 else 0.0)
 
 
-@nb.njit(cache=True, _nrt=False, inline="always")
+@nb.njit(cache=True, _nrt=False, forceinline=True)
 def _uv_step(tg: _Tangents, angle, rho):
     """The (u, v) step of a tangent of length `rho` mm at `angle` rad from t1 towards t2."""
     c, s = np.cos(angle), np.sin(angle)
@@ -143,7 +143,7 @@ def _on_ring(G, Q, sz, dom, r, sd, u, v, tg, angles, m, rho, w):
     return k
 
 
-@nb.njit(cache=True, _nrt=False, inline="always")
+@nb.njit(cache=True, _nrt=False, forceinline=True)
 def _best_angle(f, m):
     """The angle (rad) of the smallest of the m values f at even angles, between the samples
     by a parabola through the best and its two neighbours (the sample where they are not
@@ -223,7 +223,7 @@ def _contacts(G, Q, sz, dom, rows, sid, uv, toward, settled, radii, k0, k1, star
                 angles[2 + i] = i * np.pi / 4
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _scratch():
     """The work arrays of `_contacts`: a `PointBatch` for the largest ring, the tangent plane's
     vectors and the rings' angles."""

@@ -21,8 +21,10 @@ about the start's best point (error O(h^3) for a step of length h, so the model 
 as the steps converge); only exact values are ever reported. The model's value
 (`_model_value`) is inlined at its seven sites (a call passes the whole model, about a hundred
 words, for every value: a call at the walk's four sites alone ran the ball and bull-nose
-engine slower, `benchmarks/bench_compile.py` says what the sites cost to compile), each site
-compiling the cutter's kernels again. The kernels that allocate nothing are compiled without
+engine slower). The small kernels are inlined by LLVM (`forceinline=True`: the compiled
+function marked always-inline where it is linked in), not by numba (`inline="always"` copies
+and types the callee's IR again at every site, nested sites included, which cost about a third
+of the compile; `benchmarks/bench_compile.py`). The kernels that allocate nothing are compiled without
 numba's reference counting (`_nrt=False`): with it, every array a call passes or unpacks from a
 tuple is counted up and down atomically, a large part of a call, more on two threads (both
 count the same arrays). Counts and indices passed to kernels are int64 values, not Python int
@@ -113,7 +115,7 @@ class Refined:
     evaluations: np.ndarray
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _taylor_at(d, uv0, s, u, v, out):
     """Point and first derivatives (rows _POINT, _DU, _DV of `out`, part frame) of start s's
     Taylor model at (u, v)."""
@@ -127,7 +129,7 @@ def _taylor_at(d, uv0, s, u, v, out):
         out[_DV, m] = sv
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _onto_level(excess, hu, hv, u, v, lo_u, hi_u, lo_v, hi_v):
     """The step (du, dv) that brings a height `excess` mm above a level (negative: below) to it,
     the height's derivatives being (hu, hv): the projected Newton step on excess^2 / 2
@@ -136,7 +138,7 @@ def _onto_level(excess, hu, hv, u, v, lo_u, hi_u, lo_v, hi_v):
                        lo_v, hi_v, False, False)
 
 
-@nb.njit(cache=True, _nrt=False, inline="always")
+@nb.njit(cache=True, _nrt=False, forceinline=True)
 def _model_value(M, s, r, sd, u, v, snap, e):
     """The `_ModelValue` of start s's Taylor model (M, above) at (u, v) for CC row r,
     surface sd (rules of `sizes.point_size`, tool frame through Q, inf outside the trim). With a
@@ -161,7 +163,7 @@ def _model_value(M, s, r, sd, u, v, snap, e):
     return _ModelValue(f, u, v)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _near_floor(Q, r, d, s, best_p, floor, hu, hv):
     """Whether start s's best point lies on row r's bottom plane or within the height range of
     its stencil (half-widths hu, hv) above it: the contour steps apply."""
@@ -169,7 +171,7 @@ def _near_floor(Q, r, d, s, best_p, floor, hu, hv):
     return row_height(Q, r, best_p, s) - floor[r] <= max(_ON_FLOOR, span)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _newton_target(F, cu, cv, hu, hv):
     """Newton point (u, v) of the quadratic through the 3x3 stencil values F (9,) about
     (cu, cv) (central differences, half-widths hu, hv), at most _REACH half-widths per
@@ -198,14 +200,14 @@ def _newton_target(F, cu, cv, hu, hv):
     return True, scale < 1.0, cu + du * scale, cv + dv * scale
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _speeds(d, s):
     """|S_u|, |S_v| (mm per parameter unit) at start s's model centre."""
     return (np.sqrt(d[s, _DU, 0] ** 2 + d[s, _DU, 1] ** 2 + d[s, _DU, 2] ** 2),
             np.sqrt(d[s, _DV, 0] ** 2 + d[s, _DV, 1] ** 2 + d[s, _DV, 2] ** 2))
 
 
-@nb.njit(cache=True, _nrt=False, inline="always")
+@nb.njit(cache=True, _nrt=False, forceinline=True)
 def _derivatives(M, s, r, sd, u0, v0, f0, su, sv, e, F):
     """(ok, gradient (gu, gv), Hessian (huu, huv, hvv)) of start s's model size at (u0, v0)
     (value f0 there), per mm along u and v (su, sv: mm per parameter unit): central differences
@@ -223,7 +225,7 @@ def _derivatives(M, s, r, sd, u0, v0, f0, su, sv, e, F):
             (fvp - 2 * f0 + fvm) / _DELTA**2)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _eigen(huu, huv, hvv):
     """Eigenvalues l1 <= l2 of the symmetric 2x2 matrix [[huu, huv], [huv, hvv]] and the unit
     eigenvector (x1, y1) of l1 (the one of l2 is (-y1, x1))."""
@@ -238,7 +240,7 @@ def _eigen(huu, huv, hvv):
     return l1, l2, x1, y1
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _boundary_lambda(g1, g2, l1, l2, radius, lo, hi):
     """The lambda in [lo, hi] at which the step of H + lambda I, (-g1 / (l1 + lambda),
     -g2 / (l2 + lambda)) in H's eigenbasis (eigenvalues l1 <= l2, gradient (g1, g2)), is
@@ -272,7 +274,7 @@ def _boundary_lambda(g1, g2, l1, l2, radius, lo, hi):
     return hi
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _trust_region(gu, gv, huu, huv, hvv, radius):
     """The step (pu, pv) that minimises the quadratic g.p + p.H.p / 2 over |p| <= radius (2D,
     through H's eigenvectors: the Newton step where H is positive definite and the step is
@@ -295,7 +297,7 @@ def _trust_region(gu, gv, huu, huv, hvv, radius):
     return c1 * x1 + c2 * x2, c1 * y1 + c2 * y2
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _line_step(g, hh, radius):
     """The step along one coordinate that minimises g p + hh p^2 / 2 over |p| <= radius."""
     if hh > 0.0:
@@ -303,7 +305,7 @@ def _line_step(g, hh, radius):
     return -radius if g > 0.0 else radius
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _fraction_inside(p, lo, hi):
     """The largest fraction (<= 1) of a step p that stays within [lo, hi] (lo <= 0 <= hi; a
     centre up to _DELTA outside its box takes no step across the bound, and a zero step is
@@ -317,7 +319,7 @@ def _fraction_inside(p, lo, hi):
     return 1.0
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _boxed_step(gu, gv, huu, huv, hvv, radius, box):
     """`_trust_region`'s step kept inside the domain `box` = (u lo, u hi, v lo, v hi), offsets
     from the centre in mm: a coordinate whose bound the centre lies on and the step would
@@ -430,7 +432,7 @@ class _StepScratch(NamedTuple):
     box: np.ndarray
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _step_scratch() -> _StepScratch:
     """A fresh `_StepScratch`."""
     m = 2 + _FRACTIONS.shape[0]
@@ -522,7 +524,7 @@ def _contour_probes(M, s, r, sd, f0, fc, hu, hv, vals, uvs, e):
     return 2 + _FRACTIONS.shape[0]
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _vertex(f0, fm, fp, tau):
     """The offset (mm) of the vertex of the parabola through the values fm, f0, fp at -tau, 0
     and tau, at most _REACH tau either way (towards the lower side where it opens downwards)."""
@@ -548,7 +550,7 @@ def _exact(G, M, r, k, bt):
                                 bt.normals, bt.sc, j, 2)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _centre(d, uv0, s, j, bt):
     """Start s's Taylor model re-centred on the batch's point j."""
     uv0[s, 0], uv0[s, 1] = bt.u[j], bt.v[j]
@@ -557,7 +559,7 @@ def _centre(d, uv0, s, j, bt):
             d[s, m, c] = bt.ev[j, m, c]
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _pruned(best_f, best_p, sid, idx, active, cells):
     """Of a row's starts `idx` (ascending), those far above the row's best no longer active
     (more than _PRUNE_REL + _PRUNE_ABS), and of the active ones whose best points (part frame)

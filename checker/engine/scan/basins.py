@@ -9,7 +9,7 @@ import numpy as np
 NEAR_TIE = 2e-4  # relative: a sample whose lower neighbours are all lower by less is near-minimal
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def _lowest_neighbour(i, p, knn, values, stamp, pos):
     """The smallest size among the evaluated nearest test points of test point p (inf: none)."""
     npts = knn.shape[0]

@@ -126,7 +126,7 @@ def edge_data(grid: CellGrid, knn: np.ndarray) -> EdgeData:
     return data
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def straddles(view, grid, nb_lo, nb_hi, c, floor):
     """Whether cell c can hold a point at or above `floor` (row frame, mm) with a neighbour
     below it (`view`: `grid_view` of the row, grid/candidates.py; boxes from `edge_data`)."""
@@ -139,7 +139,7 @@ def straddles(view, grid, nb_lo, nb_hi, c, floor):
     return low < floor
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, forceinline=True)
 def may_cross(i, rot, xyz, p, zp, floor, edges):
     """Whether a neighbour of point p (at height zp >= floor in row i's frame; `xyz` the grid's
     points by id) can lie below the floor: exactly from the neighbours' lowest height where the
