@@ -3,13 +3,13 @@ processes at once (two cores): one checks and posts the bundled warm-up job (the
 4-axis compressor sample with a ball D12, 90 CC points, flagged) as `pathcheck JOB -o JOB.nc`
 does, compiling what it needs in the order it needs it (the mesh of the tool and holder, the
 scan, the rings, the refinement, the 4-axis plan); the other compiles at the same time what the
-job needs last, the refinement (`steps.refine`, the largest kernels) and the plan, so that the
-job finds them cached when it gets there and neither compiles what the other does. Then one
-process compiles what a large job takes beyond the demo's: the engine on many CC points with one
-axis (the kernels' threaded variants; the compressor sample's first run after `warm` compiled
-six kernels without them) and the rest of the mesh's kernels. Afterwards neither job compiles
-anything; a job that needs more (a flat end-mill's contour search) compiles those few on its
-first run.
+job needs later, the certified stretches (`mesh.swept`), the refinement (`steps.refine`, the
+largest kernels) and the plan, so that the job mostly finds them cached when it gets there.
+Then one process compiles what a large job takes beyond the demo's: the engine on many CC
+points with one axis (the kernels' threaded variants; the compressor sample's first run after
+`warm` compiled six kernels without them) and the rest of the mesh's kernels. Afterwards
+neither job compiles anything; a job that needs more (a flat end-mill's contour search)
+compiles those few on its first run.
 
 `pathcheck warm` compiles for this CPU and marks the cache folder so (`kernel_cache.HOST_MARK`:
 later processes take these kernels instead of the portable ones a wheel ships); `make wheel` builds
@@ -42,13 +42,14 @@ from checker.resources import resource
 WARMUP_JOB = resource("warmup", "warmup.apt")
 # the stages, each a set of processes run at once: the warm-up job beside what it needs last,
 # then what a large job needs beyond it
-_STAGES = (("check_warm_up_job", "compile_refinement_and_plan"), ("compile_large_job",))
+_STAGES = (("check_warm_up_job", "compile_stretches_refinement_and_plan"), ("compile_large_job",))
 _WARM_ROWS = 4000  # CC points: enough for the threaded kernels (see _allowable_at_the_warm_up_part)
 
 
-def compile_refinement_and_plan() -> None:
-    """What the warm-up job needs last: the refinement (`_refinement`) and the 4-axis plan's
-    own kernel (the shortest path over B)."""
+def compile_stretches_refinement_and_plan() -> None:
+    """What the warm-up job needs later: the certified stretches (`compile_stretches`), the
+    refinement (`_refinement`) and the 4-axis plan's own kernel (the shortest path over B)."""
+    compile_stretches()
     _refinement()
     _plan()
 
@@ -60,25 +61,43 @@ def compile_large_job() -> None:
     compile_mesh()
 
 
-def compile_mesh() -> None:
-    """The mesh kernels: the tree, the depth of a tool's pieces, a stretch certified whole, the
-    allowable size."""
+def _small_mesh():
+    """A four-triangle tree, a ball D6 tool's pieces with its holder, two poses (tips, axes)."""
     import numpy as np
 
     from checker.cutter import parse_cutter
     from checker.mesh import MeshIndex, tool_pieces
-    from checker.mesh.allowable import allowable_on_mesh
-    from checker.mesh.depth import pose_depths
-    from checker.mesh.swept import certified_stretches
 
     v = np.array([[-20.0, -20, 0], [20, -20, 0], [0, 20, 0], [0, 0, 10]])
     index = MeshIndex.build(v, np.array([[0, 1, 2], [0, 1, 3]]))
     cutter = parse_cutter("CUTTER/6,3")
     tips = np.array([[0.0, 0, 1], [0, -5, -0.1]])
     axes = np.tile([0.0, 0, 1], (2, 1))
-    pieces = tool_pieces(cutter, with_holder=True)
-    pose_depths(index, pieces, tips, axes, reach=1.0)
+    return index, cutter, tool_pieces(cutter, with_holder=True), tips, axes
+
+
+def compile_stretches() -> None:
+    """A stretch of moves certified whole (`mesh.swept`), the mesh kernels the warm-up job needs
+    after the tool's depths."""
+    import numpy as np
+
+    from checker.mesh.swept import certified_stretches
+
+    index, _, pieces, tips, axes = _small_mesh()
     certified_stretches(index, pieces, tips, axes, tips, np.zeros(2), np.zeros(2), np.ones(2))
+
+
+def compile_mesh() -> None:
+    """The mesh kernels: the tree, the depth of a tool's pieces, a stretch certified whole, the
+    allowable size."""
+    import numpy as np
+
+    from checker.mesh.allowable import allowable_on_mesh
+    from checker.mesh.depth import pose_depths
+
+    index, cutter, pieces, tips, axes = _small_mesh()
+    pose_depths(index, pieces, tips, axes, reach=1.0)
+    compile_stretches()
     allowable_on_mesh(index, cutter, np.zeros((1, 3)), axes[:1], axes[:1], tol=1e-6, s_max=10.0)
 
 

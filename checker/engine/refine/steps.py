@@ -17,21 +17,21 @@ millimetre stay on the floor.
 Surface evaluation is the expensive part, so each step evaluates the surface once per start:
 exactly, with second derivatives, at the point the step picks (`_exact`). The stencil, the
 Newton step, its backtracking and the walk run on the second-order Taylor model of the surface
-about the start's best point (error O(h^3) for a step of length h, so the model becomes exact
-as the steps converge); only exact values are ever reported. The model's value
-(`_model_value`) is inlined at its seven sites (a call passes the whole model, about a hundred
-words, for every value: a call at the walk's four sites alone ran the ball and bull-nose
-engine slower). The small kernels are inlined by LLVM (`forceinline=True`: the compiled
-function marked always-inline where it is linked in), not by numba (`inline="always"` copies
-and types the callee's IR again at every site, nested sites included, which cost about a third
-of the compile; `benchmarks/bench_compile.py`). The kernels that allocate nothing are compiled without
-numba's reference counting (`_nrt=False`): with it, every array a call passes or unpacks from a
-tuple is counted up and down atomically, a large part of a call, more on two threads (both
-count the same arrays). Counts and indices passed to kernels are int64 values, not Python int
-constants (`evaluate.ZERO`, `np.int64(index)`): numba compiles a kernel again for each literal
-value it is passed and for a parallel loop's uint64 index. The evaluation's order and the
-exact value of one point stay constants (their loops then have fixed lengths: the engine ran
-slower without, the flat end-mill most). (docs/MATH.md §6)"""
+about the start's best point (error O(h^3) for a step of length h, so the model becomes exact as
+the steps converge); only exact values are ever reported. The model's value (`_model_value`) is
+inlined at its seven sites (a call passes the whole model, about a hundred words, for every
+value: a call at the walk's four sites alone ran the ball and bull-nose engine slower), and so
+are the small kernels, by LLVM (`forceinline=True`: the compiled function marked always- inline
+where it is linked in), not by numba (`inline="always"` copies and types the callee's IR again
+at every site, nested sites included, which cost about a third of the compile;
+`benchmarks/bench_compile.py`). The kernels that allocate nothing are compiled without numba's
+reference counting (`_nrt=False`): with it, every array a call passes or unpacks from a tuple is
+counted up and down atomically, a large part of a call, more on two threads (both count the same
+arrays). Counts and indices passed to kernels are int64 values, not Python int constants
+(`evaluate.ZERO`, `np.int64(index)`): numba compiles a kernel again for each literal value it is
+passed and for a parallel loop's uint64 index. The evaluation's order and the exact value of one
+point stay constants (their loops then have fixed lengths: the engine ran slower without, the
+flat end-mill most). (docs/MATH.md §6)"""
 
 from __future__ import annotations
 
