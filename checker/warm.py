@@ -5,7 +5,7 @@ does, compiling what it needs in the order it needs it (the mesh of the tool and
 scan, the rings, the refinement, the 4-axis plan); the other compiles at the same time what the
 job needs later, the certified stretches (`mesh.swept`), the refinement (`steps.refine`, the
 largest kernels) and the plan, so that the job mostly finds them cached when it gets there.
-Then one process compiles what a large job takes beyond the demo's: the engine on many CC
+Then the first process compiles what a large job takes beyond the demo's: the engine on many CC
 points with one axis (the kernels' threaded variants; the compressor sample's first run after
 `warm` compiled six kernels without them) and the rest of the mesh's kernels. Afterwards
 neither job compiles anything; a job that needs more (a flat end-mill's contour search)
@@ -40,18 +40,11 @@ from checker.kernel_cache import (
 from checker.resources import resource
 
 WARMUP_JOB = resource("warmup", "warmup.apt")
-# the stages, each a set of processes run at once: the warm-up job beside what it needs last,
-# then what a large job needs beyond it
-_STAGES = (("check_warm_up_job", "compile_stretches_refinement_and_plan"), ("compile_large_job",))
+# two processes at once, each a sequence of this module's functions: the warm-up job, then what
+# a large job needs beyond it; beside it, what the warm-up job needs later
+_PROCESSES = (("check_warm_up_job", "compile_large_job"),
+              ("compile_stretches", "compile_refinement", "compile_plan"))
 _WARM_ROWS = 4000  # CC points: enough for the threaded kernels (see _allowable_at_the_warm_up_part)
-
-
-def compile_stretches_refinement_and_plan() -> None:
-    """What the warm-up job needs later: the certified stretches (`compile_stretches`), the
-    refinement (`_refinement`) and the 4-axis plan's own kernel (the shortest path over B)."""
-    compile_stretches()
-    _refinement()
-    _plan()
 
 
 def compile_large_job() -> None:
@@ -101,7 +94,8 @@ def compile_mesh() -> None:
     allowable_on_mesh(index, cutter, np.zeros((1, 3)), axes[:1], axes[:1], tol=1e-6, s_max=10.0)
 
 
-def _plan() -> None:
+def compile_plan() -> None:
+    """The 4-axis plan's own kernel (the shortest path over B)."""
     import numpy as np
 
     from checker.config import default_config
@@ -115,7 +109,7 @@ def _plan() -> None:
         w_original=fa.dp_weight_original, max_db_per_mm=fa.max_db_per_mm)
 
 
-def _refinement() -> None:
+def compile_refinement() -> None:
     """`steps.refine` (the kernels of the whole refinement) from one start at a CC point of the
     warm-up part, with the types `allowable` passes it (its frames as `allowable` makes
     them)."""
@@ -179,17 +173,15 @@ def check_warm_up_job() -> None:
 
 
 def _compile_all(folder: Path, kernels: str) -> None:
-    """The `_STAGES` (each stage's processes at once) into the numba cache `folder`, for this
-    CPU (`kernels` "host") or `kernel_cache.PORTABLE_CPU` ("portable")."""
+    """The `_PROCESSES` (at once) into the numba cache `folder`, for this CPU (`kernels` "host")
+    or `kernel_cache.PORTABLE_CPU` ("portable")."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(folder), **{KERNELS_ENV: kernels})
 
-    def run(call: str) -> subprocess.Popen:
-        return subprocess.Popen([sys.executable, "-c", f"from checker.warm import {call}; "
-                                 f"{call}()"], env=env)
+    def run(calls: tuple[str, ...]) -> subprocess.Popen:
+        code = "import checker.warm as w; " + "; ".join(f"w.{call}()" for call in calls)
+        return subprocess.Popen([sys.executable, "-c", code], env=env)
 
-    failed = []
-    for stage in _STAGES:
-        failed += [proc.wait() for proc in [run(name) for name in stage]]
+    failed = [proc.wait() for proc in [run(calls) for calls in _PROCESSES]]
     if any(failed):
         raise RuntimeError(f"compiling the kernels failed (exit {max(failed)})")
 
