@@ -54,7 +54,7 @@ def compile_large_job() -> None:
     compile_mesh()
 
 
-def _small_mesh():
+def _small_mesh() -> tuple:
     """A four-triangle tree, a ball D6 tool's pieces with its holder, two poses (tips, axes)."""
     import numpy as np
 
