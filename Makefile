@@ -9,8 +9,7 @@ THREE_NPM := tools/three/node_modules/three
 
 .PHONY: setup demo test lint bench wheel clean
 
-# The base install, then at once (two cores) the [all] extra (STEP/IGES, Dask, the test tools:
-# the extras of the pathcheck just installed, which pip then does not build again)
+# The base install, then at once (two cores) the [all] extra (STEP/IGES, Dask, the test tools)
 # and the kernels compiled once into the per-user cache (`pathcheck warm`, run from the source
 # tree while pip re-links the package); three.js (npm) fetched from the start beside both.
 # --no-compile, then byte-compiled on two cores after the extra, while the kernels compile:
@@ -38,7 +37,7 @@ $(STAMP): pyproject.toml
 	$(MAKE) --no-print-directory $(THREE)/VERSION & three=$$!; \
 	$(TIME) $(PYTHON) -m venv $(VENV) && $(TIME) $(BIN)/pip install --quiet --no-compile -e . \
 		|| { wait $$three; exit 1; }; \
-	{ $(TIME) $(BIN)/pip install --quiet --no-compile "pathcheck[all]" \
+	{ $(TIME) $(BIN)/pip install --quiet --no-compile -e ".[all]" \
 		&& $(TIME) $(BIN)/python -m compileall -q -j 0 -x "$(NOT_IMPORTED)" $(VENV)/lib checker \
 		>/dev/null; } & extra=$$!; \
 	$(TIME) $(BIN)/python -m checker.cli warm; warm=$$?; \
