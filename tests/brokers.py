@@ -1,6 +1,6 @@
 """The service's broker as the service tests run it: started in a thread of the test process
-with the service options a test module needs, its workers real processes; and a wait for the
-worker that runs a request."""
+with the service options a test module needs, its workers real processes; a client of one; and
+a wait for the worker that runs a request."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from checker.client import Client
 from checker.config import Config, default_config
 from checker.service.broker import Broker
 from checker.service.roots import Roots
@@ -39,6 +40,15 @@ def running_broker(config: Config, *, workers: int = 2, roots: list[Path] | None
         thread.join(20)
     assert not thread.is_alive(), "broker did not stop"
     assert b.worker_pids() == [], "workers left running after the broker stopped"
+
+
+@contextmanager
+def client_of_root(root: Path) -> Iterator[Client]:
+    """A client (no retries, 120 s timeout) of a one-worker broker with the default
+    configuration that reads files under `root`."""
+    with running_broker(default_config(), workers=1, roots=[root]) as broker, \
+            Client(broker.address, timeout_s=120, retries=0) as c:
+        yield c
 
 
 def wait_busy(b: Broker, timeout_s: float = 20.0) -> int:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import jsonschema
 import pytest
-from brokers import running_broker
+from brokers import client_of_root
 from collide_machines import descent_job, machine_file, the_descent_finding
 from requires import require_extra
 
@@ -33,8 +33,7 @@ def root(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def client(root):
-    with running_broker(default_config(), workers=1, roots=[root]) as broker, \
-            Client(broker.address, timeout_s=120, retries=0) as c:
+    with client_of_root(root) as c:
         yield c
 
 

@@ -64,15 +64,21 @@ def test_the_check_contract_names_every_stage_once():
     assert set(names) == stages
 
 
-def test_an_import_that_goes_up_breaks_the_contract(tmp_path):
+def _lint_with(tmp_path: Path, module: str, code: str) -> subprocess.CompletedProcess:
+    """The contracts checked on a copy of the package (in `tmp_path`) with `code` appended to
+    its `module` (a path under checker/)."""
     shutil.copytree(REPO / "checker", tmp_path / "checker",
                     ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(REPO / "pyproject.toml", tmp_path)
-    header = tmp_path / "checker" / "postproc" / "header.py"
+    changed = tmp_path / "checker" / module
+    changed.write_text(changed.read_text() + code)
+    return _lint(tmp_path)
+
+
+def test_an_import_that_goes_up_breaks_the_contract(tmp_path):
     # a function-level import: import-linter sees it as well as a module-level one
-    header.write_text(header.read_text() + "\n\ndef _up():\n    from checker.check import check_job"
-                      "\n\n    return check_job\n")
-    run = _lint(tmp_path)
+    run = _lint_with(tmp_path, "postproc/header.py", "\n\ndef _up():\n    from checker.check "
+                     "import check_job\n\n    return check_job\n")
     assert run.returncode == 1, run.stdout + run.stderr
     # both: the stages reach the entry of their package through the post
     assert "0 kept, 2 broken" in run.stdout
@@ -80,13 +86,8 @@ def test_an_import_that_goes_up_breaks_the_contract(tmp_path):
 
 
 def test_a_stage_that_imports_a_later_one_breaks_the_check_contract(tmp_path):
-    shutil.copytree(REPO / "checker", tmp_path / "checker",
-                    ignore=shutil.ignore_patterns("__pycache__"))
-    shutil.copy(REPO / "pyproject.toml", tmp_path)
-    advice = tmp_path / "checker" / "check" / "advice.py"
-    advice.write_text(advice.read_text() + "\n\ndef _later():\n    from checker.check.document "
-                      "import build_document\n\n    return build_document\n")
-    run = _lint(tmp_path)
+    run = _lint_with(tmp_path, "check/advice.py", "\n\ndef _later():\n    from "
+                     "checker.check.document import build_document\n\n    return build_document\n")
     assert run.returncode == 1, run.stdout + run.stderr
     assert "1 kept, 1 broken" in run.stdout
     assert "checker.check.advice -> checker.check.document" in run.stdout

@@ -12,11 +12,10 @@ from pathlib import Path
 
 import jsonschema
 import pytest
-from brokers import running_broker
+from brokers import client_of_root
 from vise import MOULD, gotos, into_jaw, vise, write_boxes
 
 from checker.client import Client
-from checker.config import default_config
 from checker.resources import resource
 
 TOLERANCE = 0.02
@@ -37,8 +36,7 @@ def root(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def client(root):
-    with running_broker(default_config(), workers=1, roots=[root]) as broker, \
-            Client(broker.address, timeout_s=120, retries=0) as c:
+    with client_of_root(root) as c:
         yield c
 
 
