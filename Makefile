@@ -12,14 +12,18 @@ THREE_NPM := tools/three/node_modules/three
 # The base install, then at once (two cores) the [all] extra (STEP/IGES, Dask, the test tools)
 # and the kernels compiled once into the per-user cache (`pathcheck warm`, run from the source
 # tree while the extra is installed); three.js (npm) fetched from the start beside both.
-# The packages are installed by uv (`UV`, installed into the venv by its pip), which fetches and
-# links them several times faster than pip; the venv keeps its pip for the user.
+# The packages are installed by uv (`UV`), which fetches and links them several times faster than
+# pip; the venv gets pip with the extra, for the user.
 # $(TIME): a prefix for each step, empty by default (e.g. `make demo TIME="/usr/bin/time -a -o
 # F"` appends each step's times to F).
 setup: $(STAMP) $(THREE)/VERSION
 
 UV := uv==0.13.9
 UV_INSTALL = $(BIN)/uv pip install --quiet --python $(BIN)/python
+# uv into the new venv by this Python's pip (22.3 or newer), or else by the venv's own (ensurepip)
+$(BIN)/uv:
+	$(PYTHON) -m pip --python $(BIN)/python install --quiet --quiet "$(UV)" 2>/dev/null \
+		|| { $(BIN)/python -m ensurepip >/dev/null && $(BIN)/python -m pip install --quiet --quiet "$(UV)"; }
 # Python writes the bytecode of what each step imports (the warm-up imports what the commands
 # do): where PYTHONDONTWRITEBYTECODE is set (some CI machines) every command would otherwise
 # compile numpy, scipy and numba from source again (~1.7 s of start-up)
@@ -36,9 +40,9 @@ $(THREE)/VERSION: tools/three/package-lock.json
 
 $(STAMP): pyproject.toml
 	$(MAKE) --no-print-directory $(THREE)/VERSION & three=$$!; \
-	$(TIME) $(PYTHON) -m venv $(VENV) && $(TIME) $(BIN)/pip install --quiet --quiet "$(UV)" \
+	$(TIME) $(PYTHON) -m venv --without-pip $(VENV) && $(TIME) $(MAKE) --no-print-directory $(BIN)/uv \
 		&& $(TIME) $(UV_INSTALL) -e . || { wait $$three; exit 1; }; \
-	$(TIME) $(UV_INSTALL) -e ".[all]" & extra=$$!; \
+	$(TIME) $(UV_INSTALL) -e ".[all]" pip & extra=$$!; \
 	$(TIME) $(BIN)/python -m checker.cli warm; warm=$$?; \
 	wait $$extra && wait $$three && test $$warm -eq 0
 	touch $(STAMP)
