@@ -23,7 +23,8 @@ UV_INSTALL = $(BIN)/uv pip install --quiet --python $(BIN)/python
 # uv into the new venv by this Python's pip (22.3 or newer), or else by the venv's own (ensurepip)
 $(BIN)/uv:
 	$(PYTHON) -m pip --python $(BIN)/python install --quiet --quiet "$(UV)" 2>/dev/null \
-		|| { $(BIN)/python -m ensurepip >/dev/null && $(BIN)/python -m pip install --quiet --quiet "$(UV)"; }
+		|| { $(BIN)/python -m ensurepip >/dev/null \
+			&& $(BIN)/python -m pip install --quiet --quiet "$(UV)"; }
 # Python writes the bytecode of what each step imports (the warm-up imports what the commands
 # do): where PYTHONDONTWRITEBYTECODE is set (some CI machines) every command would otherwise
 # compile numpy, scipy and numba from source again (~1.7 s of start-up)
@@ -40,7 +41,8 @@ $(THREE)/VERSION: tools/three/package-lock.json
 
 $(STAMP): pyproject.toml
 	$(MAKE) --no-print-directory $(THREE)/VERSION & three=$$!; \
-	$(TIME) $(PYTHON) -m venv --without-pip $(VENV) && $(TIME) $(MAKE) --no-print-directory $(BIN)/uv \
+	$(TIME) $(PYTHON) -m venv --without-pip $(VENV) \
+		&& $(TIME) $(MAKE) --no-print-directory $(BIN)/uv \
 		&& $(TIME) $(UV_INSTALL) -e . || { wait $$three; exit 1; }; \
 	$(TIME) $(UV_INSTALL) -e ".[all]" pip & extra=$$!; \
 	$(TIME) $(BIN)/python -m checker.cli warm; warm=$$?; \
