@@ -11,6 +11,7 @@ import sys
 import click
 
 from checker.commands.options import EXIT_CODES
+from checker.commands.terminal import show_notes
 from checker.errors import PathcheckError, printable
 
 # subcommand name -> "module:attribute" of its click command
@@ -124,7 +125,7 @@ def _interrupted(signum: int, frame: object) -> None:
     raise Interrupted
 
 
-EXIT_OK, EXIT_INPUT, EXIT_INTERNAL = 0, 2, 3  # 1 (findings): the commands' own exit
+EXIT_OK, EXIT_FINDINGS, EXIT_INPUT, EXIT_INTERNAL = 0, 1, 2, 3  # 1: the commands' own exit
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report an interrupted command
 
 
@@ -166,9 +167,14 @@ def main(argv: list[str] | None = None) -> None:
 
 
 def _run(args: list[str]) -> None:
-    """`main` inside its signal handlers: every ending is one of the exit codes."""
+    """`main` inside its signal handlers: every ending is one of the exit codes; the command's
+    notes (`terminal.note`) are shown when it ends with exit 0 or 1."""
+    show_notes(False)
     try:
         cli.main(args=args, prog_name="pathcheck", standalone_mode=False)
+    except SystemExit as done:  # a command's own exit: 1 for findings
+        show_notes(done.code in (None, EXIT_OK, EXIT_FINDINGS))
+        raise
     except PathcheckError as err:
         _say(str(err))
         sys.exit(EXIT_INPUT)
@@ -180,6 +186,7 @@ def _run(args: list[str]) -> None:
         _say(_os_error(err))
         sys.exit(EXIT_INPUT)
     except click.exceptions.Exit as exc:
+        show_notes(exc.exit_code in (EXIT_OK, EXIT_FINDINGS))
         sys.exit(exc.exit_code)
     except click.UsageError as exc:  # click's own three lines (usage, hint, error) as one
         where = f"; see '{exc.ctx.command_path} --help'" if exc.ctx is not None else ""
@@ -193,6 +200,7 @@ def _run(args: list[str]) -> None:
         sys.exit(EXIT_INTERRUPTED)
     except Exception as err:
         _internal(err, args)
+    show_notes(True)
     sys.exit(EXIT_OK)
 
 

@@ -72,6 +72,26 @@ def test_the_machine_files_units_are_used_and_said(files, capsys):
                    "the units of machine linuxcnc-hmc\n")
 
 
+@pytest.mark.parametrize("later_error", ["B axis", "part file"])
+def test_the_note_is_not_shown_before_a_later_input_error(files, tmp_path, capsys, later_error):
+    """The units note is shown only when the command succeeds: a program without units that
+    then fails (it turns B on a table-table A/C machine; its part file is not a part) ends with
+    its one error line alone (the nightly fuzzing's G-code case 477 printed both)."""
+    program, _ = files
+    args = ["check-gcode", str(program), "--machine", "linuxcnc-xyzac-trt"]
+    if later_error == "B axis":
+        program.write_text(PROGRAM.replace("G1 X20", "G1 X20 B32"))
+        expected = f"{program}:5: the program turns B (B32)"
+    else:
+        part = tmp_path / "part.stl"
+        part.write_text("solid nothing\n")
+        args += ["--part", str(part), "--cutter", "CUTTER/6,3", "--no-store"]
+        expected = str(part)
+    code, _, err = _run(args, capsys)
+    assert code == 2, err
+    assert len(err.splitlines()) == 1 and expected in err and "pathcheck: note:" not in err, err
+
+
 def test_a_program_that_states_its_units_gets_no_note(files, capsys):
     program, machine = files
     program.write_text(PROGRAM.replace("G17 G90 G54", "G17 G90 G54 G20"))

@@ -13,13 +13,15 @@ import click
 import numpy as np
 
 from checker.commands import options as opt
+from checker.commands.terminal import note
 from checker.commands.view import view_option, write_after_check
 from checker.progress import step
 
 
 def assumed_units(moves, given: str | None, machine) -> None:
     """A program that states no units is read in `--units`, else in the units its machine file
-    states, with a note on stderr naming the file and the unit; neither: a PathcheckError."""
+    states, with a note naming the file and the unit (`terminal.note`: shown unless the command
+    ends with an input error); neither: a PathcheckError."""
     if moves.units_stated:
         return
     from checker.errors import PathcheckError, printable
@@ -31,8 +33,8 @@ def assumed_units(moves, given: str | None, machine) -> None:
             f"the program states no units (no {codes}) and machine {machine.name} gives none: "
             "expected --units mm|inch", path=moves.path, code="usage")
     source = "--units" if given else f"the units of machine {machine.name}"
-    click.echo(f"pathcheck: note: {printable(str(moves.path))} states no units (no {codes}): "
-               f"read in {moves.units}, {source}", err=True)
+    note(f"{printable(str(moves.path))} states no units (no {codes}): read in {moves.units}, "
+         f"{source}")
 
 
 @click.command()

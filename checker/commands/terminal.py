@@ -1,7 +1,7 @@
 """What the commands print on the terminal: the progress of `checker.progress` steps on stderr
 (a transient rich bar only when stderr is a terminal and not `--quiet`; `--verbose`: one line
-per step with its time, terminal or not) and a text console that does not wrap lines when
-piped."""
+per step with its time, terminal or not), a text console that does not wrap lines when
+piped, and the notes a command shows only if it succeeds."""
 
 from __future__ import annotations
 
@@ -9,6 +9,21 @@ import sys
 
 # columns of stdout when it is not a terminal: no line is wrapped, tables keep their width
 PIPE_WIDTH = 10_000
+_notes: list[str] = []  # the running command's notes, shown when it ends (`show_notes`)
+
+
+def note(text: str) -> None:
+    """A note on stderr (`pathcheck: note: TEXT`) shown when the command ends with exit 0 or 1;
+    an input error (exit 2) is its one line alone."""
+    _notes.append(text)
+
+
+def show_notes(show: bool) -> None:
+    """The running command's notes on stderr (`show`) or dropped; none are kept after."""
+    if show:
+        for text in _notes:
+            print(f"pathcheck: note: {text}", file=sys.stderr)
+    _notes.clear()
 
 
 def text_console(*, stderr: bool = False):
